@@ -1,0 +1,147 @@
+# Skeleton-guided path tracing toolchain.
+#   make            build bin/voxelize bin/skeletonize bin/importance bin/render
+#   make test       install missing packages, build, run every test
+#   make demo       install missing packages, build, run the pipeline on data/corridor
+#   make scene SCENE=path/to/scene.json   build out/NAME/ (only steps whose inputs changed)
+#   make bench      speed and error benchmarks (see bench/)
+#   make SANITIZE=1 ...  the same with AddressSanitizer + UBSan in build/asan
+
+SHELL := /bin/bash
+CC ?= cc
+CXX ?= c++
+ifeq ($(origin CC),default)
+CC := cc
+endif
+ifeq ($(origin CXX),default)
+CXX := c++
+endif
+
+ifeq ($(SANITIZE),1)
+BUILD ?= build/asan
+SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+OPT := -O1
+else
+BUILD ?= build/release
+OPT := -O2
+endif
+BIN ?= bin
+ifeq ($(SANITIZE),1)
+BIN := $(BUILD)/bin
+endif
+
+WARN := -Wall -Wextra
+CPPFLAGS += -Icommon -D_GNU_SOURCE -MMD -MP
+CFLAGS += -std=c11 $(OPT) -g $(WARN) $(SANFLAGS) -pthread
+CXXFLAGS += -std=c++17 $(OPT) -g $(WARN) $(SANFLAGS) -pthread -Wno-deprecated-declarations
+LDFLAGS += $(SANFLAGS) -pthread
+LDLIBS := -lembree3 -lopenvdb -ltbb -lOpenImageIO -lOpenImageIO_Util -lassimp -lcjson \
+          -lcriterion -lstdc++ -lm
+PROG_LDLIBS := $(filter-out -lcriterion,$(LDLIBS))
+
+ALL_STEPS := voxelize skeletonize importance render
+# A step joins the build once it has a main.c.
+STEPS := $(foreach s,$(ALL_STEPS),$(if $(wildcard $(s)/main.c),$(s)))
+PROGRAMS := $(addprefix $(BIN)/,$(STEPS))
+
+COMMON_C := $(wildcard common/*.c)
+COMMON_CXX := $(wildcard common/*.cpp)
+COMMON_OBJ := $(COMMON_C:%.c=$(BUILD)/%.o) $(COMMON_CXX:%.cpp=$(BUILD)/%.o)
+
+# Each step: its library (every .c but main.c) and its program (main.c).
+step_lib_src = $(filter-out $(1)/main.c,$(wildcard $(1)/*.c))
+step_lib_obj = $(patsubst %.c,$(BUILD)/%.o,$(call step_lib_src,$(1)))
+STEP_LIBS := $(foreach s,$(STEPS),$(BUILD)/lib$(s).a)
+
+TEST_SRC := $(wildcard tests/test_*.c)
+TEST_SUPPORT_SRC := $(filter-out $(TEST_SRC),$(wildcard tests/*.c))
+TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+TEST_SUPPORT_OBJ := $(TEST_SUPPORT_SRC:%.c=$(BUILD)/%.o)
+
+.PHONY: all test check-tests demo scene bench bench-quick deps clean distclean FORCE
+.DEFAULT_GOAL := all
+
+all: $(PROGRAMS)
+
+$(BUILD)/libcommon.a: $(COMMON_OBJ)
+	@mkdir -p $(@D)
+	$(AR) rcs $@ $^
+
+define STEP_RULES
+$(BUILD)/lib$(1).a: $(call step_lib_obj,$(1))
+	@mkdir -p $$(@D)
+	rm -f $$@
+	$$(AR) rcs $$@ $$^
+$(BIN)/$(1): $(BUILD)/$(1)/main.o $(BUILD)/lib$(1).a $(STEP_LIBS) $(BUILD)/libcommon.a
+	@mkdir -p $$(@D)
+	$$(CC) $$(LDFLAGS) -o $$@ $(BUILD)/$(1)/main.o $(STEP_LIBS) $(BUILD)/libcommon.a $$(PROG_LDLIBS)
+endef
+$(foreach s,$(STEPS),$(eval $(call STEP_RULES,$(s))))
+
+$(BUILD)/%.o: %.c
+	@mkdir -p $(@D)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -c -o $@ $<
+
+$(BUILD)/%.o: %.cpp
+	@mkdir -p $(@D)
+	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c -o $@ $<
+
+$(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_SUPPORT_OBJ) $(STEP_LIBS) $(BUILD)/libcommon.a
+	@mkdir -p $(@D)
+	$(CC) $(LDFLAGS) -o $@ $< $(TEST_SUPPORT_OBJ) $(STEP_LIBS) $(BUILD)/libcommon.a $(LDLIBS)
+
+# Tests run from the repository root; they find bin/ through SG_BIN.
+deps:
+	@bash scripts/install-deps.sh
+
+test: deps
+	@$(MAKE) --no-print-directory check-tests
+
+check-tests: $(PROGRAMS) $(TEST_BIN)
+	@SG_BIN=$(abspath $(BIN)) bash tests/run-tests.sh $(TEST_BIN)
+
+demo: deps
+	@$(MAKE) --no-print-directory all
+	@$(MAKE) --no-print-directory scene SCENE=data/corridor/corridor.json
+	@echo "demo: images in out/corridor/ (image.png to look at, image.exr linear)"
+
+# ---- scene builds -------------------------------------------------------
+# out/NAME/geometry.key holds the identity of what the precompute depends on
+# (geometry, lights, resolution: not the camera). It is rewritten only when
+# that identity changes, so a moved camera re-renders without re-running the
+# precompute.
+ifdef SCENE
+NAME := $(basename $(notdir $(SCENE)))
+OUT := out/$(NAME)
+VOXELIZE_FLAGS ?=
+scene: $(OUT)/medium.vdb $(OUT)/skeleton.ply $(OUT)/importance.cache $(OUT)/image.exr
+
+$(OUT)/geometry.key: FORCE $(BIN)/voxelize
+	@mkdir -p $(OUT)
+	@$(BIN)/voxelize $(SCENE) --key $(VOXELIZE_FLAGS) > $@.new
+	@if cmp -s $@.new $@; then rm -f $@.new; else mv $@.new $@; fi
+
+$(OUT)/medium.vdb: $(OUT)/geometry.key $(BIN)/voxelize
+	$(BIN)/voxelize $(SCENE) -o $@ $(VOXELIZE_FLAGS)
+
+$(OUT)/skeleton.ply: $(OUT)/medium.vdb $(BIN)/skeletonize
+	$(BIN)/skeletonize $< -o $@
+
+$(OUT)/importance.cache: $(OUT)/medium.vdb $(OUT)/skeleton.ply $(BIN)/importance
+	$(BIN)/importance $(OUT)/medium.vdb $(OUT)/skeleton.ply -o $@ --vectors $(OUT)/vectors.ply
+
+$(OUT)/image.exr: $(SCENE) $(OUT)/importance.cache $(BIN)/render
+	$(BIN)/render $(SCENE) --cache $(OUT)/importance.cache -o $@ --png $(OUT)/image.png $(RENDER_FLAGS)
+else
+scene:
+	@echo "usage: make scene SCENE=path/to/scene.json" >&2; exit 2
+endif
+
+FORCE:
+
+clean:
+	rm -rf build bin
+
+distclean: clean
+	rm -rf out
+
+-include $(shell find $(BUILD) -name '*.d' 2>/dev/null)

@@ -1,0 +1,32 @@
+/* Image files through OpenImageIO (wrapper: image_io.cpp). Images are
+ * linear float RGB, row-major from the top-left pixel. */
+#ifndef SG_IMAGE_IO_H
+#define SG_IMAGE_IO_H
+
+#include <stdbool.h>
+
+#include "error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct SgImageAttribute {
+    const char *name;
+    const char *value; /* stored as a string attribute */
+} SgImageAttribute;
+
+/* Linear float RGB EXR with string attributes (spp, seconds, mode, seed...). */
+bool sg_image_write_exr(const char *path, int width, int height, const float *rgb,
+                        const SgImageAttribute *attributes, int attribute_count,
+                        SgError *err);
+/* 8-bit sRGB PNG of rgb * 2^exposure. */
+bool sg_image_write_png(const char *path, int width, int height, const float *rgb,
+                        double exposure, SgError *err);
+/* Reads any image OpenImageIO knows as float RGB; caller frees *rgb. */
+bool sg_image_read(const char *path, int *width, int *height, float **rgb, SgError *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,103 @@
+/* The scene every program reads: triangles in world space (double precision,
+ * so that a scene far from the origin keeps its detail), materials, lights
+ * grouped from emissive triangles, the camera and the build settings.
+ * Loaded from the JSON scene description (see README.md, "Scene format");
+ * meshes go through Assimp. */
+#ifndef SG_SCENE_H
+#define SG_SCENE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SG_NO_LIGHT UINT32_MAX
+
+typedef enum SgMaterialType {
+    SG_MATERIAL_DIFFUSE,    /* Lambert, albedo = diffuse */
+    SG_MATERIAL_GLOSSY,     /* diffuse + normalized Phong lobe (specular, exponent) */
+    SG_MATERIAL_MIRROR,     /* perfect reflection tinted by specular */
+    SG_MATERIAL_DIELECTRIC, /* smooth glass with index ior */
+} SgMaterialType;
+
+typedef struct SgMaterial {
+    char name[64];
+    SgMaterialType type;
+    float diffuse[3];  /* Kd: albedo */
+    float specular[3]; /* Ks */
+    float exponent;    /* Ns: Phong exponent */
+    float ior;         /* Ni */
+    float emission[3]; /* Ke: emitted radiance; non-zero makes its triangles lights */
+} SgMaterial;
+
+/* A light is a connected set of emissive triangles of one material (a quad
+ * is one light, not two). Its triangles are
+ * scene->light_triangles[first_triangle .. first_triangle + triangle_count). */
+typedef struct SgLight {
+    double position[3]; /* area-weighted centroid */
+    double normal[3];   /* unit, area-weighted mean of the triangle normals */
+    double area;
+    float radiance[3];  /* emitted radiance (one-sided, towards the normal) */
+    double power;       /* pi * area * luminance(radiance): for choosing lights */
+    uint32_t first_triangle;
+    uint32_t triangle_count;
+} SgLight;
+
+typedef struct SgCamera {
+    double position[3];
+    double look_at[3];
+    double up[3];
+    double fov_deg; /* vertical field of view in degrees */
+    int width, height;
+} SgCamera;
+
+typedef struct SgRenderSettings {
+    int spp;          /* default samples per pixel (0: not given) */
+    int max_depth;    /* maximum path length in bounces */
+    double exposure;  /* PNG exposure in stops */
+} SgRenderSettings;
+
+typedef struct SgScene {
+    char path[4096];          /* the scene file as given */
+
+    uint32_t vertex_count;
+    double *positions;        /* 3 * vertex_count, world space */
+    uint32_t triangle_count;
+    uint32_t *indices;        /* 3 * triangle_count */
+    uint32_t *triangle_material; /* triangle_count */
+    uint32_t *triangle_light; /* triangle_count: light index or SG_NO_LIGHT */
+
+    uint32_t material_count;
+    SgMaterial *materials;
+
+    uint32_t light_count;
+    SgLight *lights;
+    uint32_t *light_triangles; /* triangle ids grouped by light */
+
+    bool has_camera;
+    SgCamera camera;
+    SgRenderSettings render;
+    int voxel_resolution;     /* from "voxel": {"resolution"}; 0 if not given */
+
+    double bounds_min[3], bounds_max[3]; /* of all triangles */
+
+    /* Identity of what the precompute depends on: geometry, materials'
+     * emission and lights; not the camera. Same scene in, same hash out. */
+    uint64_t geometry_hash;
+} SgScene;
+
+/* Loads a scene description. On failure returns NULL with "file: cause". */
+SgScene *sg_scene_load(const char *path, SgError *err);
+void sg_scene_free(SgScene *scene);
+
+/* Geometric (unnormalized) normal of triangle t: (b-a) x (c-a). */
+void sg_scene_triangle_normal(const SgScene *scene, uint32_t t, double n[3]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Runs every Criterion test binary given, then prints one closing line
+# "tests: N passed, N failed" over all of them. Exit status 1 if any failed.
+set -u
+passed=0 failed=0 status=0
+for t in "$@"; do
+  echo "== $(basename "$t")"
+  out=$("$t" --ascii 2>&1); rc=$?
+  printf '%s\n' "$out" | grep -vE '^\[----\] .*: (Assertion Passed|tests/)' || true
+  line=$(printf '%s\n' "$out" | grep -E 'Synthesis: Tested' | tail -1)
+  if [ -z "$line" ]; then
+    echo "$(basename "$t"): no Criterion summary (crashed? exit $rc)"
+    failed=$((failed + 1)); status=1; continue
+  fi
+  p=$(sed -E 's/.*Passing: ([0-9]+).*/\1/' <<<"$line")
+  f=$(sed -E 's/.*Failing: ([0-9]+).*/\1/' <<<"$line")
+  c=$(sed -E 's/.*Crashing: ([0-9]+).*/\1/' <<<"$line")
+  passed=$((passed + p)); failed=$((failed + f + c))
+  [ "$rc" -ne 0 ] && status=1
+done
+echo "tests: $passed passed, $failed failed"
+[ "$failed" -eq 0 ] || status=1
+exit $status
