@@ -57,6 +57,10 @@ TEST_SUPPORT_SRC := $(filter-out $(TEST_SRC),$(wildcard tests/*.c))
 TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TEST_SUPPORT_OBJ := $(TEST_SUPPORT_SRC:%.c=$(BUILD)/%.o)
 
+# Benchmarks: each bench/*.c is a program; bench/run.sh drives them.
+BENCH_SRC := $(wildcard bench/*.c)
+BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
+
 .PHONY: all test check-tests demo scene bench bench-quick deps clean distclean FORCE
 .DEFAULT_GOAL := all
 
@@ -88,6 +92,16 @@ $(BUILD)/%.o: %.cpp
 $(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_SUPPORT_OBJ) $(STEP_LIBS) $(BUILD)/libcommon.a
 	@mkdir -p $(@D)
 	$(CC) $(LDFLAGS) -o $@ $< $(TEST_SUPPORT_OBJ) $(STEP_LIBS) $(BUILD)/libcommon.a $(LDLIBS)
+
+$(BUILD)/bench/%: $(BUILD)/bench/%.o $(STEP_LIBS) $(BUILD)/libcommon.a
+	@mkdir -p $(@D)
+	$(CC) $(LDFLAGS) -o $@ $< $(STEP_LIBS) $(BUILD)/libcommon.a $(PROG_LDLIBS)
+
+bench: deps $(PROGRAMS) $(BENCH_BIN)
+	@SG_BIN=$(abspath $(BIN)) SG_BENCH_BIN=$(abspath $(BUILD)/bench) bash bench/run.sh
+
+bench-quick: deps $(PROGRAMS) $(BENCH_BIN)
+	@SG_QUICK=1 SG_BIN=$(abspath $(BIN)) SG_BENCH_BIN=$(abspath $(BUILD)/bench) bash bench/run.sh
 
 # Tests run from the repository root; they find bin/ through SG_BIN.
 deps:
