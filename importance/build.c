@@ -125,7 +125,7 @@ static void block_encode_slab(void *ctx, uint64_t bk, int thread)
 /* ---- importance points, in parallel over chunks of nodes --------------- */
 
 typedef struct PointPass {
-    const SgGrid *grid;
+    const SgVisibility *vis;
     const SgSkeleton *skeleton;
     const uint32_t *component;
     uint32_t light_component;
@@ -151,7 +151,7 @@ static void point_chunk(void *ctx, uint64_t chunk, int thread)
             out[0] = out[1] = out[2] = 0;
             continue;
         }
-        sg_importance_point(p->grid, p->skeleton, p->pred, p->dist, (uint32_t)n,
+        sg_importance_point(p->vis, p->skeleton, p->pred, p->dist, (uint32_t)n,
                             p->light_position, out);
     }
 }
@@ -242,7 +242,7 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
     uint8_t *file = NULL;
 
     /* 1. Nearest node of every medium voxel. */
-    ok = sg_label_grid_build(grid, skeleton, &labels, err);
+    ok = sg_label_grid_build(grid, skeleton, options->threads, &labels, err);
     stats.seconds_labels = sg_seconds() - t0;
     if (ok) {
         stats.medium_voxels = labels.medium_voxels;
@@ -270,6 +270,9 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
         stats.components = sg_graph_components(&graph, component, scratch);
 
     int threads = sg_thread_count(options->threads);
+    SgVisibility vis = {0};
+    if (ok)
+        ok = sg_visibility_init(&vis, grid, err);
     SgProgress progress;
     sg_progress_begin(&progress, "importance points", L);
     for (uint32_t k = 0; ok && k < L; k++) {
@@ -295,7 +298,7 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
         cl->node = sources[0];
         cl->component = component[sources[0]];
         sg_graph_shortest_paths(&graph, sources, count, dist, pred, heap);
-        PointPass pp = {grid, skeleton, component, cl->component, pred, dist, ml->position,
+        PointPass pp = {&vis, skeleton, component, cl->component, pred, dist, ml->position,
                         points, k, L};
         sg_parallel_for((N + POINT_CHUNK - 1) / POINT_CHUNK, threads, point_chunk, &pp);
         stats.lights_reachable++;
@@ -456,6 +459,7 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
     free(pred);
     free(scratch);
     free(component);
+    sg_visibility_release(&vis);
     sg_graph_release(&graph);
     sg_label_grid_release(&labels);
     return ok;

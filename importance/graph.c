@@ -9,14 +9,79 @@
 #include "hash.h"
 #include "importance_cache_format.h"
 
-bool sg_importance_visible(const SgGrid *grid, const int a[3], const int b[3])
+/* Medium test with the brick accelerator: a bit per 4x4x4 brick that is
+ * all medium (a few hundred KB, cache resident) spares most loads from the
+ * byte grid, whose z neighbours are a cache line apart. */
+static inline bool medium_at(const SgVisibility *v, int i, int j, int k)
+{
+    const SgGrid *g = v->grid;
+    if (!sg_grid_inside(g, i, j, k))
+        return false;
+    if (v->full) {
+        size_t b = (size_t)(i >> 2) + v->bx * ((size_t)(j >> 2) + v->by * (size_t)(k >> 2));
+        if (v->full[b >> 6] >> (b & 63) & 1)
+            return true;
+    }
+    return g->voxels[sg_grid_index(g, i, j, k)] != 0;
+}
+
+bool sg_visibility_init(SgVisibility *v, const SgGrid *g, SgError *err)
+{
+    memset(v, 0, sizeof *v);
+    v->grid = g;
+    v->bx = ((size_t)g->nx + 3) / 4;
+    v->by = ((size_t)g->ny + 3) / 4;
+    size_t bz = ((size_t)g->nz + 3) / 4, bricks = v->bx * v->by * bz;
+    v->full = calloc((bricks + 63) / 64, sizeof *v->full);
+    if (!v->full)
+        return sg_fail(err, "out of memory for the visibility bricks");
+    /* A brick is full when each of its 16 x-rows is 4 medium voxels (bricks
+     * that stick out of the grid are never full). */
+    for (size_t bk = 0; bk < bz; bk++)
+        for (size_t bj = 0; bj < v->by; bj++)
+            for (size_t bi = 0; bi < v->bx; bi++) {
+                if ((bi + 1) * 4 > (size_t)g->nx || (bj + 1) * 4 > (size_t)g->ny ||
+                    (bk + 1) * 4 > (size_t)g->nz)
+                    continue;
+                bool full = true;
+                for (int z = 0; z < 4 && full; z++)
+                    for (int y = 0; y < 4 && full; y++) {
+                        const uint8_t *row = g->voxels + sg_grid_index(g, (int)bi * 4,
+                                                                       (int)bj * 4 + y,
+                                                                       (int)bk * 4 + z);
+                        full = row[0] && row[1] && row[2] && row[3];
+                    }
+                if (full) {
+                    size_t b = bi + v->bx * (bj + v->by * bk);
+                    v->full[b >> 6] |= (uint64_t)1 << (b & 63);
+                }
+            }
+    return true;
+}
+
+void sg_visibility_release(SgVisibility *v)
+{
+    free(v->full);
+    memset(v, 0, sizeof *v);
+}
+
+static inline bool brick_full(const SgVisibility *v, const int c[3])
+{
+    size_t b = (size_t)(c[0] >> 2) + v->bx * ((size_t)(c[1] >> 2) + v->by * (size_t)(c[2] >> 2));
+    return v->full[b >> 6] >> (b & 63) & 1;
+}
+
+bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3])
 {
     /* Amanatides & Woo between voxel centres, in exact integer arithmetic:
      * along axis x the segment crosses a voxel boundary at parameters
      * t = (2m + 1) / (2 |dx|), m = 0 .. |dx| - 1; comparing two axes'
      * next crossings is a cross-multiplication. Crossings that coincide
      * (the segment passes through an edge or corner) step diagonally,
-     * consistent with the medium's 26-connectivity. */
+     * consistent with the medium's 26-connectivity.
+     * Inside an all-medium 4x4x4 brick the walk jumps to the brick's exit:
+     * the first crossing that leaves the brick is found per axis, and every
+     * axis is advanced by its crossings before it (counted in closed form). */
     int cur[3] = {a[0], a[1], a[2]};
     int64_t len[3], step[3], m[3] = {0, 0, 0};
     for (int x = 0; x < 3; x++) {
@@ -24,7 +89,44 @@ bool sg_importance_visible(const SgGrid *grid, const int a[3], const int b[3])
         len[x] = d < 0 ? -d : d;
         step[x] = d < 0 ? -1 : 1;
     }
+    if (!sg_grid_inside(vis->grid, a[0], a[1], a[2]) || !sg_grid_inside(vis->grid, b[0], b[1], b[2]))
+        return false;
     for (;;) {
+        if (vis->full && brick_full(vis, cur)) {
+            /* Crossing index, per axis, of the first step out of the brick. */
+            int exit_axis = -1;
+            int64_t exit_index = 0;
+            for (int x = 0; x < 3; x++) {
+                int in = cur[x] & 3;
+                int64_t k = step[x] > 0 ? 4 - in : in + 1; /* crossings to leave */
+                int64_t index = m[x] + k - 1;
+                if (index >= len[x])
+                    continue; /* the segment ends before leaving along x */
+                /* (2 index + 1) / len_x < (2 exit_index + 1) / len_exit ? */
+                if (exit_axis < 0 ||
+                    (2 * index + 1) * len[exit_axis] < (2 * exit_index + 1) * len[x]) {
+                    exit_axis = x;
+                    exit_index = index;
+                }
+            }
+            if (exit_axis < 0)
+                return true; /* b is in this brick */
+            /* Crossings strictly before T = N / (2 len_e): count of k with
+             * (2k+1) len_e < N len_x, i.e. floor((floor((N len_x - 1) / len_e) + 1) / 2). */
+            int64_t N = 2 * exit_index + 1, Q = len[exit_axis];
+            for (int x = 0; x < 3; x++) {
+                if (len[x] == 0)
+                    continue;
+                int64_t f = (N * len[x] - 1) / Q;
+                int64_t count = (f + 1) / 2;
+                if (count > len[x])
+                    count = len[x];
+                if (count > m[x]) {
+                    cur[x] += (int)(step[x] * (count - m[x]));
+                    m[x] = count;
+                }
+            }
+        }
         int best = -1;
         for (int x = 0; x < 3; x++) {
             if (m[x] >= len[x])
@@ -41,9 +143,15 @@ bool sg_importance_visible(const SgGrid *grid, const int a[3], const int b[3])
                 cur[x] += (int)step[x];
                 m[x]++;
             }
-        if (!sg_grid_get(grid, cur[0], cur[1], cur[2]))
+        if (!medium_at(vis, cur[0], cur[1], cur[2]))
             return false;
     }
+}
+
+bool sg_importance_visible(const SgGrid *grid, const int a[3], const int b[3])
+{
+    SgVisibility plain = {grid, NULL, 0, 0};
+    return sg_visibility_test(&plain, a, b);
 }
 
 void sg_graph_release(SgGraph *g)
@@ -212,7 +320,13 @@ size_t sg_graph_heap_bytes(const SgGraph *g)
     return ((size_t)g->first[g->node_count] + g->node_count + 1) * sizeof(HeapItem);
 }
 
-void sg_importance_point(const SgGrid *grid, const SgSkeleton *s, const uint32_t *pred,
+static double voxel_distance(const int a[3], const int b[3])
+{
+    double d0 = a[0] - b[0], d1 = a[1] - b[1], d2 = a[2] - b[2];
+    return sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+}
+
+void sg_importance_point(const SgVisibility *vis, const SgSkeleton *s, const uint32_t *pred,
                          const double *dist, uint32_t node, const double light_position[3],
                          float point[3])
 {
@@ -222,19 +336,48 @@ void sg_importance_point(const SgGrid *grid, const SgSkeleton *s, const uint32_t
             point[a] = (float)light_position[a];
         return;
     }
+    /* Walk the path toward the light in chunks: a chunk spans at most
+     * SG_RUN_TOLERANCE times its distance from the node, and when its last
+     * node is visible the nodes inside it are taken as visible too (an
+     * obstacle would have to hide between two sight lines that close).
+     * Otherwise its nodes are tested one by one, so the end of the run is
+     * exact. Near the node chunks are single nodes; far away this makes the
+     * walk logarithmic instead of linear in the run length. */
     double sum[3] = {0, 0, 0};
     uint32_t count = 0;
     bool reached = false;
-    for (uint32_t m = pred[node]; m != SG_CACHE_NONE; m = pred[m]) {
-        if (!sg_importance_visible(grid, n->voxel, s->nodes[m].voxel))
-            break;
-        for (int a = 0; a < 3; a++)
-            sum[a] += s->nodes[m].position[a];
-        count++;
-        if (dist[m] == 0) {
-            reached = true;
-            break;
+    uint32_t m = pred[node];
+    while (m != SG_CACHE_NONE && !reached) {
+        double budget = SG_RUN_TOLERANCE * voxel_distance(n->voxel, s->nodes[m].voxel);
+        double span = 0;
+        uint32_t last = m;
+        while (dist[last] != 0 && pred[last] != SG_CACHE_NONE) {
+            double e = voxel_distance(s->nodes[last].voxel, s->nodes[pred[last]].voxel);
+            if (span + e > budget)
+                break;
+            span += e;
+            last = pred[last];
         }
+        bool whole = last != m && sg_visibility_test(vis, n->voxel, s->nodes[last].voxel);
+        bool stop = false;
+        for (uint32_t x = m;; x = pred[x]) {
+            if (!whole && !sg_visibility_test(vis, n->voxel, s->nodes[x].voxel)) {
+                stop = true;
+                break;
+            }
+            for (int a = 0; a < 3; a++)
+                sum[a] += s->nodes[x].position[a];
+            count++;
+            if (dist[x] == 0) {
+                reached = true;
+                break;
+            }
+            if (x == last)
+                break;
+        }
+        if (stop)
+            break;
+        m = pred[last];
     }
     if (reached) {
         /* The node sees the light itself: aim at the light, not at the

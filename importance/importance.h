@@ -39,8 +39,9 @@ typedef struct SgImportanceStats {
 /* Step 1: label[v] = nearest node of medium voxel v (SG_CACHE_NONE where no
  * node is reachable or the voxel is not medium). labels: sg_grid_count(grid)
  * entries, filled. Nodes whose voxel is outside the grid or not medium are
- * not sources. Deterministic: ties go to the lower node id. */
-bool sg_importance_label_voxels(const SgGrid *grid, const SgSkeleton *skeleton,
+ * not sources. Deterministic for any thread count: among the nodes at the
+ * shortest distance the lowest id wins. */
+bool sg_importance_label_voxels(const SgGrid *grid, const SgSkeleton *skeleton, int threads,
                                 uint32_t *labels, SgError *err);
 
 /* Straight segment between voxel centres a and b stays inside the medium

@@ -11,18 +11,19 @@
 typedef struct SgLabelGrid {
     int nx, ny, nz;
     size_t px, py;      /* padded sizes along x and y */
-    uint32_t *label;    /* (nx+2)(ny+2)(nz+2); SG_CACHE_NONE: no node / not medium */
+    uint64_t *key;      /* (nx+2)(ny+2)(nz+2): distance << 32 | node; node SG_CACHE_NONE:
+                           no node / not medium */
     uint64_t medium_voxels;
     uint64_t labelled_voxels;
 } SgLabelGrid;
 
-bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, SgLabelGrid *out,
-                         SgError *err);
+bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int threads,
+                         SgLabelGrid *out, SgError *err);
 void sg_label_grid_release(SgLabelGrid *g);
 
 static inline uint32_t sg_label_at(const SgLabelGrid *g, int i, int j, int k)
 {
-    return g->label[(size_t)(i + 1) + g->px * ((size_t)(j + 1) + g->py * (size_t)(k + 1))];
+    return (uint32_t)g->key[(size_t)(i + 1) + g->px * ((size_t)(j + 1) + g->py * (size_t)(k + 1))];
 }
 
 #endif

@@ -8,6 +8,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "../importance/graph.h"
 #include "../importance/importance.h"
 #include "importance_cache.h"
 #include "importance_cache_format.h"
@@ -100,7 +101,7 @@ Test(importance_labels, geodesic_not_euclidean)
     sgt_edge(&s, p, q);
     uint32_t *labels = malloc(sg_grid_count(&m.grid) * sizeof *labels);
     SgError err = {0};
-    cr_assert(sg_importance_label_voxels(&m.grid, &s, labels, &err), "%s", err.message);
+    cr_assert(sg_importance_label_voxels(&m.grid, &s, 2, labels, &err), "%s", err.message);
     cr_assert_eq(labels[sg_grid_index(&m.grid, 14, 2, 2)], p);
     cr_assert_eq(labels[sg_grid_index(&m.grid, 16, 2, 2)], q);
     cr_assert_eq(labels[sg_grid_index(&m.grid, 14, 8, 3)], p);
@@ -127,7 +128,7 @@ Test(importance_labels, open_box_follows_euclidean_bisector)
     sgt_node(&s, c[1][0], c[1][1], c[1][2], SG_NODE_PLAIN, -1);
     uint32_t *labels = malloc(sg_grid_count(&m.grid) * sizeof *labels);
     SgError err = {0};
-    cr_assert(sg_importance_label_voxels(&m.grid, &s, labels, &err), "%s", err.message);
+    cr_assert(sg_importance_label_voxels(&m.grid, &s, 2, labels, &err), "%s", err.message);
     int checked = 0;
     for (int k = 0; k < 31; k++)
         for (int j = 0; j < 31; j++)
@@ -218,6 +219,47 @@ Test(importance_visibility, agrees_with_dense_sampling)
     /* Disagreement only where the segment grazes a voxel corner. */
     cr_assert_geq(agree, total * 97 / 100, "agree %d of %d", agree, total);
     cr_assert_leq(unsafe, total / 100, "DDA sees through %d solid samples", unsafe);
+    sgt_medium_free(&m);
+}
+
+Test(importance_visibility, brick_jumps_agree_with_plain_walk)
+{
+    /* Open rooms with scattered solid voxels and slabs: the accelerated walk
+     * (jumps through all-medium 4x4x4 bricks) answers like the plain one. */
+    SgMedium m;
+    sgt_medium_init(&m, 61, 45, 38);
+    sgt_box(&m, 0, 0, 0, 60, 44, 37, 1);
+    SgRng rng;
+    sg_rng_seed(&rng, 11, 2);
+    for (int i = 0; i < 60; i++) {
+        int x = (int)(sg_rng_float(&rng) * 61), y = (int)(sg_rng_float(&rng) * 45),
+            z = (int)(sg_rng_float(&rng) * 38);
+        int w = (int)(sg_rng_float(&rng) * 4);
+        sgt_box(&m, x, y, z, x + w, y + (i % 3 == 0 ? 12 : 0), z, 0);
+    }
+    SgVisibility fast;
+    SgError err = {0};
+    cr_assert(sg_visibility_init(&fast, &m.grid, &err));
+    int visible = 0, total = 20000;
+    for (int t = 0; t < total; t++) {
+        int a[3], b[3];
+        for (int x = 0; x < 3; x++) {
+            int n = x == 0 ? 61 : x == 1 ? 45 : 38;
+            a[x] = (int)(sg_rng_float(&rng) * n);
+            b[x] = t % 4 == 0 ? a[x] + (int)(sg_rng_float(&rng) * 9) - 4
+                              : (int)(sg_rng_float(&rng) * n);
+            if (b[x] < 0) b[x] = 0;
+            if (b[x] >= n) b[x] = n - 1;
+        }
+        if (t % 7 == 0)
+            b[t % 3] = a[t % 3]; /* axis-parallel and diagonal-in-a-plane cases */
+        bool plain = sg_importance_visible(&m.grid, a, b);
+        cr_assert_eq(sg_visibility_test(&fast, a, b), plain, "(%d %d %d)-(%d %d %d)", a[0],
+                     a[1], a[2], b[0], b[1], b[2]);
+        visible += plain;
+    }
+    cr_assert(visible > total / 10 && visible < total * 9 / 10, "visible %d", visible);
+    sg_visibility_release(&fast);
     sgt_medium_free(&m);
 }
 
