@@ -30,7 +30,7 @@ BIN := $(BUILD)/bin
 endif
 
 WARN := -Wall -Wextra
-CPPFLAGS += -Icommon -D_GNU_SOURCE -MMD -MP
+CPPFLAGS += -Icommon -I. -D_GNU_SOURCE -MMD -MP
 CFLAGS += -std=c11 $(OPT) -g $(WARN) $(SANFLAGS) -pthread
 CXXFLAGS += -std=c++17 $(OPT) -g $(WARN) $(SANFLAGS) -pthread -Wno-deprecated-declarations
 LDFLAGS += $(SANFLAGS) -pthread
