@@ -161,6 +161,9 @@ endif
 
 FORCE:
 
+# Keep intermediate objects (tests link from them) so nothing rebuilds needlessly.
+.SECONDARY:
+
 clean:
 	rm -rf build bin
 
