@@ -520,3 +520,39 @@ Test(importance_cache, refuses_mismatched_inputs)
     cr_assert_neq(access(path, F_OK), 0, "a failed build left a file");
     l_scene_free(&s);
 }
+
+Test(importance_cache, light_found_by_its_seed_and_no_lights_at_all)
+{
+    /* A skeleton read from a PLY without the `light` property has no light
+     * nodes: each light then hangs on the nearest node of its seed voxel. */
+    LScene s;
+    l_scene(&s);
+    for (uint32_t n = 0; n < s.skeleton.node_count; n++) {
+        s.skeleton.nodes[n].kind = SG_NODE_PLAIN;
+        s.skeleton.nodes[n].light = -1;
+    }
+    char path[256];
+    SgImportanceCache *c = build_and_open(&s.medium, &s.skeleton, "seed", 2, path, sizeof path);
+    cr_assert(sg_cache_light_has_paths(c, 0));
+    double q[3], p[3] = {10.5, 2.5, 2.5};
+    cr_assert(sg_cache_importance_point(c, p, 0, q));
+    cr_assert_gt(q[0], 15);
+    uint32_t last = s.skeleton.node_count - 1; /* the seed's own node sees the light */
+    cr_assert(sg_cache_node_importance_point(c, last, 0, q));
+    cr_assert_float_eq(q[1], 47.0, 1e-4);
+    sg_cache_close(c);
+    unlink(path);
+
+    /* No lights: a valid cache whose lookups find nodes but no points. */
+    s.medium.light_count = 0;
+    c = build_and_open(&s.medium, &s.skeleton, "nolight", 1, path, sizeof path);
+    cr_assert_eq(sg_cache_light_count(c), 0);
+    uint32_t node;
+    cr_assert(sg_cache_nearest_node(c, p, &node));
+    cr_assert_not(sg_cache_importance_point(c, p, 0, q));
+    cr_assert_not(sg_cache_light_reaches(c, 0, p));
+    sg_cache_close(c);
+    unlink(path);
+    s.medium.light_count = 1;
+    l_scene_free(&s);
+}
