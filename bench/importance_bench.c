@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "../importance/importance.h"
@@ -209,6 +210,19 @@ static void build_scene(SgMedium *m, SgSkeleton *s, int d)
     m->resolution = NZ;
 }
 
+/* Other work on the machine skews the seconds: say how busy it was. */
+static const char *load_average(void)
+{
+    static char text[128] = "unknown\n";
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (f) {
+        if (!fgets(text, sizeof text, f))
+            snprintf(text, sizeof text, "unknown\n");
+        fclose(f);
+    }
+    return text;
+}
+
 static double peak_rss_mb(void)
 {
     struct rusage ru;
@@ -247,10 +261,14 @@ int main(int argc, char **argv)
     SgImportanceOptions opt = {.threads = threads, .quiet = true};
     SgImportanceStats st;
     SgError err = {0};
+    struct timespec c0, c1;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
     if (!sg_importance_build(&m, &s, &opt, path, &st, &err)) {
         fprintf(stderr, "importance_bench: %s\n", err.message);
         return 1;
     }
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
+    double cpu = (double)(c1.tv_sec - c0.tv_sec) + 1e-9 * (double)(c1.tv_nsec - c0.tv_nsec);
     double rss = peak_rss_mb();
 
     /* Open (validate) and look up random medium positions. */
@@ -277,6 +295,7 @@ int main(int argc, char **argv)
         found += sg_cache_importance_point(c, pts + 3 * i, (uint32_t)(i & 3), q);
     double ns = (sg_seconds() - t2) / LOOKUPS * 1e9;
 
+    printf("load average at the end: %s", load_average());
     printf("grid %dx%dx%d, %llu medium voxels (%.1f%% labelled), %u nodes, %u edges, "
            "%u components, %u lights, %d threads; scene built in %.2f s\n",
            g->nx, g->ny, g->nz, (unsigned long long)st.medium_voxels,
@@ -285,6 +304,7 @@ int main(int argc, char **argv)
     printf("%-34s %12s %14s\n", "metric", "value", "target");
     printf("%-34s %12.2f %14s\n", "build seconds (total)", st.seconds_total,
            d == 1 ? "< 4" : "-");
+    printf("%-34s %12.2f %14s\n", "  CPU seconds (all threads)", cpu, "");
     printf("%-34s %12.2f %14s\n", "  nearest-node labels (Dijkstra)", st.seconds_labels, "");
     printf("%-34s %12.2f %14s\n", "  paths + importance points", st.seconds_points, "");
     printf("%-34s %12.2f %14s\n", "  block table", st.seconds_table, "");

@@ -5,17 +5,20 @@
  * weights allow Dial's bucket queue (a ring of flat arrays): linear in the
  * voxels and their neighbours, no heap.
  *
- * Parallel and deterministic: each voxel holds one 64-bit key
- * (distance << 32 | node) lowered with compare-and-swap, so the result is
- * the minimum over all paths of (distance, node) whatever the order of the
- * updates. Since every step weighs at least 29, the buckets d .. d+28 are
- * final when the first of them is reached and relaxing them only touches
- * buckets >= d+29: a batch of 29 buckets is processed by all threads at
- * once, with two barriers per batch. */
+ * Each voxel holds one 64-bit key, distance << 32 | node. The answer is the
+ * fixpoint of "key(u) = min over neighbours v of key(v) + step": unique, so
+ * any order of relaxations that reaches it gives the same labels (among
+ * nodes at the shortest distance the lowest id wins).
+ *
+ * Parallel without locks: the grid is cut into z slabs of equal medium, one
+ * per thread; each slab runs its own Dijkstra touching only its voxels.
+ * Then the keys across each slab boundary are relaxed (serially, two planes
+ * per boundary), the voxels that improved seed the next round, and the
+ * slabs run again until nothing crosses: usually two or three rounds, the
+ * later ones touching only the bands where a node on the other side is
+ * nearer. Same fixpoint, so the same bytes for any thread count. */
 #include "labels.h"
 
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -23,22 +26,22 @@
 #include "progress.h"
 #include "threads.h"
 
-enum { W_FACE = 29, W_EDGE = 41, W_CORNER = 50, BATCH = W_FACE, RING = 128, MAX_THREADS = 16 };
+enum { W_FACE = 29, W_EDGE = 41, W_CORNER = 50, RING = 64, MAX_SLABS = 16 };
 
 /* A blocked cell: distance 0 (never improved), no node. */
 #define KEY_BLOCKED ((uint64_t)SG_CACHE_NONE)
 #define KEY_UNSEEN UINT64_MAX
 
-typedef struct Bucket {
-    uint32_t *items;
+typedef struct Buffer {
+    uint64_t *items;
     size_t count, cap;
-} Bucket;
+} Buffer;
 
-static bool bucket_push(Bucket *b, uint32_t v)
+static bool buffer_push(Buffer *b, uint64_t v)
 {
     if (b->count == b->cap) {
-        size_t cap = b->cap ? b->cap * 2 : 4096;
-        uint32_t *grown = realloc(b->items, cap * sizeof *grown);
+        size_t cap = b->cap ? b->cap * 2 : 1024;
+        uint64_t *grown = realloc(b->items, cap * sizeof *grown);
         if (!grown)
             return false;
         b->items = grown;
@@ -48,103 +51,120 @@ static bool bucket_push(Bucket *b, uint32_t v)
     return true;
 }
 
-typedef struct Propagation {
-    _Atomic uint64_t *key;
+typedef struct Slab {
+    size_t lo, hi;      /* padded indices of its voxels: whole z planes */
+    Buffer seeds;       /* distance << 32 | voxel, for the next round */
+    Buffer ring[RING];  /* Dial's buckets (voxel indices in the low 32 bits) */
+    uint64_t relaxed;   /* voxels settled, over all rounds */
+    bool failed;
+} Slab;
+
+typedef struct Labeller {
+    uint64_t *key;
     long off[26];
     uint32_t weight[26];
-    int threads;
-    Bucket ring[MAX_THREADS][RING];
-    uint64_t settled[MAX_THREADS];
-    bool failed[MAX_THREADS];
-    uint32_t batch; /* first distance of the current batch */
-    bool done;
-    pthread_barrier_t barrier;
-    pthread_mutex_t gate_lock;
-    pthread_cond_t gate;
-    bool go;
-    SgProgress progress;
-} Propagation;
+    size_t plane; /* padded voxels per z plane */
+    bool first_round;
+    int slab_count;
+    Slab slabs[MAX_SLABS];
+} Labeller;
 
-typedef struct Worker {
-    Propagation *p;
-    int t;
-} Worker;
-
-static void process_batch(Propagation *p, int t)
+static int compare_u64(const void *a, const void *b)
 {
-    Bucket *mine = p->ring[t];
-    for (uint32_t d = p->batch; d < p->batch + BATCH; d++) {
-        size_t total = 0;
-        for (int s = 0; s < p->threads; s++)
-            total += p->ring[s][d % RING].count;
-        size_t lo = total * (size_t)t / (size_t)p->threads;
-        size_t hi = total * (size_t)(t + 1) / (size_t)p->threads;
-        /* Items [lo, hi) of the concatenation of every thread's bucket d. */
-        size_t base = 0;
-        for (int s = 0; s < p->threads && base < hi; s++) {
-            const Bucket *b = &p->ring[s][d % RING];
-            size_t from = lo > base ? lo - base : 0, to = hi - base < b->count ? hi - base : b->count;
-            for (size_t q = from; q < to; q++) {
-                uint32_t v = b->items[q];
-                uint64_t k = atomic_load_explicit(&p->key[v], memory_order_relaxed);
-                if ((uint32_t)(k >> 32) != d)
-                    continue; /* superseded by a shorter path */
-                p->settled[t]++;
-                uint64_t label = (uint32_t)k;
-                for (int e = 0; e < 26; e++) {
-                    uint32_t u = (uint32_t)((long)v + p->off[e]);
-                    uint32_t nd = d + p->weight[e];
-                    uint64_t want = (uint64_t)nd << 32 | label;
-                    uint64_t cur = atomic_load_explicit(&p->key[u], memory_order_relaxed);
-                    while (want < cur) {
-                        if (atomic_compare_exchange_weak_explicit(&p->key[u], &cur, want,
-                                                                  memory_order_relaxed,
-                                                                  memory_order_relaxed)) {
-                            /* Queue it once per distance: a lower node at the
-                             * same distance is already queued. */
-                            if ((uint32_t)(cur >> 32) > nd &&
-                                !bucket_push(&mine[nd % RING], u))
-                                p->failed[t] = true;
-                            break;
-                        }
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Dijkstra inside one slab from its seeds (sorted by distance, fed into the
+ * ring as the distance reaches them). */
+static void run_slab(void *ctx, uint64_t index, int thread)
+{
+    (void)thread;
+    Labeller *L = ctx;
+    Slab *s = &L->slabs[index];
+    uint64_t *key = L->key;
+    if (s->seeds.count == 0)
+        return;
+    qsort(s->seeds.items, s->seeds.count, sizeof *s->seeds.items, compare_u64);
+    size_t next_seed = 0, pending = 0;
+    uint32_t d = (uint32_t)(s->seeds.items[0] >> 32);
+    for (;;) {
+        while (next_seed < s->seeds.count && (uint32_t)(s->seeds.items[next_seed] >> 32) == d) {
+            if (!buffer_push(&s->ring[d % RING], (uint32_t)s->seeds.items[next_seed]))
+                s->failed = true;
+            next_seed++;
+            pending++;
+        }
+        if (pending == 0) {
+            if (next_seed == s->seeds.count)
+                break;
+            d = (uint32_t)(s->seeds.items[next_seed] >> 32);
+            continue;
+        }
+        Buffer *b = &s->ring[d % RING];
+        for (size_t q = 0; q < b->count; q++) {
+            uint32_t v = (uint32_t)b->items[q];
+            uint64_t k = key[v];
+            if ((uint32_t)(k >> 32) != d)
+                continue; /* superseded by a shorter path */
+            s->relaxed++;
+            uint64_t label = (uint32_t)k;
+            for (int e = 0; e < 26; e++) {
+                size_t u = (size_t)((long)v + L->off[e]);
+                if (u < s->lo || u >= s->hi)
+                    continue; /* the neighbouring slab's: exchanged later */
+                uint32_t nd = d + L->weight[e];
+                uint64_t want = (uint64_t)nd << 32 | label;
+                uint64_t cur = key[u];
+                if (want < cur) {
+                    key[u] = want;
+                    /* In the first round every reached voxel was queued at
+                     * its distance when it got it: a lower node at the same
+                     * distance needs no new entry. Later rounds start from
+                     * keys set before, so any change is queued. */
+                    if ((uint32_t)(cur >> 32) > nd || !L->first_round) {
+                        if (!buffer_push(&s->ring[nd % RING], u))
+                            s->failed = true;
+                        pending++;
                     }
                 }
             }
-            base += b->count;
         }
+        pending -= b->count;
+        b->count = 0;
+        d++;
     }
+    s->seeds.count = 0;
 }
 
-static void *run_worker(void *arg)
+/* Relaxes plane `from` into the adjacent plane `to` (z differs by one),
+ * seeding `slab` with every voxel that improved. */
+static bool exchange(Labeller *L, size_t from, size_t to, Slab *slab, size_t px)
 {
-    Worker *w = arg;
-    Propagation *p = w->p;
-    pthread_mutex_lock(&p->gate_lock);
-    while (!p->go)
-        pthread_cond_wait(&p->gate, &p->gate_lock);
-    pthread_mutex_unlock(&p->gate_lock);
-    for (;;) {
-        process_batch(p, w->t);
-        pthread_barrier_wait(&p->barrier);
-        if (w->t == 0) {
-            bool pending = false, failed = false;
-            uint64_t settled = 0;
-            for (int s = 0; s < p->threads; s++) {
-                for (uint32_t d = p->batch; d < p->batch + BATCH; d++)
-                    p->ring[s][d % RING].count = 0;
-                for (int r = 0; r < RING; r++)
-                    pending |= p->ring[s][r].count > 0;
-                failed |= p->failed[s];
-                settled += p->settled[s];
+    uint64_t *key = L->key;
+    long dz = to > from ? (long)L->plane : -(long)L->plane;
+    bool ok = true;
+    for (size_t v = from; v < from + L->plane; v++) {
+        uint64_t k = key[v];
+        if ((uint32_t)k == SG_CACHE_NONE)
+            continue; /* blocked or not reached */
+        uint32_t d = (uint32_t)(k >> 32);
+        for (int dy = -1; dy <= 1; dy++)
+            for (int dx = -1; dx <= 1; dx++) {
+                long o = dz + dx + (long)px * dy;
+                size_t u = (size_t)((long)v + o);
+                if (u < to || u >= to + L->plane)
+                    continue;
+                uint32_t nd = d + (dx == 0 && dy == 0 ? W_FACE : dx == 0 || dy == 0 ? W_EDGE
+                                                                                    : W_CORNER);
+                uint64_t want = (uint64_t)nd << 32 | (uint32_t)k;
+                if (want < key[u]) {
+                    key[u] = want;
+                    ok = ok && buffer_push(&slab->seeds, (uint64_t)nd << 32 | u);
+                }
             }
-            p->batch += BATCH;
-            p->done = !pending || failed;
-            sg_progress_update(&p->progress, settled);
-        }
-        pthread_barrier_wait(&p->barrier);
-        if (p->done)
-            return NULL;
     }
+    return ok;
 }
 
 void sg_label_grid_release(SgLabelGrid *g)
@@ -164,33 +184,33 @@ bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int thr
     if (total >= UINT32_MAX)
         return sg_fail(err, "grid of %dx%dx%d voxels is too large for the nearest-node table",
                        grid->nx, grid->ny, grid->nz);
-    Propagation *p = calloc(1, sizeof *p);
-    _Atomic uint64_t *key = malloc(total * sizeof *key);
-    if (!p || !key) {
-        free(p);
+    Labeller *L = calloc(1, sizeof *L);
+    uint64_t *key = malloc(total * sizeof *key);
+    uint64_t *plane_medium = calloc(pz, sizeof *plane_medium);
+    if (!L || !key || !plane_medium) {
+        free(L);
         free(key);
+        free(plane_medium);
         return sg_fail(err, "out of memory for the nearest-node labels (%zu voxels)", total);
     }
-    p->key = key;
-    pthread_mutex_init(&p->gate_lock, NULL);
-    pthread_cond_init(&p->gate, NULL);
-    p->threads = sg_thread_count(threads);
-    if (p->threads > MAX_THREADS)
-        p->threads = MAX_THREADS;
+    L->key = key;
+    L->plane = px * py;
 
     uint64_t medium = 0;
     for (size_t v = 0; v < total; v++)
-        atomic_init(&key[v], KEY_BLOCKED);
+        key[v] = KEY_BLOCKED;
     for (int k = 0; k < grid->nz; k++)
         for (int j = 0; j < grid->ny; j++) {
             const uint8_t *row = grid->voxels + sg_grid_index(grid, 0, j, k);
-            _Atomic uint64_t *krow = key + 1 + px * ((size_t)(j + 1) + py * (size_t)(k + 1));
+            uint64_t *krow = key + 1 + px * ((size_t)(j + 1) + py * (size_t)(k + 1));
             for (int i = 0; i < grid->nx; i++)
                 if (row[i]) {
-                    atomic_init(&krow[i], KEY_UNSEEN);
-                    medium++;
+                    krow[i] = KEY_UNSEEN;
+                    plane_medium[k + 1]++;
                 }
         }
+    for (size_t z = 0; z < pz; z++)
+        medium += plane_medium[z];
     int n = 0;
     for (int dz = -1; dz <= 1; dz++)
         for (int dy = -1; dy <= 1; dy++)
@@ -198,10 +218,34 @@ bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int thr
                 int axes = (dx != 0) + (dy != 0) + (dz != 0);
                 if (axes == 0)
                     continue;
-                p->off[n] = dx + (long)px * (dy + (long)py * dz);
-                p->weight[n] = axes == 1 ? W_FACE : axes == 2 ? W_EDGE : W_CORNER;
+                L->off[n] = dx + (long)px * (dy + (long)py * dz);
+                L->weight[n] = axes == 1 ? W_FACE : axes == 2 ? W_EDGE : W_CORNER;
                 n++;
             }
+
+    /* Slabs of whole z planes holding about equal medium. */
+    int slabs = sg_thread_count(threads);
+    if (slabs > MAX_SLABS)
+        slabs = MAX_SLABS;
+    if (slabs > grid->nz / 8)
+        slabs = grid->nz / 8 > 1 ? grid->nz / 8 : 1;
+    size_t z = 1;
+    uint64_t acc = 0;
+    for (int s = 0; s < slabs; s++) {
+        L->slabs[s].lo = z * L->plane;
+        uint64_t goal = medium * (uint64_t)(s + 1) / (uint64_t)slabs;
+        if (s == slabs - 1) {
+            z = pz - 1;
+        } else {
+            /* Leave at least one plane to each later slab. */
+            size_t limit = pz - 1 - (size_t)(slabs - 1 - s);
+            while (z < limit && (acc + plane_medium[z] <= goal || z * L->plane == L->slabs[s].lo))
+                acc += plane_medium[z++];
+        }
+        L->slabs[s].hi = z * L->plane;
+    }
+    L->slab_count = slabs;
+    free(plane_medium);
 
     bool ok = true;
     for (uint32_t s = 0; ok && s < skeleton->node_count; s++) {
@@ -209,62 +253,59 @@ bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int thr
         if (!sg_grid_inside(grid, c[0], c[1], c[2]) || !sg_grid_get(grid, c[0], c[1], c[2]))
             continue;
         size_t v = (size_t)(c[0] + 1) + px * ((size_t)(c[1] + 1) + py * (size_t)(c[2] + 1));
-        if (atomic_load(&key[v]) != KEY_UNSEEN)
+        if (key[v] != KEY_UNSEEN)
             continue; /* a lower node already stands on this voxel */
-        atomic_store(&key[v], (uint64_t)s);
-        ok = bucket_push(&p->ring[0][0], (uint32_t)v);
+        key[v] = s;
+        for (int t = 0; t < slabs; t++)
+            if (v >= L->slabs[t].lo && v < L->slabs[t].hi)
+                ok = buffer_push(&L->slabs[t].seeds, v);
     }
 
-    sg_progress_begin(&p->progress, "nearest nodes", medium);
-    if (ok && p->ring[0][0].count > 0) {
-        /* Workers wait at a gate until the thread count (and so the
-         * barrier) is known: a thread that fails to start is simply left
-         * out. */
-        Worker workers[MAX_THREADS];
-        pthread_t ids[MAX_THREADS];
-        int wanted = p->threads, started = 1;
-        for (int t = 0; t < wanted; t++)
-            workers[t] = (Worker){p, t};
-        pthread_mutex_lock(&p->gate_lock);
-        for (int t = 1; t < wanted; t++) {
-            if (pthread_create(&ids[started], NULL, run_worker, &workers[started]) != 0)
-                break;
-            started++;
+    SgProgress progress;
+    sg_progress_begin(&progress, "nearest nodes", medium);
+    for (int round = 0; ok; round++) {
+        L->first_round = round == 0;
+        sg_parallel_for((uint64_t)slabs, slabs, run_slab, L);
+        uint64_t relaxed = 0;
+        for (int s = 0; s < slabs; s++) {
+            ok = ok && !L->slabs[s].failed;
+            relaxed += L->slabs[s].relaxed;
         }
-        p->threads = started;
-        pthread_barrier_init(&p->barrier, NULL, (unsigned)started);
-        p->go = true;
-        pthread_cond_broadcast(&p->gate);
-        pthread_mutex_unlock(&p->gate_lock);
-        run_worker(&workers[0]);
-        for (int t = 1; t < started; t++)
-            pthread_join(ids[t], NULL);
-        pthread_barrier_destroy(&p->barrier);
-        for (int t = 0; t < started; t++)
-            ok = ok && !p->failed[t];
+        sg_progress_update(&progress, relaxed < medium ? relaxed : medium);
+        bool more = false;
+        for (int s = 0; ok && s + 1 < slabs; s++) {
+            size_t last_a = L->slabs[s].hi - L->plane, first_b = L->slabs[s].hi;
+            ok = exchange(L, last_a, first_b, &L->slabs[s + 1], px) &&
+                 exchange(L, first_b, last_a, &L->slabs[s], px);
+        }
+        for (int s = 0; s < slabs; s++)
+            more |= L->slabs[s].seeds.count > 0;
+        if (!more)
+            break;
     }
-    sg_progress_end(&p->progress);
-    uint64_t settled = 0;
-    for (int t = 0; t < MAX_THREADS; t++) {
-        settled += p->settled[t];
+    sg_progress_end(&progress);
+
+    for (int s = 0; s < MAX_SLABS; s++) {
+        free(L->slabs[s].seeds.items);
         for (int r = 0; r < RING; r++)
-            free(p->ring[t][r].items);
+            free(L->slabs[s].ring[r].items);
     }
-    pthread_mutex_destroy(&p->gate_lock);
-    pthread_cond_destroy(&p->gate);
-    free(p);
+    free(L);
     if (!ok) {
         free(key);
         return sg_fail(err, "out of memory in the nearest-node propagation");
     }
+    uint64_t labelled = 0;
+    for (size_t v = 0; v < total; v++)
+        labelled += (uint32_t)key[v] != SG_CACHE_NONE;
     out->nx = grid->nx;
     out->ny = grid->ny;
     out->nz = grid->nz;
     out->px = px;
     out->py = py;
-    out->key = (uint64_t *)key;
+    out->key = key;
     out->medium_voxels = medium;
-    out->labelled_voxels = settled;
+    out->labelled_voxels = labelled;
     return true;
 }
 

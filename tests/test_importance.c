@@ -151,6 +151,156 @@ Test(importance_labels, open_box_follows_euclidean_bisector)
     sgt_medium_free(&m);
 }
 
+/* Reference: plain Dijkstra with a binary heap on (distance, node) keys,
+ * same quantized steps (29, 41, 50), no bounds tricks. */
+static void reference_labels(const SgGrid *g, const SgSkeleton *s, uint32_t *label)
+{
+    size_t n = sg_grid_count(g);
+    uint64_t *key = malloc(n * sizeof *key);
+    uint64_t *heap = malloc((27 * n + s->node_count + 1) * sizeof *heap * 2);
+    size_t size = 0;
+    for (size_t v = 0; v < n; v++)
+        key[v] = UINT64_MAX;
+#define HEAP_PUSH(kk, vv)                                                                  \
+    do {                                                                                   \
+        size_t i_ = size++;                                                                \
+        uint64_t k_ = (kk), v_ = (vv);                                                     \
+        while (i_ > 0 && (heap[2 * ((i_ - 1) / 2)] > k_ ||                                 \
+                          (heap[2 * ((i_ - 1) / 2)] == k_ && heap[2 * ((i_ - 1) / 2) + 1] > v_))) { \
+            heap[2 * i_] = heap[2 * ((i_ - 1) / 2)];                                       \
+            heap[2 * i_ + 1] = heap[2 * ((i_ - 1) / 2) + 1];                               \
+            i_ = (i_ - 1) / 2;                                                             \
+        }                                                                                  \
+        heap[2 * i_] = k_;                                                                 \
+        heap[2 * i_ + 1] = v_;                                                             \
+    } while (0)
+    for (uint32_t i = 0; i < s->node_count; i++) {
+        const int *c = s->nodes[i].voxel;
+        if (!sg_grid_get(g, c[0], c[1], c[2]))
+            continue;
+        size_t v = sg_grid_index(g, c[0], c[1], c[2]);
+        if (key[v] > i) {
+            key[v] = i;
+            HEAP_PUSH(key[v], v);
+        }
+    }
+    while (size > 0) {
+        uint64_t k = heap[0], v = heap[1];
+        size--;
+        uint64_t lk = heap[2 * size], lv = heap[2 * size + 1];
+        size_t i = 0;
+        for (;;) {
+            size_t c = 2 * i + 1;
+            if (c >= size)
+                break;
+            if (c + 1 < size && (heap[2 * (c + 1)] < heap[2 * c] ||
+                                 (heap[2 * (c + 1)] == heap[2 * c] && heap[2 * (c + 1) + 1] < heap[2 * c + 1])))
+                c++;
+            if (heap[2 * c] > lk || (heap[2 * c] == lk && heap[2 * c + 1] >= lv))
+                break;
+            heap[2 * i] = heap[2 * c];
+            heap[2 * i + 1] = heap[2 * c + 1];
+            i = c;
+        }
+        heap[2 * i] = lk;
+        heap[2 * i + 1] = lv;
+        if (key[v] != k)
+            continue;
+        int x = (int)(v % (size_t)g->nx), y = (int)(v / (size_t)g->nx % (size_t)g->ny),
+            z = (int)(v / ((size_t)g->nx * (size_t)g->ny));
+        for (int dz = -1; dz <= 1; dz++)
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++) {
+                    int axes = (dx != 0) + (dy != 0) + (dz != 0);
+                    if (!axes || !sg_grid_get(g, x + dx, y + dy, z + dz))
+                        continue;
+                    uint64_t w = axes == 1 ? 29 : axes == 2 ? 41 : 50;
+                    uint64_t want = ((k >> 32) + w) << 32 | (uint32_t)k;
+                    size_t u = sg_grid_index(g, x + dx, y + dy, z + dz);
+                    if (want < key[u]) {
+                        key[u] = want;
+                        HEAP_PUSH(want, u);
+                    }
+                }
+    }
+#undef HEAP_PUSH
+    for (size_t v = 0; v < n; v++)
+        label[v] = key[v] == UINT64_MAX ? SG_CACHE_NONE : (uint32_t)key[v];
+    free(heap);
+    free(key);
+}
+
+Test(importance_labels, slabs_match_plain_dijkstra_for_any_thread_count)
+{
+    /* A serpentine: z-running corridors joined alternately at y = 0 and
+     * y = 39, so that geodesics cross the slab boundaries many times; a
+     * few nodes, some in one slab and nearest to voxels of another. */
+    SgMedium m;
+    sgt_medium_init(&m, 24, 40, 48);
+    for (int k = 1; k < 47; k += 4) {
+        sgt_box(&m, 1, 1, k, 22, 38, k + 1, 1);
+        int j = (k / 4) % 2 ? 1 : 36;
+        sgt_box(&m, 1, j, k + 2, 22, j + 2, k + 3, 1);
+    }
+    sgt_box(&m, 5, 5, 1, 8, 30, 46, 1); /* a shaft through everything */
+    sgt_box(&m, 6, 6, 2, 7, 29, 45, 0); /* hollow: the shaft is a tube */
+    SgSkeleton s = {0};
+    int nodes[][3] = {{3, 20, 1}, {20, 3, 45}, {12, 30, 21}, {12, 30, 22}, {2, 37, 3}, {5, 10, 30}};
+    for (size_t i = 0; i < sizeof nodes / sizeof nodes[0]; i++)
+        sgt_node(&s, nodes[i][0], nodes[i][1], nodes[i][2], SG_NODE_PLAIN, -1);
+    sgt_node(&s, 3, 20, 1, SG_NODE_PLAIN, -1); /* same voxel as node 0: never a source */
+    size_t n = sg_grid_count(&m.grid);
+    uint32_t *want = malloc(n * sizeof *want), *got = malloc(n * sizeof *got);
+    reference_labels(&m.grid, &s, want);
+    size_t labelled = 0;
+    for (size_t v = 0; v < n; v++)
+        labelled += want[v] != SG_CACHE_NONE;
+    cr_assert_gt(labelled, 10000);
+    for (int threads = 1; threads <= 5; threads++) {
+        SgError err = {0};
+        cr_assert(sg_importance_label_voxels(&m.grid, &s, threads, got, &err), "%s", err.message);
+        for (size_t v = 0; v < n; v++)
+            cr_assert_eq(got[v], want[v], "threads %d voxel %zu: %u, reference %u", threads, v,
+                         got[v], want[v]);
+    }
+    free(want);
+    free(got);
+    sg_skeleton_release(&s);
+    sgt_medium_free(&m);
+}
+
+Test(importance_labels, ties_across_slabs_match_plain_dijkstra)
+{
+    /* Many nodes on a coarse lattice in open space: distances tie along
+     * every bisector, and many bisectors cross slab boundaries, where a
+     * later round changes the node of voxels at an unchanged distance. */
+    SgMedium m;
+    sgt_medium_init(&m, 16, 16, 96);
+    sgt_box(&m, 0, 0, 0, 15, 15, 95, 1);
+    sgt_box(&m, 0, 7, 30, 11, 8, 33, 0);
+    sgt_box(&m, 4, 0, 60, 15, 11, 61, 0);
+    SgSkeleton s = {0};
+    for (int k = 3; k < 96; k += 12)
+        for (int j = 2; j < 16; j += 6)
+            for (int i = 1 + (k / 12) % 3; i < 16; i += 7)
+                sgt_node(&s, i, j, k, SG_NODE_PLAIN, -1);
+    size_t n = sg_grid_count(&m.grid);
+    uint32_t *want = malloc(n * sizeof *want), *got = malloc(n * sizeof *got);
+    reference_labels(&m.grid, &s, want);
+    for (int threads = 1; threads <= 12; threads += (threads < 4 ? 1 : 4)) {
+        SgError err = {0};
+        cr_assert(sg_importance_label_voxels(&m.grid, &s, threads, got, &err), "%s", err.message);
+        size_t wrong = 0;
+        for (size_t v = 0; v < n; v++)
+            wrong += got[v] != want[v];
+        cr_assert_eq(wrong, 0, "threads %d: %zu voxels differ from the reference", threads, wrong);
+    }
+    free(want);
+    free(got);
+    sg_skeleton_release(&s);
+    sgt_medium_free(&m);
+}
+
 /* ---- visibility ------------------------------------------------------------ */
 
 Test(importance_visibility, blocked_by_one_voxel_and_symmetric)
