@@ -134,6 +134,7 @@ typedef struct PointPass {
     const double *light_position;
     float *points; /* node_count * light_count * 3 */
     uint32_t light, light_count;
+    double tolerance;
 } PointPass;
 
 enum { POINT_CHUNK = 32 };
@@ -152,7 +153,7 @@ static void point_chunk(void *ctx, uint64_t chunk, int thread)
             continue;
         }
         sg_importance_point(p->vis, p->skeleton, p->pred, p->dist, (uint32_t)n,
-                            p->light_position, out);
+                            p->light_position, p->tolerance, out);
     }
 }
 
@@ -270,6 +271,10 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
         stats.components = sg_graph_components(&graph, component, scratch);
 
     int threads = sg_thread_count(options->threads);
+    double tolerance = options->run_tolerance < 0 ? 0 : options->run_tolerance > 0
+                           ? options->run_tolerance : SG_IMPORTANCE_RUN_TOLERANCE;
+    if (options->exact_runs)
+        tolerance = 0;
     SgVisibility vis = {0};
     if (ok)
         ok = sg_visibility_init(&vis, grid, err);
@@ -299,7 +304,7 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
         cl->component = component[sources[0]];
         sg_graph_shortest_paths(&graph, sources, count, dist, pred, heap);
         PointPass pp = {&vis, skeleton, component, cl->component, pred, dist, ml->position,
-                        points, k, L};
+                        points, k, L, tolerance};
         sg_parallel_for((N + POINT_CHUNK - 1) / POINT_CHUNK, threads, point_chunk, &pp);
         stats.lights_reachable++;
         sg_progress_update(&progress, k + 1);

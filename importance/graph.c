@@ -328,7 +328,7 @@ static double voxel_distance(const int a[3], const int b[3])
 
 void sg_importance_point(const SgVisibility *vis, const SgSkeleton *s, const uint32_t *pred,
                          const double *dist, uint32_t node, const double light_position[3],
-                         float point[3])
+                         double tolerance, float point[3])
 {
     const SgSkeletonNode *n = &s->nodes[node];
     if (dist[node] == 0) {
@@ -337,7 +337,7 @@ void sg_importance_point(const SgVisibility *vis, const SgSkeleton *s, const uin
         return;
     }
     /* Walk the path toward the light in chunks: a chunk spans at most
-     * SG_RUN_TOLERANCE times its distance from the node, and when its last
+     * `tolerance` times its distance from the node, and when its last
      * node is visible the nodes inside it are taken as visible too (an
      * obstacle would have to hide between two sight lines that close).
      * Otherwise its nodes are tested one by one, so the end of the run is
@@ -348,7 +348,7 @@ void sg_importance_point(const SgVisibility *vis, const SgSkeleton *s, const uin
     bool reached = false;
     uint32_t m = pred[node];
     while (m != SG_CACHE_NONE && !reached) {
-        double budget = SG_RUN_TOLERANCE * voxel_distance(n->voxel, s->nodes[m].voxel);
+        double budget = tolerance * voxel_distance(n->voxel, s->nodes[m].voxel);
         double span = 0;
         uint32_t last = m;
         while (dist[last] != 0 && pred[last] != SG_CACHE_NONE) {

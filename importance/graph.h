@@ -35,14 +35,11 @@ bool sg_visibility_init(SgVisibility *vis, const SgGrid *grid, SgError *err);
 void sg_visibility_release(SgVisibility *vis);
 bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3]);
 
-/* Chunks of the path toward the light whose far end is visible count as
- * visible when they span at most this fraction of their distance. */
-#define SG_RUN_TOLERANCE 0.125
-
 /* Importance point of `node` for the light whose shortest-path tree is
- * (pred, dist) (dist 0 at the light's nodes). */
+ * (pred, dist) (dist 0 at the light's nodes). tolerance: see
+ * SgImportanceOptions.run_tolerance (0: every node tested). */
 void sg_importance_point(const SgVisibility *vis, const SgSkeleton *skeleton, const uint32_t *pred,
                          const double *dist, uint32_t node, const double light_position[3],
-                         float point[3]);
+                         double tolerance, float point[3]);
 
 #endif

@@ -21,8 +21,18 @@
 extern "C" {
 #endif
 
+/* The run of visible nodes is walked in chunks: a chunk whose far end is
+ * visible counts as visible when it spans at most this fraction of its
+ * distance from the node (an obstacle would have to hide between two sight
+ * lines that close). Nodes are tested one by one near the node and at the
+ * end of the run, which stays exact; the walk becomes logarithmic instead
+ * of linear in the run length. */
+#define SG_IMPORTANCE_RUN_TOLERANCE 0.125
+
 typedef struct SgImportanceOptions {
     int threads;              /* <= 0: every core */
+    double run_tolerance;     /* 0: SG_IMPORTANCE_RUN_TOLERANCE */
+    bool exact_runs;          /* test every node of the run (the paper's rule, verbatim) */
     const char *vectors_path; /* optional: figure 2 as a PLY of node -> point edges */
     bool quiet;               /* no summary line on stderr */
 } SgImportanceOptions;

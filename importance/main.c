@@ -26,6 +26,9 @@ static void usage(FILE *out)
             "  -o FILE           output cache (written to a temporary name, then renamed)\n"
             "  --vectors FILE    also write node -> importance point edges as PLY (figure 2)\n"
             "  --threads N       worker threads (default: every core)\n"
+            "  --exact-runs      test the visibility of every node of each run (slower on\n"
+            "                    long straight branches); by default nodes far from the\n"
+            "                    node are tested in chunks spanning 1/8 of their distance\n"
             "  --info CACHE [SCENE.json]\n"
             "                    validate a cache and print one JSON object: lights_total,\n"
             "                    lights_reachable (with a scene: lights that can reach its\n"
@@ -114,6 +117,8 @@ int main(int argc, char **argv)
                 return 2;
             }
             options.threads = (int)t;
+        } else if (!strcmp(a, "--exact-runs")) {
+            options.exact_runs = true;
         } else if (!strcmp(a, "--info") && i + 1 < argc) {
             want_info = true;
             info_path = argv[++i];
