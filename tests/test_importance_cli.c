@@ -236,6 +236,15 @@ static void lattice_skeleton(const SgMedium *m, int pitch, SgSkeleton *s)
                 sgt_edge(s, ln, n);
         }
     }
+    /* sgt_node places nodes in unit voxels at the origin: use the grid's
+     * world transform instead. */
+    for (uint32_t n = 0; n < s->node_count; n++) {
+        double p[3];
+        const int *v = s->nodes[n].voxel;
+        sg_grid_voxel_center(g, v[0], v[1], v[2], p);
+        for (int a = 0; a < 3; a++)
+            s->nodes[n].position[a] = (float)p[a];
+    }
     free(id);
 }
 
@@ -264,7 +273,10 @@ Test(importance_cli, corridor_scene_end_to_end, .init = setup)
     lattice_skeleton(&m, 3, &s);
     cr_assert(sg_skeleton_write_ply(&s, skeleton, &e), "%s", e.message);
 
-    snprintf(cmd, sizeof cmd, "%s %s %s -o %s -q", program, medium, skeleton, cache);
+    char vectors[4096];
+    snprintf(vectors, sizeof vectors, "%s/vectors.ply", dir);
+    snprintf(cmd, sizeof cmd, "%s %s %s -o %s --vectors %s -q", program, medium, skeleton, cache,
+             vectors);
     cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
     snprintf(cmd, sizeof cmd, "%s --info %s data/corridor/corridor.json > %s", program, cache,
              info);
@@ -278,10 +290,20 @@ Test(importance_cli, corridor_scene_end_to_end, .init = setup)
     cJSON_Delete(j);
 
     /* Every medium voxel finds a node, and each node's importance point for
-     * a reachable light is finite and inside the grid's box. */
+     * a reachable light is inside the grid's box (or on the light). */
     SgImportanceCache *c = sg_cache_open(cache, &e);
     cr_assert_not_null(c, "%s", e.message);
     const SgGrid *g = &m.grid;
+    for (uint32_t n = 0; n < s.node_count; n++)
+        for (uint32_t k = 0; k < m.light_count; k++) {
+            double q[3];
+            if (!sg_cache_node_importance_point(c, n, k, q))
+                continue;
+            for (int a = 0; a < 3; a++) {
+                double lo = g->origin[a], hi = lo + g->voxel_size * (a == 0 ? g->nx : a == 1 ? g->ny : g->nz);
+                cr_assert(q[a] >= lo - 1e-3 && q[a] <= hi + 1e-3, "node %u point %g outside", n, q[a]);
+            }
+        }
     uint64_t found = 0, medium_voxels = 0;
     for (int k = 0; k < g->nz; k++)
         for (int jy = 0; jy < g->ny; jy++)
