@@ -428,6 +428,10 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
     }
     stats.seconds_table = sg_seconds() - t2;
     double t3 = sg_seconds();
+    /* The side output first: the cache, the target make waits for, appears
+     * only when everything succeeded. */
+    if (ok && options->vectors_path)
+        ok = write_vectors(options->vectors_path, skeleton, component, lights, L, points, err);
     if (ok) {
         SgOutputFile out;
         ok = sg_output_open(&out, out_path, err);
@@ -440,8 +444,6 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
             }
         }
     }
-    if (ok && options->vectors_path)
-        ok = write_vectors(options->vectors_path, skeleton, component, lights, L, points, err);
     stats.seconds_write = sg_seconds() - t3;
 
     stats.nodes = N;
