@@ -211,20 +211,21 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
     const SgGrid *grid = &medium->grid;
     const double t0 = sg_seconds();
     const uint32_t N = skeleton->node_count, L = medium->light_count;
+    const char *mname = options->medium_name ? options->medium_name : "medium";
+    const char *sname = options->skeleton_name ? options->skeleton_name : "skeleton";
 
     if (N == 0)
-        return sg_fail(err, "%s: the skeleton has no nodes", out_path);
+        return sg_fail(err, "%s: the skeleton has no nodes", sname);
     if (grid->nx <= 0 || grid->ny <= 0 || grid->nz <= 0 || !grid->voxels)
-        return sg_fail(err, "%s: the medium grid is empty", out_path);
+        return sg_fail(err, "%s: the medium grid is empty", mname);
     for (uint32_t n = 0; n < N; n++) {
         const SgSkeletonNode *v = &skeleton->nodes[n];
         if (v->kind == SG_NODE_LIGHT && v->light >= 0 && (uint32_t)v->light >= L)
-            return sg_fail(err, "%s: skeleton node %u names light %d but the medium has %u "
-                           "lights (skeleton.ply and medium.vdb do not belong together)",
-                           out_path, n, v->light, L);
+            return sg_fail(err, "%s: node %u names light %d but %s has %u lights (they do "
+                           "not belong together)", sname, n, v->light, mname, L);
         for (int a = 0; a < 3; a++)
             if (!isfinite(v->position[a]))
-                return sg_fail(err, "%s: skeleton node %u has a non-finite position", out_path, n);
+                return sg_fail(err, "%s: node %u has a non-finite position", sname, n);
     }
     if ((uint64_t)N * L > (uint64_t)1 << 32)
         return sg_fail(err, "%s: %u nodes x %u lights is too many importance points", out_path,

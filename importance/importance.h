@@ -34,6 +34,8 @@ typedef struct SgImportanceOptions {
     double run_tolerance;     /* 0: SG_IMPORTANCE_RUN_TOLERANCE */
     bool exact_runs;          /* test every node of the run (the paper's rule, verbatim) */
     const char *vectors_path; /* optional: figure 2 as a PLY of node -> point edges */
+    const char *medium_name;   /* the inputs' names in messages (default "medium", */
+    const char *skeleton_name; /* "skeleton") */
     bool quiet;               /* no summary line on stderr */
 } SgImportanceOptions;
 

@@ -147,6 +147,8 @@ int main(int argc, char **argv)
         return 2;
     }
     options.quiet = quiet;
+    options.medium_name = inputs[0];
+    options.skeleton_name = inputs[1];
 
     SgError err = {0};
     SgMedium medium;

@@ -173,6 +173,23 @@ Test(importance_cli, bad_inputs_fail_with_one_line_and_no_output, .init = setup)
     cr_assert_eq(sg_test_count_lines(err), 1, "%s", err);
     cr_assert_not(sg_test_exists(cache));
 
+    /* A skeleton made for another medium: a light node naming light 7. */
+    SgSkeleton other = {0};
+    int a0[3] = {2, 6, 2}, a1[3] = {12, 6, 2};
+    uint32_t last = sgt_line(&other, SG_CACHE_NONE, a0, a1);
+    other.nodes[last].kind = SG_NODE_LIGHT;
+    other.nodes[last].light = 7;
+    char other_path[4096];
+    snprintf(other_path, sizeof other_path, "%s/other.ply", dir);
+    SgError e = {0};
+    cr_assert(sg_skeleton_write_ply(&other, other_path, &e), "%s", e.message);
+    sg_skeleton_release(&other);
+    snprintf(cmd, sizeof cmd, "%s %s %s -o %s", program, medium, other_path, cache);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 1);
+    cr_assert_eq(sg_test_count_lines(err), 1, "%s", err);
+    cr_assert(strstr(err, other_path) != NULL && strstr(err, "light 7") != NULL, "%s", err);
+    cr_assert_not(sg_test_exists(cache));
+
     /* --info on something that is not a cache, and on a missing file. */
     snprintf(cmd, sizeof cmd, "%s --info %s", program, medium);
     cr_assert_eq(sg_test_run(cmd, err, sizeof err), 1);
