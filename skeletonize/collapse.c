@@ -37,8 +37,7 @@ typedef struct Collapse {
     U32Vec pairs;       /* f, g, f, g, ... */
     EdgeVec live;       /* isolated edges not yet kept */
     EdgeVec kept;       /* isolated edges in the constraint set */
-    size_t live_sorted; /* live[0..live_sorted) has no duplicates */
-    const uint16_t *dist8, *open8;
+    const uint16_t *dist8, *open8; /* lattice layout: voxel at its lower corner */
     int substep;
     int32_t step;
     uint64_t squares, removed, total;
@@ -149,19 +148,14 @@ static inline void consider_faces(Collapse *c, uint32_t cell)
 
 static uint16_t edge_opening(const Collapse *c, size_t v, unsigned m)
 {
-    const SgComplex *cx = c->cx;
-    int p[3];
-    sg_complex_coords(cx, v, p);
+    /* the voxels holding edge (v, m): cubes at v - d, d sharing no axis with m */
     uint16_t best = 0;
     for (unsigned d = 0; d < 8; d++) {
         if (d & m)
             continue;
-        int x = p[0] - (int)(d & 1), y = p[1] - (int)(d >> 1 & 1), z = p[2] - (int)(d >> 2);
-        if (x < 0 || y < 0 || z < 0 || x >= cx->nx || y >= cx->ny || z >= cx->nz)
-            continue;
-        uint16_t o = c->open8[(size_t)x + (size_t)cx->nx * ((size_t)y + (size_t)cx->ny * (size_t)z)];
-        if (o > best)
-            best = o;
+        size_t w = v - ((d & 1) ? c->st[0] : 0) - ((d & 2) ? c->st[1] : 0) - ((d & 4) ? c->st[2] : 0);
+        if (c->open8[w] > best)
+            best = c->open8[w];
     }
     return best;
 }
@@ -218,13 +212,17 @@ static void run_substep(Collapse *c, int s)
     q->n = 0;
     if (c->oom)
         return;
-    /* all at once: the pairs were tested against the complex as it was */
-    for (size_t i = 0; i < c->pairs.n; i++)
-        remove_cell(c, c->pairs.a[i]);
+    /* The pairs were all tested against the complex as the sub-step found
+     * it; removing them one by one now gives the same complex. Noting an
+     * edge right after each square goes notes it exactly once (when its
+     * last square goes); a face tested too early is tested again when its
+     * other coface goes. */
     c->removed += c->pairs.n;
     int coface_dim = 3 - s % 3;
     for (size_t i = 0; i < c->pairs.n; i += 2) {
         uint32_t f = c->pairs.a[i], g = c->pairs.a[i + 1];
+        remove_cell(c, f);
+        remove_cell(c, g);
         if (coface_dim == 3) {
             c->squares--;
             note_isolated_edges(c, f);
@@ -247,16 +245,6 @@ static int compare_edge_cell(const void *a, const void *b)
 static void apply_lifespan_rule(Collapse *c)
 {
     EdgeVec *live = &c->live;
-    /* the same edge is noted twice when two of its squares go in one sub-step */
-    if (live->n > c->live_sorted) {
-        SgIsolatedEdge *tail = live->a + c->live_sorted;
-        size_t n = live->n - c->live_sorted, w = 0;
-        qsort(tail, n, sizeof *tail, compare_edge_cell);
-        for (size_t i = 0; i < n; i++)
-            if (w == 0 || tail[w - 1].cell != tail[i].cell)
-                tail[w++] = tail[i];
-        live->n = c->live_sorted + w;
-    }
     size_t w = 0;
     for (size_t i = 0; i < live->n; i++) {
         SgIsolatedEdge e = live->a[i];
@@ -273,7 +261,6 @@ static void apply_lifespan_rule(Collapse *c)
         live->a[w++] = e;
     }
     live->n = w;
-    c->live_sorted = w;
 }
 
 /* ---- cavities ---------------------------------------------------------- */
@@ -308,12 +295,7 @@ static size_t square_index(const U32Vec *squares, uint32_t cell)
 
 static uint16_t voxel_dist8(const Collapse *c, size_t v)
 {
-    int p[3];
-    sg_complex_coords(c->cx, v, p);
-    const SgComplex *cx = c->cx;
-    if (p[0] < 0 || p[1] < 0 || p[2] < 0 || p[0] >= cx->nx || p[1] >= cx->ny || p[2] >= cx->nz)
-        return 0;
-    return c->dist8[(size_t)p[0] + (size_t)cx->nx * ((size_t)p[1] + (size_t)cx->ny * (size_t)p[2])];
+    return c->dist8[v];
 }
 
 /* The collapse is stuck with squares left: no free face anywhere. The
@@ -547,7 +529,6 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
         if (progress)
             sg_progress_update(progress, c.removed);
     }
-    apply_lifespan_rule(&c); /* dedupe anything noted by the last break */
 
     /* every surviving edge: kept ones and live ones still present */
     size_t total = c.kept.n + c.live.n;

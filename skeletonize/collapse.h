@@ -26,7 +26,8 @@ typedef struct SgCollapseResult {
 
 /* Collapses cx in place until only 0- and 1-cells are left. constrained
  * lists cell ids that are never removed. dist8/open8 are the medium's
- * distance and opening (grid layout). */
+ * distance and opening in lattice layout (voxel (i,j,k) at the index of
+ * vertex (i,j,k), 0 elsewhere). */
 bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
                  const uint16_t *dist8, const uint16_t *open8, SgProgress *progress,
                  SgCollapseResult *result, SgError *err);

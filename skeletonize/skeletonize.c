@@ -21,6 +21,25 @@ static size_t grid_index3(const SgGrid *g, const int p[3])
     return sg_grid_index(g, p[0], p[1], p[2]);
 }
 
+static size_t lattice_index3(const SgComplex *cx, const int p[3])
+{
+    return sg_complex_vertex(cx, p[0], p[1], p[2]);
+}
+
+static bool to_lattice(const SgComplex *cx, const SgGrid *g, uint16_t **values, SgError *err)
+{
+    uint16_t *lat = calloc(cx->vertex_count, sizeof *lat);
+    if (!lat)
+        return sg_fail(err, "skeleton: out of memory");
+    for (int k = 0; k < g->nz; k++)
+        for (int j = 0; j < g->ny; j++)
+            memcpy(lat + sg_complex_vertex(cx, 0, j, k), *values + sg_grid_index(g, 0, j, k),
+                   (size_t)g->nx * sizeof *lat);
+    free(*values);
+    *values = lat;
+    return true;
+}
+
 typedef struct Anchor {
     uint32_t vertex_cell; /* cell id of the constrained 0-cell */
     uint32_t constraint;  /* index into the caller's constraint list */
@@ -67,7 +86,7 @@ static uint32_t choose_anchor(const SgComplex *cx, const SgGrid *g, const uint16
         for (unsigned d = 0; d < 8; d++) {
             int r[3] = {q[0] - (int)(d & 1), q[1] - (int)(d >> 1 & 1), q[2] - (int)(d >> 2)};
             if (sg_grid_inside(g, r[0], r[1], r[2]))
-                score += dist8[grid_index3(g, r)];
+                score += dist8[lattice_index3(cx, r)];
         }
         if (best == UINT32_MAX || score > best_score)
             best = cell, best_score = score;
@@ -111,6 +130,10 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
         goto done;
     stats.seconds_distance = sg_seconds() - t0;
     if (!sg_complex_build(&cx, g, opt.threads, err))
+        goto done;
+    /* lattice layout (voxel (i,j,k) at vertex (i,j,k)): the collapse reads
+     * the voxels around a cell without dividing indices */
+    if (!to_lattice(&cx, g, &dist8, err) || !to_lattice(&cx, g, &open8, err))
         goto done;
 
     anchors = calloc(constraint_count ? constraint_count : 1, sizeof *anchors);
@@ -183,7 +206,7 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
             int r[3] = {c[0] - (int)(d & 1), c[1] - (int)(d >> 1 & 1), c[2] - (int)(d >> 2)};
             if (!sg_grid_inside(g, r[0], r[1], r[2]))
                 continue;
-            uint16_t dd = dist8[grid_index3(g, r)];
+            uint16_t dd = dist8[lattice_index3(&cx, r)];
             if (dd > best_d)
                 best_d = dd, memcpy(best, r, sizeof best);
         }
@@ -202,7 +225,7 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
         sg_grid_voxel_center(g, best[0], best[1], best[2], w);
         for (int a = 0; a < 3; a++)
             node->position[a] = (float)w[a];
-        node->radius = (float)(open8[grid_index3(g, best)] / 8.0 * g->voxel_size);
+        node->radius = (float)(open8[lattice_index3(&cx, best)] / 8.0 * g->voxel_size);
         node->lifespan = 0;
     }
     for (size_t v = 0; v < cx.vertex_count; v++) {
@@ -256,13 +279,13 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
         if (out->nodes[i].lifespan == 0 && ne == 0)
             out->nodes[i].lifespan = (int)col.steps;
         const int *p = out->nodes[i].voxel;
-        uint16_t here = dist8[grid_index3(g, p)], around = here;
+        uint16_t here = dist8[lattice_index3(&cx, p)], around = here;
         for (int dz = -1; dz <= 1; dz++)
             for (int dy = -1; dy <= 1; dy++)
                 for (int dx = -1; dx <= 1; dx++) {
                     int q[3] = {p[0] + dx, p[1] + dy, p[2] + dz};
-                    if (sg_grid_inside(g, q[0], q[1], q[2]) && dist8[grid_index3(g, q)] > around)
-                        around = dist8[grid_index3(g, q)];
+                    if (sg_grid_inside(g, q[0], q[1], q[2]) && dist8[lattice_index3(&cx, q)] > around)
+                        around = dist8[lattice_index3(&cx, q)];
                 }
         ratio_sum += around ? (double)here / around : 1.0;
     }
