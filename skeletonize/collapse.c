@@ -42,6 +42,7 @@ typedef struct Collapse {
     int32_t step;
     uint64_t squares, removed, total;
     uint32_t cavities_broken_total, forced_total;
+    int64_t filter256;
     bool oom;
 } Collapse;
 
@@ -252,7 +253,7 @@ static void apply_lifespan_rule(Collapse *c)
         unsigned m = e.cell & 7;
         if (!has(c->cells, v, m))
             continue;
-        if ((int64_t)(c->step - e.birth) * 8 > (int64_t)e.open8) {
+        if ((int64_t)(c->step - e.birth) * 8 * 256 > (int64_t)e.open8 * c->filter256) {
             c->cons[v] |= (uint8_t)(1u << m);
             e.kept = c->step;
             edge_push(c, &c->kept, e);
@@ -463,11 +464,14 @@ static int popcount8(unsigned x)
 }
 
 bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
-                 const uint16_t *dist8, const uint16_t *open8, SgProgress *progress,
+                 const uint16_t *dist8, const uint16_t *open8, double filter_scale,
+                 SgProgress *progress,
                  SgCollapseResult *result, SgError *err)
 {
     memset(result, 0, sizeof *result);
     Collapse c = {.cx = cx, .cells = cx->cells, .dist8 = dist8, .open8 = open8};
+    /* the rule compares 8 x lifespan with scale x (8 x opening): in 1/256 */
+    c.filter256 = filter_scale >= 0 && filter_scale < 1e6 ? (int64_t)(filter_scale * 256 + 0.5) : 256;
     for (int a = 0; a < 3; a++)
         c.st[a] = cx->stride[a];
     c.cur = c.queue_a;

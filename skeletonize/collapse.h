@@ -27,9 +27,11 @@ typedef struct SgCollapseResult {
 /* Collapses cx in place until only 0- and 1-cells are left. constrained
  * lists cell ids that are never removed. dist8/open8 are the medium's
  * distance and opening in lattice layout (voxel (i,j,k) at the index of
- * vertex (i,j,k), 0 elsewhere). */
+ * vertex (i,j,k), 0 elsewhere). An isolated edge joins the constraint set
+ * when lifespan > filter_scale x opening (1: [Cha10]). */
 bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
-                 const uint16_t *dist8, const uint16_t *open8, SgProgress *progress,
+                 const uint16_t *dist8, const uint16_t *open8, double filter_scale,
+                 SgProgress *progress,
                  SgCollapseResult *result, SgError *err);
 void sg_collapse_result_release(SgCollapseResult *r);
 

@@ -296,6 +296,9 @@ bool sg_distance_opening(const SgGrid *g, int threads, uint16_t **dist8_out,
             for (int y = 0; y < g->ny; y++)
                 for (int x = 0; x < g->nx; x++, p++)
                     c.cand[p] = pack(&c, x, y, z);
+        /* one round x, y, z; a second round would lower the mean
+         * underestimate from ~0.56 to ~0.33 voxel (noisy walls) at twice
+         * the cost: not worth it for a threshold counted in whole steps */
         sg_parallel_for((uint64_t)g->nz, c.threads, open_x, &c);
         sg_parallel_for((uint64_t)g->nz, c.threads, open_y, &c);
         sg_parallel_for((uint64_t)g->ny, c.threads, open_z, &c);

@@ -14,6 +14,7 @@ void sg_skeleton_options_default(SgSkeletonOptions *opt)
     memset(opt, 0, sizeof *opt);
     opt->threads = 0;
     opt->progress = true;
+    opt->filter_scale = 1.0;
 }
 
 static size_t grid_index3(const SgGrid *g, const int p[3])
@@ -159,7 +160,8 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
     if (!opt.progress)
         progress.enabled = false;
     progress.total = 0;
-    if (!sg_collapse(&cx, anchor_cells, anchor_count, dist8, open8, &progress, &col, err))
+    if (!sg_collapse(&cx, anchor_cells, anchor_count, dist8, open8, opt.filter_scale, &progress,
+                     &col, err))
         goto done;
     sg_progress_end(&progress);
     stats.seconds_collapse = sg_seconds() - t1;

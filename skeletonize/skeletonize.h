@@ -25,6 +25,10 @@ typedef struct SgSkeletonOptions {
     bool camera_constraint; /* the camera's voxel joins the constraint set */
     int threads;            /* <= 0: every core */
     bool progress;          /* progress line on a terminal (stderr) */
+    double filter_scale;    /* the lifespan rule keeps an edge when
+                               lifespan > filter_scale x opening; 1 is [Cha10]'s
+                               parameter-free rule (default), 0 keeps every
+                               edge as soon as it is isolated (no filter) */
 } SgSkeletonOptions;
 
 typedef struct SgSkeletonStats {
