@@ -27,11 +27,13 @@ static void tmp_path(char *out, size_t cap, const char *name)
 }
 
 /* Runs the program; returns its exit status, stderr in err_text. */
+static const char *run_env = "";
 static int run(const char *args, char *err_text, size_t cap)
 {
     char errfile[256], cmd[2048];
     tmp_path(errfile, sizeof errfile, "stderr.txt");
-    snprintf(cmd, sizeof cmd, "%s/skeletonize %s 2>%s >/dev/null", bin_dir(), args, errfile);
+    snprintf(cmd, sizeof cmd, "%s %s/skeletonize %s 2>%s >/dev/null", run_env, bin_dir(), args,
+             errfile);
     int status = system(cmd);
     FILE *f = fopen(errfile, "r");
     size_t n = f ? fread(err_text, 1, cap - 1, f) : 0;
@@ -141,7 +143,12 @@ Test(skeletonize_cli, refuses_truncated_file)
     struct stat st;
     cr_assert_eq(stat(in, &st), 0);
     cr_assert_eq(truncate(in, st.st_size / 2), 0);
+    /* OpenVDB 10 leaks a node buffer inside RootNode::readTopology when the
+     * stream ends early (its exception path, not ours): keep LeakSanitizer
+     * (SANITIZE=1 builds) from adding its report to the one-line message */
+    run_env = "ASAN_OPTIONS=detect_leaks=0";
     expect_refused(in, "truncated file");
+    run_env = "";
     unlink(in);
 }
 
