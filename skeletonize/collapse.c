@@ -8,8 +8,11 @@
  * queued when it becomes free, which can only happen when one of its
  * cofaces is removed, so after a removal only the faces of the removed
  * cells are re-tested: each step costs the size of the current border.
- * A free face keeps its unique coface until one of them goes, so its kind
- * never changes and one "queued" bit per cell avoids duplicates. */
+ * A face is queued when, right after one of its cofaces goes, it has
+ * exactly one coface left (or at the start). Cofaces only ever go, so that
+ * count passes 1 once: a cell is queued at most once, with no need for a
+ * "queued" bit per cell. A queued face may stop being free (its coface
+ * goes with another face): it is checked again when its sub-step comes. */
 #include "collapse.h"
 
 #include <stdlib.h>
@@ -30,7 +33,7 @@ typedef struct EdgeVec {
 
 typedef struct Collapse {
     SgComplex *cx;
-    uint8_t *cells, *cons, *queued;
+    uint8_t *cells, *cons;
     size_t st[3];
     U32Vec queue_a[KINDS], queue_b[KINDS];
     U32Vec *cur, *next; /* this step's and next step's queues */
@@ -121,15 +124,10 @@ static inline int free_kind(const Collapse *c, uint32_t f, uint32_t *g)
 
 static inline void consider(Collapse *c, uint32_t h)
 {
-    size_t v = h >> 3;
-    unsigned m = h & 7;
-    if (has(c->queued, v, m))
-        return;
     uint32_t g;
     int k = free_kind(c, h, &g);
     if (k < 0)
         return;
-    c->queued[v] |= (uint8_t)(1u << m);
     u32_push(c, k > c->substep ? &c->cur[k] : &c->next[k], h);
 }
 
@@ -204,13 +202,17 @@ static void run_substep(Collapse *c, int s)
     c->pairs.n = 0;
     for (size_t i = 0; i < q->n; i++) {
         uint32_t f = q->a[i], g;
-        c->queued[f >> 3] &= (uint8_t) ~(1u << (f & 7));
         if (free_kind(c, f, &g) == s) {
             u32_push(c, &c->pairs, f);
             u32_push(c, &c->pairs, g);
         }
     }
     q->n = 0;
+    if (q->cap > (1u << 16)) { /* the border moves on: do not keep the slack */
+        free(q->a);
+        q->a = NULL;
+        q->cap = 0;
+    }
     if (c->oom)
         return;
     /* The pairs were all tested against the complex as the sub-step found
@@ -477,9 +479,8 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
     c.cur = c.queue_a;
     c.next = c.queue_b;
     c.cons = calloc(cx->vertex_count, 1);
-    c.queued = calloc(cx->vertex_count, 1);
     bool ok = false;
-    if (!c.cons || !c.queued) {
+    if (!c.cons) {
         c.oom = true;
         goto done;
     }
@@ -508,6 +509,8 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
             goto done;
     }
 
+    if (progress)
+        progress->total = c.total; /* cells removed / cells at the start */
     for (;;) {
         bool any = false;
         for (int k = 0; k < KINDS; k++)
@@ -562,7 +565,6 @@ done:
     free(c.live.a);
     free(c.kept.a);
     free(c.cons);
-    free(c.queued);
     if (!ok) {
         sg_collapse_result_release(result);
         return sg_fail(err, "collapse: out of memory");

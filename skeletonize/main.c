@@ -98,7 +98,7 @@ int main(int argc, char **argv)
     if (!ok) {
         sg_error_print("skeletonize", &err);
     } else if (!quiet) {
-        if (options.camera_constraint && stats.constraints < medium.light_count + 1)
+        if (options.camera_constraint && !stats.camera_constrained)
             fprintf(stderr, "skeletonize: %s: note: the camera is not in the medium; "
                             "it is not a constraint\n", in_path);
         fprintf(stderr,

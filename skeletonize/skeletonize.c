@@ -159,7 +159,6 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
     sg_progress_begin(&progress, "skeleton: collapse", 0);
     if (!opt.progress)
         progress.enabled = false;
-    progress.total = 0;
     if (!sg_collapse(&cx, anchor_cells, anchor_count, dist8, open8, opt.filter_scale, &progress,
                      &col, err))
         goto done;
@@ -350,8 +349,11 @@ bool sg_skeletonize(const SgMedium *m, const SgSkeletonOptions *opt, SgSkeleton 
             count++;
         }
     }
+    bool camera = count > 0 && kinds[count - 1] == SG_NODE_CAMERA;
     bool ok = sg_skeletonize_grid(&m->grid, count, (const int(*)[3])voxels, kinds, lights, opt,
                                   out, stats, err);
+    if (ok && stats)
+        stats->camera_constrained = camera;
     free(voxels);
     free(kinds);
     free(lights);

@@ -40,6 +40,7 @@ typedef struct SgSkeletonStats {
     uint32_t forced_breaks;    /* squares removed although no cavity was behind them
                                   (a stuck, non-collapsible 2D part); 0 in practice */
     uint32_t constraints;      /* light (+ camera) constraint cells */
+    bool camera_constrained;   /* the camera's voxel was in the medium and is a node */
     uint32_t steps;            /* collapse steps */
     double mean_centredness;   /* mean over nodes of dist(node voxel) / max dist in its 3x3x3 */
     double seconds_distance, seconds_collapse, seconds_total;

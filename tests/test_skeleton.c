@@ -298,8 +298,22 @@ Test(skeleton, camera_constraint)
             }
         cr_expect_eq(cameras, with);
         cr_expect_eq(st.constraints, 1u + (unsigned)with);
+        cr_expect_eq(st.camera_constrained, (bool)with);
         sg_skeleton_release(&s);
     }
+    /* a camera inside a wall is no constraint (and no failure) */
+    m.camera_position[0] = 12.0;
+    m.camera_position[2] = 12.0;
+    SgSkeletonOptions o = quiet_options(2);
+    o.camera_constraint = true;
+    SgSkeleton s;
+    SgSkeletonStats st;
+    SgError err = {0};
+    cr_assert(sg_skeletonize(&m, &o, &s, &st, &err));
+    cr_expect(!st.camera_constrained);
+    for (uint32_t i = 0; i < s.node_count; i++)
+        cr_expect_neq(s.nodes[i].kind, SG_NODE_CAMERA);
+    sg_skeleton_release(&s);
     sg_shape_medium_free(&m);
 }
 
