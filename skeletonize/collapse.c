@@ -227,8 +227,9 @@ static void run_substep(Collapse *c, int s)
         remove_cell(c, f);
         remove_cell(c, g);
         if (coface_dim == 3) {
+            /* each edge of the square f is also an edge of another square
+             * of the cube g, still here: no edge becomes isolated */
             c->squares--;
-            note_isolated_edges(c, f);
         } else if (coface_dim == 2) {
             c->squares--;
             note_isolated_edges(c, g);
