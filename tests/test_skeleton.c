@@ -451,3 +451,32 @@ Test(distance, exact_edt_and_opening_bound)
     free(open8);
     sg_shape_medium_free(&m);
 }
+
+/* ---- a real scene: Sponza (third-party, in ../shared/scenes) ---- */
+
+#include "../voxelize/voxelize.h"
+#include "support_files.h"
+
+Test(skeleton, sponza_topology)
+{
+    const char *path = "data/external/sponza.json";
+    if (!sg_test_have_shared_scenes() || !sg_test_exists("../shared/scenes/sponza-dabrovic/sponza.obj"))
+        cr_skip_test("../shared/scenes/sponza-dabrovic is absent");
+    SgError err = {0};
+    SgScene *scene = sg_scene_load(path, &err);
+    cr_assert_not_null(scene, "%s", err.message);
+    SgVoxelizeOptions vo = {.resolution = 128, .threads = 2};
+    SgMedium m;
+    SgVoxelizeStats vs;
+    cr_assert(sg_voxelize(scene, &vo, &m, &vs, &err), "%s", err.message);
+    sg_scene_free(scene);
+    SgSkeletonOptions o = quiet_options(2);
+    SgSkeleton s;
+    SgSkeletonStats st;
+    cr_assert(sg_skeletonize(&m, &o, &s, &st, &err), "%s", err.message);
+    check_skeleton(&m, &s, &st, "sponza 128");
+    cr_expect(st.loops > 10, "sponza's arcades give many loops, got %ld", (long)st.loops);
+    cr_expect(st.mean_centredness > 0.85, "centredness %.3f", st.mean_centredness);
+    sg_skeleton_release(&s);
+    sg_medium_release(&m);
+}
