@@ -84,6 +84,7 @@ typedef struct SgScene {
     int voxel_resolution;     /* from "voxel": {"resolution"}; 0 if not given */
 
     double bounds_min[3], bounds_max[3]; /* of all triangles */
+    uint32_t degenerate_dropped; /* zero-area triangles left out when loading */
 
     /* Identity of what the precompute depends on: geometry, materials'
      * emission and lights; not the camera. Same scene in, same hash out. */

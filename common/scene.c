@@ -1,0 +1,1176 @@
+/* Scene loading: the JSON description (cJSON) and its meshes (Assimp).
+ * Everything ends up in flat world-space arrays; lights are grouped from
+ * emissive triangles. See README.md, "Scene format". */
+#include "scene.h"
+
+#include <assimp/ObjMaterial.h>
+#include <assimp/cimport.h>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <glob.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "hash.h"
+#include "ply_mesh.h"
+#include "vecmath.h"
+
+/* ---- growable arrays ---------------------------------------------------- */
+
+typedef struct Builder {
+    SgScene *scene;
+    const char *json_path;
+    char base_dir[4096];
+    uint32_t vertex_capacity, triangle_capacity, material_capacity;
+    const cJSON *material_overrides; /* the "materials" object, or NULL */
+    uint32_t dropped_degenerate;
+} Builder;
+
+static bool grow(void **array, uint32_t *capacity, uint32_t needed, size_t item,
+                 SgError *err, const char *path)
+{
+    if (needed <= *capacity)
+        return true;
+    uint64_t cap = *capacity ? *capacity : 1024;
+    while (cap < needed)
+        cap *= 2;
+    if (cap > UINT32_MAX)
+        return sg_fail(err, "%s: scene too large (more than 4 billion elements)", path);
+    void *p = realloc(*array, (size_t)cap * item);
+    if (!p)
+        return sg_fail(err, "%s: out of memory", path);
+    *array = p;
+    *capacity = (uint32_t)cap;
+    return true;
+}
+
+static bool add_vertices(Builder *b, uint32_t count, SgError *err)
+{
+    SgScene *s = b->scene;
+    if ((uint64_t)s->vertex_count + count > UINT32_MAX)
+        return sg_fail(err, "%s: too many vertices", b->json_path);
+    return grow((void **)&s->positions, &b->vertex_capacity, s->vertex_count + count,
+                3 * sizeof(double), err, b->json_path);
+}
+
+static bool add_triangles(Builder *b, uint32_t count, SgError *err)
+{
+    SgScene *s = b->scene;
+    if ((uint64_t)s->triangle_count + count > UINT32_MAX)
+        return sg_fail(err, "%s: too many triangles", b->json_path);
+    uint32_t cap = b->triangle_capacity;
+    if (!grow((void **)&s->indices, &cap, s->triangle_count + count, 3 * sizeof(uint32_t), err,
+              b->json_path))
+        return false;
+    uint32_t cap2 = b->triangle_capacity;
+    if (!grow((void **)&s->triangle_material, &cap2, s->triangle_count + count,
+              sizeof(uint32_t), err, b->json_path))
+        return false;
+    b->triangle_capacity = cap;
+    return true;
+}
+
+/* ---- JSON helpers ------------------------------------------------------- */
+
+static bool json_vec3(const cJSON *item, double out[3])
+{
+    if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3)
+        return false;
+    for (int a = 0; a < 3; a++) {
+        const cJSON *v = cJSON_GetArrayItem(item, a);
+        if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble))
+            return false;
+        out[a] = v->valuedouble;
+    }
+    return true;
+}
+
+static bool json_color(const cJSON *item, float out[3])
+{
+    double v[3];
+    if (!json_vec3(item, v))
+        return false;
+    for (int a = 0; a < 3; a++) {
+        if (v[a] < 0)
+            return false;
+        out[a] = (float)v[a];
+    }
+    return true;
+}
+
+/* Optional vec3 member: absent is fine, present must be valid. */
+static bool member_vec3(const char *path, const cJSON *obj, const char *owner, const char *name,
+                        double out[3], bool *present, SgError *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, name);
+    if (present)
+        *present = item != NULL;
+    if (!item)
+        return true;
+    if (!json_vec3(item, out))
+        return sg_fail(err, "%s: %s.%s must be an array of 3 finite numbers", path, owner, name);
+    return true;
+}
+
+static bool member_color(const char *path, const cJSON *obj, const char *owner, const char *name,
+                         float out[3], SgError *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, name);
+    if (!item)
+        return true;
+    if (!json_color(item, out))
+        return sg_fail(err, "%s: %s.%s must be an array of 3 non-negative numbers", path, owner,
+                       name);
+    return true;
+}
+
+static bool member_number(const char *path, const cJSON *obj, const char *owner, const char *name,
+                          double lo, double hi, double *out, SgError *err)
+{
+    const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, name);
+    if (!item)
+        return true;
+    if (!cJSON_IsNumber(item) || !isfinite(item->valuedouble) || item->valuedouble < lo ||
+        item->valuedouble > hi)
+        return sg_fail(err, "%s: %s.%s must be a number in [%g, %g]", path, owner, name, lo, hi);
+    *out = item->valuedouble;
+    return true;
+}
+
+static bool member_int(const char *path, const cJSON *obj, const char *owner, const char *name,
+                       int lo, int hi, int *out, SgError *err)
+{
+    double v = *out;
+    if (!member_number(path, obj, owner, name, lo, hi, &v, err))
+        return false;
+    if (v != floor(v))
+        return sg_fail(err, "%s: %s.%s must be a whole number", path, owner, name);
+    *out = (int)v;
+    return true;
+}
+
+/* ---- materials ---------------------------------------------------------- */
+
+static void default_material(SgMaterial *m, const char *name)
+{
+    memset(m, 0, sizeof *m);
+    snprintf(m->name, sizeof m->name, "%.63s", name);
+    m->type = SG_MATERIAL_DIFFUSE;
+    m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0.5f;
+    m->exponent = 1;
+    m->ior = 1.5f;
+}
+
+static bool apply_material_json(const char *path, const cJSON *obj, const char *name,
+                                SgMaterial *m, SgError *err)
+{
+    if (!cJSON_IsObject(obj))
+        return sg_fail(err, "%s: material \"%s\" must be an object", path, name);
+    char owner[96];
+    snprintf(owner, sizeof owner, "materials.%s", name);
+    const cJSON *type = cJSON_GetObjectItemCaseSensitive(obj, "type");
+    if (type) {
+        const char *t = cJSON_GetStringValue(type);
+        if (t && !strcmp(t, "diffuse"))
+            m->type = SG_MATERIAL_DIFFUSE;
+        else if (t && !strcmp(t, "glossy"))
+            m->type = SG_MATERIAL_GLOSSY;
+        else if (t && !strcmp(t, "mirror"))
+            m->type = SG_MATERIAL_MIRROR;
+        else if (t && !strcmp(t, "dielectric"))
+            m->type = SG_MATERIAL_DIELECTRIC;
+        else
+            return sg_fail(err, "%s: %s.type must be diffuse, glossy, mirror or dielectric", path,
+                           owner);
+    }
+    double exponent = m->exponent, ior = m->ior;
+    if (!member_color(path, obj, owner, "albedo", m->diffuse, err) ||
+        !member_color(path, obj, owner, "specular", m->specular, err) ||
+        !member_color(path, obj, owner, "emission", m->emission, err) ||
+        !member_number(path, obj, owner, "exponent", 0, 1e7, &exponent, err) ||
+        !member_number(path, obj, owner, "ior", 1.0, 10.0, &ior, err))
+        return false;
+    m->exponent = (float)exponent;
+    m->ior = (float)ior;
+    /* Keep energy conservation: albedos above 1 would make furnaces explode. */
+    for (int a = 0; a < 3; a++)
+        if (m->diffuse[a] + m->specular[a] > 1.0f && m->type != SG_MATERIAL_MIRROR &&
+            m->type != SG_MATERIAL_DIELECTRIC)
+            return sg_fail(err, "%s: %s: albedo + specular exceeds 1 (not energy conserving)",
+                           path, owner);
+    return true;
+}
+
+static bool add_material(Builder *b, const SgMaterial *m, uint32_t *id, SgError *err)
+{
+    SgScene *s = b->scene;
+    if (!grow((void **)&s->materials, &b->material_capacity, s->material_count + 1,
+              sizeof(SgMaterial), err, b->json_path))
+        return false;
+    s->materials[s->material_count] = *m;
+    *id = s->material_count++;
+    return true;
+}
+
+/* A material named in the JSON "materials" object, looked up by name. */
+static bool named_material(Builder *b, const char *name, uint32_t *id, SgError *err)
+{
+    for (uint32_t i = 0; i < b->scene->material_count; i++)
+        if (!strcmp(b->scene->materials[i].name, name)) {
+            *id = i;
+            return true;
+        }
+    const cJSON *obj = b->material_overrides
+                           ? cJSON_GetObjectItemCaseSensitive(b->material_overrides, name)
+                           : NULL;
+    if (!obj)
+        return sg_fail(err, "%s: material \"%s\" is not defined in \"materials\"", b->json_path,
+                       name);
+    SgMaterial m;
+    default_material(&m, name);
+    return apply_material_json(b->json_path, obj, name, &m, err) && add_material(b, &m, id, err);
+}
+
+static void read_color(const struct aiMaterial *mat, const char *key, unsigned type,
+                       unsigned index, float out[3])
+{
+    struct aiColor4D c;
+    if (aiGetMaterialColor(mat, key, type, index, &c) == AI_SUCCESS) {
+        out[0] = isfinite(c.r) && c.r > 0 ? c.r : 0;
+        out[1] = isfinite(c.g) && c.g > 0 ? c.g : 0;
+        out[2] = isfinite(c.b) && c.b > 0 ? c.b : 0;
+    }
+}
+
+/* Maps an Assimp (mostly MTL) material to ours; JSON "materials" entries of
+ * the same name override it. */
+static bool convert_material(Builder *b, const struct aiMaterial *mat, const char *file,
+                             uint32_t mesh_index, SgMaterial *m, SgError *err)
+{
+    struct aiString name;
+    char label[64];
+    if (aiGetMaterialString(mat, AI_MATKEY_NAME, &name) == AI_SUCCESS && name.length)
+        snprintf(label, sizeof label, "%.63s", name.data);
+    else
+        snprintf(label, sizeof label, "mesh%u", mesh_index);
+    default_material(m, label);
+    m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
+    read_color(mat, AI_MATKEY_COLOR_DIFFUSE, m->diffuse);
+    read_color(mat, AI_MATKEY_COLOR_SPECULAR, m->specular);
+    read_color(mat, AI_MATKEY_COLOR_EMISSIVE, m->emission);
+    float shininess = 0, ior = 1.5f, opacity = 1;
+    int illum = 2;
+    unsigned one = 1;
+    aiGetMaterialFloatArray(mat, AI_MATKEY_SHININESS, &shininess, &one);
+    one = 1;
+    aiGetMaterialFloatArray(mat, AI_MATKEY_REFRACTI, &ior, &one);
+    one = 1;
+    aiGetMaterialFloatArray(mat, AI_MATKEY_OPACITY, &opacity, &one);
+    one = 1;
+    aiGetMaterialIntegerArray(mat, AI_MATKEY_OBJ_ILLUM, &illum, &one);
+    if (!isfinite(shininess) || shininess < 0)
+        shininess = 0;
+    if (!isfinite(ior) || ior < 1)
+        ior = 1.5f;
+    m->exponent = shininess;
+    m->ior = ior;
+    float ks = v3_max_component(v3(m->specular[0], m->specular[1], m->specular[2]));
+    float kd = v3_max_component(v3(m->diffuse[0], m->diffuse[1], m->diffuse[2]));
+    if ((illum == 4 || illum == 6 || illum == 7 || opacity < 1) && ior > 1.0f)
+        m->type = SG_MATERIAL_DIELECTRIC;
+    else if (illum == 3 || (ks > 0 && kd == 0 && shininess >= 1000))
+        m->type = SG_MATERIAL_MIRROR;
+    else if (ks > 0 && illum != 1)
+        m->type = SG_MATERIAL_GLOSSY;
+    else
+        m->type = SG_MATERIAL_DIFFUSE;
+    if (m->type == SG_MATERIAL_DIFFUSE)
+        memset(m->specular, 0, sizeof m->specular);
+    /* Scale down what would create energy. */
+    for (int a = 0; a < 3; a++) {
+        float sum = m->diffuse[a] + (m->type == SG_MATERIAL_GLOSSY ? m->specular[a] : 0);
+        if (sum > 0.999f) {
+            float k = 0.999f / sum;
+            m->diffuse[a] *= k;
+            m->specular[a] *= k;
+        }
+    }
+    (void)file;
+    const cJSON *override = b->material_overrides
+                                ? cJSON_GetObjectItemCaseSensitive(b->material_overrides, label)
+                                : NULL;
+    if (override && !apply_material_json(b->json_path, override, label, m, err))
+        return false;
+    return true;
+}
+
+/* ---- transforms --------------------------------------------------------- */
+
+typedef struct Transform {
+    double m[3][4]; /* row-major affine */
+} Transform;
+
+static void transform_identity(Transform *t)
+{
+    memset(t, 0, sizeof *t);
+    t->m[0][0] = t->m[1][1] = t->m[2][2] = 1;
+}
+
+static void transform_point(const Transform *t, const double p[3], double out[3])
+{
+    for (int r = 0; r < 3; r++)
+        out[r] = t->m[r][0] * p[0] + t->m[r][1] * p[1] + t->m[r][2] * p[2] + t->m[r][3];
+}
+
+/* out = a * b (apply b first). */
+static void transform_compose(const Transform *a, const Transform *b, Transform *out)
+{
+    Transform r;
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 4; j++) {
+            double v = (j == 3) ? a->m[i][3] : 0;
+            for (int k = 0; k < 3; k++)
+                v += a->m[i][k] * b->m[k][j];
+            r.m[i][j] = v;
+        }
+    }
+    *out = r;
+}
+
+static bool parse_transform(const char *path, const cJSON *obj, const char *owner, Transform *t,
+                            SgError *err)
+{
+    transform_identity(t);
+    if (!obj)
+        return true;
+    if (!cJSON_IsObject(obj))
+        return sg_fail(err, "%s: %s.transform must be an object", path, owner);
+    const cJSON *matrix = cJSON_GetObjectItemCaseSensitive(obj, "matrix");
+    if (matrix) {
+        if (!cJSON_IsArray(matrix) || cJSON_GetArraySize(matrix) != 16)
+            return sg_fail(err, "%s: %s.transform.matrix must hold 16 numbers", path, owner);
+        double v[16];
+        for (int i = 0; i < 16; i++) {
+            const cJSON *x = cJSON_GetArrayItem(matrix, i);
+            if (!cJSON_IsNumber(x) || !isfinite(x->valuedouble))
+                return sg_fail(err, "%s: %s.transform.matrix must hold finite numbers", path,
+                               owner);
+            v[i] = x->valuedouble;
+        }
+        if (v[12] != 0 || v[13] != 0 || v[14] != 0 || v[15] != 1)
+            return sg_fail(err, "%s: %s.transform.matrix must be affine (last row 0 0 0 1)",
+                           path, owner);
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 4; c++)
+                t->m[r][c] = v[4 * r + c];
+        return true;
+    }
+    Transform s, rot, tr;
+    transform_identity(&s);
+    transform_identity(&rot);
+    transform_identity(&tr);
+    const cJSON *scale = cJSON_GetObjectItemCaseSensitive(obj, "scale");
+    if (scale) {
+        double k[3];
+        if (cJSON_IsNumber(scale) && isfinite(scale->valuedouble))
+            k[0] = k[1] = k[2] = scale->valuedouble;
+        else if (!json_vec3(scale, k))
+            return sg_fail(err, "%s: %s.transform.scale must be a number or 3 numbers", path,
+                           owner);
+        for (int a = 0; a < 3; a++) {
+            if (k[a] == 0)
+                return sg_fail(err, "%s: %s.transform.scale must not be zero", path, owner);
+            s.m[a][a] = k[a];
+        }
+    }
+    const cJSON *rotate = cJSON_GetObjectItemCaseSensitive(obj, "rotate");
+    if (rotate) {
+        double v[4];
+        if (!cJSON_IsArray(rotate) || cJSON_GetArraySize(rotate) != 4)
+            return sg_fail(err, "%s: %s.transform.rotate must be [degrees, x, y, z]", path,
+                           owner);
+        for (int i = 0; i < 4; i++) {
+            const cJSON *x = cJSON_GetArrayItem(rotate, i);
+            if (!cJSON_IsNumber(x) || !isfinite(x->valuedouble))
+                return sg_fail(err, "%s: %s.transform.rotate must hold finite numbers", path,
+                               owner);
+            v[i] = x->valuedouble;
+        }
+        double len = sqrt(v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
+        if (len == 0)
+            return sg_fail(err, "%s: %s.transform.rotate axis is zero", path, owner);
+        double x = v[1] / len, y = v[2] / len, z = v[3] / len;
+        double a = v[0] * M_PI / 180, c = cos(a), sn = sin(a), C = 1 - c;
+        double r[3][3] = {{x * x * C + c, x * y * C - z * sn, x * z * C + y * sn},
+                          {y * x * C + z * sn, y * y * C + c, y * z * C - x * sn},
+                          {z * x * C - y * sn, z * y * C + x * sn, z * z * C + c}};
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                rot.m[i][j] = r[i][j];
+    }
+    double translate[3];
+    bool has_translate;
+    if (!member_vec3(path, obj, owner, "translate", translate, &has_translate, err))
+        return false;
+    if (has_translate)
+        for (int a = 0; a < 3; a++)
+            tr.m[a][3] = translate[a];
+    Transform rs;
+    transform_compose(&rot, &s, &rs);
+    transform_compose(&tr, &rs, t);
+    return true;
+}
+
+/* ---- geometry ----------------------------------------------------------- */
+
+static bool is_degenerate(const double *a, const double *b, const double *c)
+{
+    double e1[3], e2[3], e3[3], n[3];
+    d3_sub(b, a, e1);
+    d3_sub(c, a, e2);
+    d3_sub(c, b, e3);
+    d3_cross(e1, e2, n);
+    double longest = fmax(d3_dot(e1, e1), fmax(d3_dot(e2, e2), d3_dot(e3, e3)));
+    /* Relative test: independent of the scene's unit. */
+    return !(d3_length(n) > 1e-12 * longest);
+}
+
+/* Appends one triangle whose vertices are already in the vertex array. */
+static void push_triangle(Builder *b, uint32_t i0, uint32_t i1, uint32_t i2, uint32_t material)
+{
+    SgScene *s = b->scene;
+    const double *p = s->positions;
+    if (is_degenerate(p + 3 * i0, p + 3 * i1, p + 3 * i2)) {
+        b->dropped_degenerate++;
+        return;
+    }
+    uint32_t t = s->triangle_count++;
+    s->indices[3 * t + 0] = i0;
+    s->indices[3 * t + 1] = i1;
+    s->indices[3 * t + 2] = i2;
+    s->triangle_material[t] = material;
+}
+
+static bool check_point(Builder *b, const char *what, const double p[3], SgError *err)
+{
+    for (int a = 0; a < 3; a++)
+        if (!isfinite(p[a]))
+            return sg_fail(err, "%s: %s has a non-finite vertex coordinate", b->json_path, what);
+    return true;
+}
+
+static bool has_extension(const char *file, const char *ext)
+{
+    size_t n = strlen(file), e = strlen(ext);
+    return n > e && !strcasecmp(file + n - e, ext);
+}
+
+/* Appends a mesh given as flat positions and triangle indices (already
+ * bounds-checked) with one material. */
+static bool append_mesh(Builder *b, const char *file, const double *positions,
+                        uint32_t vertex_count, const uint32_t *indices, uint32_t triangle_count,
+                        const Transform *xf, uint32_t material, SgError *err)
+{
+    SgScene *s = b->scene;
+    uint32_t base = s->vertex_count;
+    if (!add_vertices(b, vertex_count, err) || !add_triangles(b, triangle_count, err))
+        return false;
+    for (uint32_t v = 0; v < vertex_count; v++) {
+        if (!check_point(b, file, positions + 3 * (size_t)v, err))
+            return false;
+        transform_point(xf, positions + 3 * (size_t)v, s->positions + 3 * (size_t)(base + v));
+    }
+    s->vertex_count += vertex_count;
+    for (uint32_t t = 0; t < triangle_count; t++)
+        push_triangle(b, base + indices[3 * (size_t)t], base + indices[3 * (size_t)t + 1],
+                      base + indices[3 * (size_t)t + 2], material);
+    return true;
+}
+
+/* The material of a mesh with none of its own: the override if given. */
+static bool plain_material(Builder *b, const char *file, const char *material_name,
+                           const float *emission, uint32_t *id, SgError *err)
+{
+    SgMaterial m;
+    if (material_name) {
+        if (!named_material(b, material_name, id, err))
+            return false;
+        if (!emission)
+            return true;
+        m = b->scene->materials[*id];
+    } else {
+        const char *slash = strrchr(file, '/');
+        default_material(&m, slash ? slash + 1 : file);
+    }
+    if (emission)
+        memcpy(m.emission, emission, sizeof m.emission);
+    return add_material(b, &m, id, err);
+}
+
+static bool load_ply_file(Builder *b, const char *file, const Transform *xf,
+                          const char *material_name, const float *emission, SgError *err)
+{
+    SgPlyMesh mesh;
+    if (!sg_ply_mesh_read(&mesh, file, err))
+        return false;
+    uint32_t material;
+    bool ok = plain_material(b, file, material_name, emission, &material, err) &&
+              append_mesh(b, file, mesh.positions, mesh.vertex_count, mesh.indices,
+                          mesh.triangle_count, xf, material, err);
+    sg_ply_mesh_release(&mesh);
+    return ok;
+}
+
+/* Assimp's post-processing trusts the importer's indices; a bad file can
+ * make it fault. Check them first. */
+static bool assimp_scene_is_sane(const struct aiScene *as)
+{
+    for (unsigned mi = 0; mi < as->mNumMeshes; mi++) {
+        const struct aiMesh *mesh = as->mMeshes[mi];
+        if (!mesh || (mesh->mNumVertices && !mesh->mVertices))
+            return false;
+        for (unsigned f = 0; f < mesh->mNumFaces; f++) {
+            const struct aiFace *face = &mesh->mFaces[f];
+            if (face->mNumIndices && !face->mIndices)
+                return false;
+            for (unsigned i = 0; i < face->mNumIndices; i++)
+                if (face->mIndices[i] >= mesh->mNumVertices)
+                    return false;
+        }
+    }
+    return true;
+}
+
+static bool load_mesh_file(Builder *b, const char *file, const Transform *xf,
+                           const char *material_name, const float *emission, SgError *err)
+{
+    if (has_extension(file, ".ply"))
+        return load_ply_file(b, file, xf, material_name, emission, err);
+    const struct aiScene *as = aiImportFile(file, 0);
+    if (!as) {
+        const char *why = aiGetErrorString();
+        FILE *probe = fopen(file, "rb");
+        if (!probe)
+            return sg_fail(err, "%s: cannot open mesh: %s", file, strerror(errno));
+        fclose(probe);
+        return sg_fail(err, "%s: cannot read mesh: %s", file, why && *why ? why : "unknown format");
+    }
+    if (!assimp_scene_is_sane(as)) {
+        aiReleaseImport(as);
+        return sg_fail(err, "%s: malformed mesh (face indices out of range)", file);
+    }
+    as = aiApplyPostProcessing(as, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                       aiProcess_PreTransformVertices | aiProcess_SortByPType);
+    if (!as)
+        return sg_fail(err, "%s: cannot process mesh: %s", file, aiGetErrorString());
+    bool ok = true;
+    uint32_t override_id = UINT32_MAX;
+    if (material_name || as->mNumMaterials == 0)
+        ok = plain_material(b, file, material_name, emission, &override_id, err);
+    uint32_t *material_ids = calloc(as->mNumMaterials ? as->mNumMaterials : 1, sizeof(uint32_t));
+    if (ok && !material_ids)
+        ok = sg_fail(err, "%s: out of memory", file);
+    for (unsigned m = 0; ok && m < as->mNumMaterials && override_id == UINT32_MAX; m++) {
+        SgMaterial mat;
+        ok = convert_material(b, as->mMaterials[m], file, m, &mat, err);
+        if (ok && emission)
+            memcpy(mat.emission, emission, sizeof mat.emission);
+        ok = ok && add_material(b, &mat, &material_ids[m], err);
+    }
+    double *positions = NULL;
+    uint32_t *indices = NULL;
+    for (unsigned mi = 0; ok && mi < as->mNumMeshes; mi++) {
+        const struct aiMesh *mesh = as->mMeshes[mi];
+        if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE))
+            continue;
+        double *p = realloc(positions, (mesh->mNumVertices + 1) * 3 * sizeof(double));
+        uint32_t *ix = realloc(indices, (mesh->mNumFaces + 1) * 3 * sizeof(uint32_t));
+        if (p)
+            positions = p;
+        if (ix)
+            indices = ix;
+        if (!p || !ix) {
+            ok = sg_fail(err, "%s: out of memory", file);
+            break;
+        }
+        for (unsigned v = 0; v < mesh->mNumVertices; v++) {
+            positions[3 * v + 0] = mesh->mVertices[v].x;
+            positions[3 * v + 1] = mesh->mVertices[v].y;
+            positions[3 * v + 2] = mesh->mVertices[v].z;
+        }
+        uint32_t triangles = 0;
+        for (unsigned f = 0; f < mesh->mNumFaces; f++) {
+            const struct aiFace *face = &mesh->mFaces[f];
+            if (face->mNumIndices != 3)
+                continue;
+            memcpy(indices + 3 * (size_t)triangles++, face->mIndices, 3 * sizeof(uint32_t));
+        }
+        uint32_t material = override_id != UINT32_MAX ? override_id
+                            : mesh->mMaterialIndex < as->mNumMaterials
+                                ? material_ids[mesh->mMaterialIndex]
+                                : material_ids[0];
+        ok = append_mesh(b, file, positions, mesh->mNumVertices, indices, triangles, xf,
+                         material, err);
+    }
+    free(positions);
+    free(indices);
+    free(material_ids);
+    aiReleaseImport(as);
+    return ok;
+}
+
+static bool load_inline_mesh(Builder *b, const cJSON *mesh, const char *owner, const Transform *xf,
+                             const char *material_name, const float *emission, SgError *err)
+{
+    const cJSON *vertices = cJSON_GetObjectItemCaseSensitive(mesh, "vertices");
+    const cJSON *triangles = cJSON_GetObjectItemCaseSensitive(mesh, "triangles");
+    int nv = cJSON_GetArraySize(vertices), nt = cJSON_GetArraySize(triangles);
+    if (!cJSON_IsArray(vertices) || nv % 3 || !cJSON_IsArray(triangles) || nt % 3)
+        return sg_fail(err, "%s: %s needs \"vertices\" (x,y,z,...) and \"triangles\" (i,j,k,...)",
+                       b->json_path, owner);
+    uint32_t material = 0;
+    SgMaterial m;
+    if (material_name) {
+        if (!named_material(b, material_name, &material, err))
+            return false;
+        m = b->scene->materials[material];
+    } else {
+        default_material(&m, owner);
+    }
+    if (emission || !material_name) {
+        if (emission)
+            memcpy(m.emission, emission, sizeof m.emission);
+        if (!add_material(b, &m, &material, err))
+            return false;
+    }
+    SgScene *s = b->scene;
+    uint32_t base = s->vertex_count;
+    if (!add_vertices(b, (uint32_t)(nv / 3), err) || !add_triangles(b, (uint32_t)(nt / 3), err))
+        return false;
+    const cJSON *v = vertices->child;
+    for (int i = 0; i < nv / 3; i++) {
+        double p[3];
+        for (int a = 0; a < 3; a++, v = v->next) {
+            if (!cJSON_IsNumber(v))
+                return sg_fail(err, "%s: %s.vertices must be numbers", b->json_path, owner);
+            p[a] = v->valuedouble;
+        }
+        if (!check_point(b, owner, p, err))
+            return false;
+        transform_point(xf, p, s->positions + 3 * (size_t)(base + i));
+    }
+    s->vertex_count += (uint32_t)(nv / 3);
+    const cJSON *t = triangles->child;
+    for (int i = 0; i < nt / 3; i++) {
+        uint32_t idx[3];
+        for (int a = 0; a < 3; a++, t = t->next) {
+            if (!cJSON_IsNumber(t) || t->valuedouble < 0 || t->valuedouble >= nv / 3 ||
+                t->valuedouble != floor(t->valuedouble))
+                return sg_fail(err, "%s: %s.triangles has an index out of range", b->json_path,
+                               owner);
+            idx[a] = base + (uint32_t)t->valuedouble;
+        }
+        push_triangle(b, idx[0], idx[1], idx[2], material);
+    }
+    return true;
+}
+
+static bool load_meshes(Builder *b, const cJSON *root, SgError *err)
+{
+    const cJSON *meshes = cJSON_GetObjectItemCaseSensitive(root, "meshes");
+    const cJSON *shorthand = cJSON_GetObjectItemCaseSensitive(root, "mesh");
+    cJSON *owned = NULL;
+    if (shorthand) {
+        if (!cJSON_IsString(shorthand))
+            return sg_fail(err, "%s: \"mesh\" must be a file name", b->json_path);
+        owned = cJSON_CreateArray();
+        cJSON *entry = cJSON_CreateObject();
+        cJSON_AddStringToObject(entry, "file", shorthand->valuestring);
+        cJSON_AddItemToArray(owned, entry);
+        if (meshes) {
+            cJSON *m;
+            cJSON_ArrayForEach(m, meshes) cJSON_AddItemToArray(owned, cJSON_Duplicate(m, 1));
+        }
+        meshes = owned;
+    }
+    if (!meshes && !cJSON_GetObjectItemCaseSensitive(root, "lights")) {
+        return sg_fail(err, "%s: no geometry: give \"mesh\", \"meshes\" or \"lights\"",
+                       b->json_path);
+    }
+    if (meshes && !cJSON_IsArray(meshes)) {
+        cJSON_Delete(owned);
+        return sg_fail(err, "%s: \"meshes\" must be an array", b->json_path);
+    }
+    bool ok = true;
+    int index = 0;
+    const cJSON *mesh;
+    cJSON_ArrayForEach(mesh, meshes)
+    {
+        char owner[32];
+        snprintf(owner, sizeof owner, "meshes[%d]", index++);
+        if (!cJSON_IsObject(mesh)) {
+            ok = sg_fail(err, "%s: %s must be an object", b->json_path, owner);
+            break;
+        }
+        Transform xf;
+        float emission[3] = {0, 0, 0};
+        const cJSON *em = cJSON_GetObjectItemCaseSensitive(mesh, "emission");
+        const cJSON *mat = cJSON_GetObjectItemCaseSensitive(mesh, "material");
+        if (mat && !cJSON_IsString(mat)) {
+            ok = sg_fail(err, "%s: %s.material must be a material name", b->json_path, owner);
+            break;
+        }
+        if (!parse_transform(b->json_path, cJSON_GetObjectItemCaseSensitive(mesh, "transform"),
+                             owner, &xf, err) ||
+            !member_color(b->json_path, mesh, owner, "emission", emission, err)) {
+            ok = false;
+            break;
+        }
+        const char *material_name = mat ? mat->valuestring : NULL;
+        const cJSON *file = cJSON_GetObjectItemCaseSensitive(mesh, "file");
+        if (!file) {
+            ok = load_inline_mesh(b, mesh, owner, &xf, material_name, em ? emission : NULL, err);
+        } else if (!cJSON_IsString(file) || !*file->valuestring) {
+            ok = sg_fail(err, "%s: %s.file must be a file name", b->json_path, owner);
+        } else {
+            char pattern[8192];
+            if (file->valuestring[0] == '/')
+                snprintf(pattern, sizeof pattern, "%s", file->valuestring);
+            else
+                snprintf(pattern, sizeof pattern, "%s%s", b->base_dir, file->valuestring);
+            glob_t g;
+            int rc = glob(pattern, GLOB_NOCHECK, NULL, &g);
+            if (rc != 0) {
+                ok = sg_fail(err, "%s: %s.file: cannot expand \"%s\"", b->json_path, owner,
+                             pattern);
+            } else {
+                for (size_t i = 0; ok && i < g.gl_pathc; i++)
+                    ok = load_mesh_file(b, g.gl_pathv[i], &xf, material_name,
+                                        em ? emission : NULL, err);
+                globfree(&g);
+            }
+        }
+        if (!ok)
+            break;
+    }
+    cJSON_Delete(owned);
+    return ok;
+}
+
+static bool load_lights(Builder *b, const cJSON *root, SgError *err)
+{
+    const cJSON *lights = cJSON_GetObjectItemCaseSensitive(root, "lights");
+    if (!lights)
+        return true;
+    if (!cJSON_IsArray(lights))
+        return sg_fail(err, "%s: \"lights\" must be an array", b->json_path);
+    int index = 0;
+    const cJSON *light;
+    cJSON_ArrayForEach(light, lights)
+    {
+        char owner[32];
+        snprintf(owner, sizeof owner, "lights[%d]", index++);
+        const char *type = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(light, "type"));
+        if (!type || strcmp(type, "quad"))
+            return sg_fail(err, "%s: %s.type must be \"quad\"", b->json_path, owner);
+        const cJSON *corners = cJSON_GetObjectItemCaseSensitive(light, "corners");
+        if (!cJSON_IsArray(corners) || cJSON_GetArraySize(corners) != 4)
+            return sg_fail(err, "%s: %s.corners must hold 4 points", b->json_path, owner);
+        SgMaterial m;
+        default_material(&m, owner);
+        m.diffuse[0] = m.diffuse[1] = m.diffuse[2] = 0;
+        if (!member_color(b->json_path, light, owner, "radiance", m.emission, err))
+            return false;
+        if (!cJSON_GetObjectItemCaseSensitive(light, "radiance"))
+            return sg_fail(err, "%s: %s.radiance is missing", b->json_path, owner);
+        uint32_t material;
+        if (!add_material(b, &m, &material, err) || !add_vertices(b, 4, err) ||
+            !add_triangles(b, 2, err))
+            return false;
+        SgScene *s = b->scene;
+        uint32_t base = s->vertex_count;
+        for (int c = 0; c < 4; c++) {
+            double p[3];
+            if (!json_vec3(cJSON_GetArrayItem(corners, c), p))
+                return sg_fail(err, "%s: %s.corners[%d] must be 3 finite numbers", b->json_path,
+                               owner, c);
+            memcpy(s->positions + 3 * (size_t)(base + c), p, sizeof p);
+        }
+        s->vertex_count += 4;
+        push_triangle(b, base, base + 1, base + 2, material);
+        push_triangle(b, base, base + 2, base + 3, material);
+    }
+    return true;
+}
+
+/* ---- lights from emissive triangles ------------------------------------- */
+
+static uint32_t find_root(uint32_t *parent, uint32_t x)
+{
+    while (parent[x] != x) {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    return x;
+}
+
+typedef struct LightKey {
+    uint32_t root, material, triangle;
+} LightKey;
+
+static int compare_light_keys(const void *pa, const void *pb)
+{
+    const LightKey *a = pa, *b = pb;
+    if (a->root != b->root)
+        return a->root < b->root ? -1 : 1;
+    if (a->material != b->material)
+        return a->material < b->material ? -1 : 1;
+    return (a->triangle > b->triangle) - (a->triangle < b->triangle);
+}
+
+/* Emissive triangles of one material that share vertices form one light. */
+static bool group_lights(Builder *b, SgError *err)
+{
+    SgScene *s = b->scene;
+    s->triangle_light = malloc((s->triangle_count ? s->triangle_count : 1) * sizeof(uint32_t));
+    uint32_t *parent = malloc((s->vertex_count ? s->vertex_count : 1) * sizeof(uint32_t));
+    if (!s->triangle_light || !parent) {
+        free(parent);
+        return sg_fail(err, "%s: out of memory", b->json_path);
+    }
+    for (uint32_t v = 0; v < s->vertex_count; v++)
+        parent[v] = v;
+    uint32_t emissive = 0;
+    for (uint32_t t = 0; t < s->triangle_count; t++) {
+        s->triangle_light[t] = SG_NO_LIGHT;
+        const float *e = s->materials[s->triangle_material[t]].emission;
+        if (!(e[0] > 0 || e[1] > 0 || e[2] > 0))
+            continue;
+        emissive++;
+        const uint32_t *idx = s->indices + 3 * (size_t)t;
+        for (int c = 1; c < 3; c++) {
+            uint32_t r0 = find_root(parent, idx[0]), r1 = find_root(parent, idx[c]);
+            if (r0 != r1)
+                parent[r1 > r0 ? r1 : r0] = r1 > r0 ? r0 : r1;
+        }
+    }
+    /* Sort emissive triangles by (component, material, id) so that lights
+     * come out in a deterministic order. */
+    LightKey *keys = malloc((emissive ? emissive : 1) * sizeof *keys);
+    if (!keys) {
+        free(parent);
+        return sg_fail(err, "%s: out of memory", b->json_path);
+    }
+    uint32_t n = 0;
+    for (uint32_t t = 0; t < s->triangle_count; t++) {
+        const float *e = s->materials[s->triangle_material[t]].emission;
+        if (e[0] > 0 || e[1] > 0 || e[2] > 0)
+            keys[n++] = (LightKey){find_root(parent, s->indices[3 * (size_t)t]),
+                                   s->triangle_material[t], t};
+    }
+    qsort(keys, n, sizeof *keys, compare_light_keys);
+    s->light_triangles = malloc((n ? n : 1) * sizeof(uint32_t));
+    s->lights = calloc(n ? n : 1, sizeof(SgLight));
+    if (!s->light_triangles || !s->lights) {
+        free(parent);
+        free(keys);
+        return sg_fail(err, "%s: out of memory", b->json_path);
+    }
+    uint32_t light = UINT32_MAX, prev_root = UINT32_MAX, prev_material = UINT32_MAX;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t root = keys[i].root, t = keys[i].triangle, material = keys[i].material;
+        if (root != prev_root || material != prev_material) {
+            light = s->light_count++;
+            s->lights[light].first_triangle = i;
+            prev_root = root;
+            prev_material = material;
+        }
+        s->light_triangles[i] = t;
+        s->triangle_light[t] = light;
+        SgLight *l = &s->lights[light];
+        l->triangle_count++;
+        double nrm[3];
+        sg_scene_triangle_normal(s, t, nrm);
+        double area = 0.5 * d3_length(nrm);
+        const double *p = s->positions;
+        const uint32_t *idx = s->indices + 3 * (size_t)t;
+        for (int a = 0; a < 3; a++) {
+            double c = (p[3 * idx[0] + a] + p[3 * idx[1] + a] + p[3 * idx[2] + a]) / 3;
+            l->position[a] += area * c;
+            l->normal[a] += 0.5 * nrm[a];
+        }
+        l->area += area;
+        memcpy(l->radiance, s->materials[material].emission, sizeof l->radiance);
+    }
+    for (uint32_t k = 0; k < s->light_count; k++) {
+        SgLight *l = &s->lights[k];
+        double len = d3_length(l->normal);
+        for (int a = 0; a < 3; a++) {
+            l->position[a] /= l->area;
+            l->normal[a] = len > 0 ? l->normal[a] / len : 0;
+        }
+        double lum = 0.2126 * l->radiance[0] + 0.7152 * l->radiance[1] + 0.0722 * l->radiance[2];
+        l->power = M_PI * l->area * lum;
+    }
+    free(parent);
+    free(keys);
+    return true;
+}
+
+/* ---- camera and settings ------------------------------------------------ */
+
+static bool load_camera(Builder *b, const cJSON *root, SgError *err)
+{
+    SgScene *s = b->scene;
+    const char *path = b->json_path;
+    const cJSON *image = cJSON_GetObjectItemCaseSensitive(root, "image");
+    s->camera.width = 320;
+    s->camera.height = 240;
+    if (image) {
+        if (!cJSON_IsObject(image))
+            return sg_fail(err, "%s: \"image\" must be an object", path);
+        if (!member_int(path, image, "image", "width", 1, 65536, &s->camera.width, err) ||
+            !member_int(path, image, "image", "height", 1, 65536, &s->camera.height, err))
+            return false;
+    }
+    const cJSON *cam = cJSON_GetObjectItemCaseSensitive(root, "camera");
+    if (!cam)
+        return true;
+    if (!cJSON_IsObject(cam))
+        return sg_fail(err, "%s: \"camera\" must be an object", path);
+    bool has_pos, has_look, has_up;
+    double up[3] = {0, 1, 0};
+    if (!member_vec3(path, cam, "camera", "position", s->camera.position, &has_pos, err) ||
+        !member_vec3(path, cam, "camera", "look_at", s->camera.look_at, &has_look, err) ||
+        !member_vec3(path, cam, "camera", "up", up, &has_up, err))
+        return false;
+    if (!has_pos || !has_look)
+        return sg_fail(err, "%s: camera needs \"position\" and \"look_at\"", path);
+    memcpy(s->camera.up, up, sizeof up);
+    double fov = 60;
+    if (!member_number(path, cam, "camera", "fov", 1e-3, 179.9, &fov, err))
+        return false;
+    const char *axis = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(cam, "fov_axis"));
+    double aspect = (double)s->camera.width / s->camera.height;
+    bool horizontal = false;
+    if (axis && !strcmp(axis, "horizontal"))
+        horizontal = true;
+    else if (axis && !strcmp(axis, "shorter"))
+        horizontal = aspect < 1;
+    else if (axis && strcmp(axis, "vertical"))
+        return sg_fail(err, "%s: camera.fov_axis must be vertical, horizontal or shorter", path);
+    if (horizontal)
+        fov = 2 * atan(tan(fov * M_PI / 360) / aspect) * 180 / M_PI;
+    s->camera.fov_deg = fov;
+    double dir[3], side[3];
+    d3_sub(s->camera.look_at, s->camera.position, dir);
+    d3_cross(dir, up, side);
+    if (!(d3_length(dir) > 0))
+        return sg_fail(err, "%s: camera position and look_at coincide", path);
+    if (!(d3_length(side) > 1e-9 * d3_length(dir) * d3_length(up)))
+        return sg_fail(err, "%s: camera up is parallel to the view direction", path);
+    s->has_camera = true;
+    return true;
+}
+
+static bool load_settings(Builder *b, const cJSON *root, SgError *err)
+{
+    SgScene *s = b->scene;
+    const char *path = b->json_path;
+    s->render.max_depth = 8;
+    const cJSON *render = cJSON_GetObjectItemCaseSensitive(root, "render");
+    if (render) {
+        if (!cJSON_IsObject(render))
+            return sg_fail(err, "%s: \"render\" must be an object", path);
+        if (!member_int(path, render, "render", "spp", 1, 1 << 24, &s->render.spp, err) ||
+            !member_int(path, render, "render", "max_depth", 1, 1024, &s->render.max_depth, err) ||
+            !member_number(path, render, "render", "exposure", -64, 64, &s->render.exposure, err))
+            return false;
+    }
+    const cJSON *voxel = cJSON_GetObjectItemCaseSensitive(root, "voxel");
+    if (voxel) {
+        if (!cJSON_IsObject(voxel))
+            return sg_fail(err, "%s: \"voxel\" must be an object", path);
+        if (!member_int(path, voxel, "voxel", "resolution", 1, 4096, &s->voxel_resolution, err))
+            return false;
+    }
+    return true;
+}
+
+/* ---- finishing ---------------------------------------------------------- */
+
+static void compute_bounds_and_hash(SgScene *s)
+{
+    for (int a = 0; a < 3; a++) {
+        s->bounds_min[a] = INFINITY;
+        s->bounds_max[a] = -INFINITY;
+    }
+    for (uint32_t t = 0; t < s->triangle_count; t++)
+        for (int c = 0; c < 3; c++) {
+            const double *p = s->positions + 3 * (size_t)s->indices[3 * (size_t)t + c];
+            for (int a = 0; a < 3; a++) {
+                s->bounds_min[a] = fmin(s->bounds_min[a], p[a]);
+                s->bounds_max[a] = fmax(s->bounds_max[a], p[a]);
+            }
+        }
+    /* Hash what the precompute sees: triangles (as coordinates, so that
+     * vertex order in files does not matter less than geometry) and lights. */
+    uint64_t h = SG_HASH_INIT;
+    h = sg_hash_bytes(h, &s->triangle_count, sizeof s->triangle_count);
+    for (uint32_t t = 0; t < s->triangle_count; t++) {
+        for (int c = 0; c < 3; c++)
+            h = sg_hash_bytes(h, s->positions + 3 * (size_t)s->indices[3 * (size_t)t + c],
+                              3 * sizeof(double));
+        uint32_t light = s->triangle_light[t];
+        h = sg_hash_bytes(h, &light, sizeof light);
+    }
+    for (uint32_t k = 0; k < s->light_count; k++)
+        h = sg_hash_bytes(h, s->lights[k].radiance, sizeof s->lights[k].radiance);
+    s->geometry_hash = h;
+}
+
+void sg_scene_triangle_normal(const SgScene *scene, uint32_t t, double n[3])
+{
+    const uint32_t *idx = scene->indices + 3 * (size_t)t;
+    const double *a = scene->positions + 3 * (size_t)idx[0];
+    const double *b = scene->positions + 3 * (size_t)idx[1];
+    const double *c = scene->positions + 3 * (size_t)idx[2];
+    double e1[3], e2[3];
+    d3_sub(b, a, e1);
+    d3_sub(c, a, e2);
+    d3_cross(e1, e2, n);
+}
+
+static char *read_text_file(const char *path, SgError *err)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        sg_fail(err, "%s: cannot open: %s", path, strerror(errno));
+        return NULL;
+    }
+    char *text = NULL;
+    size_t size = 0, cap = 0;
+    for (;;) {
+        if (size + 65536 + 1 > cap) {
+            cap = cap ? 2 * cap : 65536 * 2;
+            if (cap > ((size_t)256 << 20)) {
+                sg_fail(err, "%s: scene description larger than 256 MB", path);
+                free(text);
+                fclose(f);
+                return NULL;
+            }
+            char *p = realloc(text, cap);
+            if (!p) {
+                free(text);
+                fclose(f);
+                sg_fail(err, "%s: out of memory", path);
+                return NULL;
+            }
+            text = p;
+        }
+        size_t got = fread(text + size, 1, 65536, f);
+        size += got;
+        if (got < 65536)
+            break;
+    }
+    bool bad = ferror(f);
+    fclose(f);
+    if (bad) {
+        free(text);
+        sg_fail(err, "%s: read error", path);
+        return NULL;
+    }
+    text[size] = 0;
+    return text;
+}
+
+/* Line number of a byte offset, for parse errors. */
+static int line_of(const char *text, const char *where)
+{
+    int line = 1;
+    for (const char *c = text; c < where && *c; c++)
+        line += *c == '\n';
+    return line;
+}
+
+SgScene *sg_scene_load(const char *path, SgError *err)
+{
+    char *text = read_text_file(path, err);
+    if (!text)
+        return NULL;
+    cJSON *root = cJSON_ParseWithOpts(text, NULL, 1);
+    if (!root) {
+        const char *where = cJSON_GetErrorPtr();
+        sg_fail(err, "%s: malformed JSON near line %d", path, where ? line_of(text, where) : 0);
+        free(text);
+        return NULL;
+    }
+    if (!cJSON_IsObject(root)) {
+        sg_fail(err, "%s: the scene must be a JSON object", path);
+        cJSON_Delete(root);
+        free(text);
+        return NULL;
+    }
+    SgScene *s = calloc(1, sizeof *s);
+    Builder b = {.scene = s, .json_path = path};
+    bool ok = s != NULL;
+    if (!ok)
+        sg_fail(err, "%s: out of memory", path);
+    if (ok) {
+        snprintf(s->path, sizeof s->path, "%s", path);
+        const char *slash = strrchr(path, '/');
+        snprintf(b.base_dir, sizeof b.base_dir, "%.*s", slash ? (int)(slash - path + 1) : 0, path);
+        b.material_overrides = cJSON_GetObjectItemCaseSensitive(root, "materials");
+        if (b.material_overrides && !cJSON_IsObject(b.material_overrides))
+            ok = sg_fail(err, "%s: \"materials\" must be an object", path);
+        if (ok && b.material_overrides) {
+            const cJSON *m;
+            cJSON_ArrayForEach(m, b.material_overrides)
+            {
+                SgMaterial probe;
+                default_material(&probe, m->string);
+                if (!apply_material_json(path, m, m->string, &probe, err)) {
+                    ok = false;
+                    break;
+                }
+            }
+        }
+    }
+    ok = ok && load_camera(&b, root, err) && load_settings(&b, root, err) &&
+         load_meshes(&b, root, err) && load_lights(&b, root, err);
+    if (ok && s->triangle_count == 0)
+        ok = sg_fail(err, "%s: the scene has no triangles%s", path,
+                     b.dropped_degenerate ? " (all were degenerate)" : "");
+    ok = ok && group_lights(&b, err);
+    if (ok) {
+        s->degenerate_dropped = b.dropped_degenerate;
+        compute_bounds_and_hash(s);
+    }
+    cJSON_Delete(root);
+    free(text);
+    if (!ok) {
+        sg_scene_free(s);
+        return NULL;
+    }
+    return s;
+}
+
+void sg_scene_free(SgScene *s)
+{
+    if (!s)
+        return;
+    free(s->positions);
+    free(s->indices);
+    free(s->triangle_material);
+    free(s->triangle_light);
+    free(s->materials);
+    free(s->lights);
+    free(s->light_triangles);
+    free(s);
+}
