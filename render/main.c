@@ -344,10 +344,10 @@ int main(int argc, char **argv)
     snprintf(exp_s, sizeof exp_s, "%g", o.lobe_exponent);
     snprintf(alpha_s, sizeof alpha_s, "%g", o.alpha);
     SgImageAttribute attrs[] = {
-        {"sg:spp", spp_s},
-        {"sg:seconds", sec_s},
-        {"sg:sampling", sg_sampling_name(o.sampling)},
-        {"sg:seed", seed_s},
+        {"spp", spp_s},
+        {"seconds", sec_s},
+        {"sampling", sg_sampling_name(o.sampling)},
+        {"seed", seed_s},
         {"sg:max_depth", depth_s},
         {"sg:lobe_exponent", exp_s},
         {"sg:alpha", alpha_s},
