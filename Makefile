@@ -30,7 +30,7 @@ BIN := $(BUILD)/bin
 endif
 
 WARN := -Wall -Wextra
-CPPFLAGS += -Icommon -D_GNU_SOURCE -MMD -MP
+CPPFLAGS += -Icommon -I. -D_GNU_SOURCE -MMD -MP
 CFLAGS += -std=c11 $(OPT) -g $(WARN) $(SANFLAGS) -pthread
 CXXFLAGS += -std=c++17 $(OPT) -g $(WARN) $(SANFLAGS) -pthread -Wno-deprecated-declarations
 LDFLAGS += $(SANFLAGS) -pthread
@@ -61,7 +61,7 @@ TEST_SUPPORT_OBJ := $(TEST_SUPPORT_SRC:%.c=$(BUILD)/%.o)
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
-.PHONY: all test check-tests demo scene bench bench-quick deps clean distclean FORCE
+.PHONY: all test check-tests demo scene bench bench-quick deps bench-deps clean distclean FORCE
 .DEFAULT_GOAL := all
 
 all: $(PROGRAMS)
@@ -97,13 +97,16 @@ $(BUILD)/bench/%: $(BUILD)/bench/%.o $(STEP_LIBS) $(BUILD)/libcommon.a
 	@mkdir -p $(@D)
 	$(CC) $(LDFLAGS) -o $@ $< $(STEP_LIBS) $(BUILD)/libcommon.a $(PROG_LDLIBS)
 
-bench: deps $(PROGRAMS) $(BENCH_BIN)
+bench: bench-deps $(PROGRAMS) $(BENCH_BIN)
 	@SG_BIN=$(abspath $(BIN)) SG_BENCH_BIN=$(abspath $(BUILD)/bench) bash bench/run.sh
 
-bench-quick: deps $(PROGRAMS) $(BENCH_BIN)
+bench-quick: bench-deps $(PROGRAMS) $(BENCH_BIN)
 	@SG_QUICK=1 SG_BIN=$(abspath $(BIN)) SG_BENCH_BIN=$(abspath $(BUILD)/bench) bash bench/run.sh
 
 # Tests run from the repository root; they find bin/ through SG_BIN.
+bench-deps:
+	@SG_WITH_BENCH_TOOLS=1 bash scripts/install-deps.sh
+
 deps:
 	@bash scripts/install-deps.sh
 
@@ -116,7 +119,8 @@ check-tests: $(PROGRAMS) $(TEST_BIN)
 demo: deps
 	@$(MAKE) --no-print-directory all
 	@$(MAKE) --no-print-directory scene SCENE=data/corridor/corridor.json
-	@echo "demo: images in out/corridor/ (image.png to look at, image.exr linear)"
+	@if [ -e out/corridor/image.png ]; then echo "demo: images in out/corridor/: image.png to look at, image.exr linear"; \
+	else echo "demo: artifacts in out/corridor/: $$(ls out/corridor | tr '\n' ' ')"; fi
 
 # ---- scene builds -------------------------------------------------------
 # out/NAME/geometry.key holds the identity of what the precompute depends on
@@ -127,7 +131,12 @@ ifdef SCENE
 NAME := $(basename $(notdir $(SCENE)))
 OUT := out/$(NAME)
 VOXELIZE_FLAGS ?=
-scene: $(OUT)/medium.vdb $(OUT)/skeleton.ply $(OUT)/importance.cache $(OUT)/image.exr
+SCENE_OUTPUTS := $(OUT)/medium.vdb \
+  $(if $(filter skeletonize,$(STEPS)),$(OUT)/skeleton.ply) \
+  $(if $(filter importance,$(STEPS)),$(OUT)/importance.cache) \
+  $(if $(filter render,$(STEPS)),$(OUT)/image.exr)
+scene: $(SCENE_OUTPUTS)
+	@echo "scene: $(OUT)/ holds $(notdir $(SCENE_OUTPUTS))"
 
 $(OUT)/geometry.key: FORCE $(BIN)/voxelize
 	@mkdir -p $(OUT)
@@ -151,6 +160,9 @@ scene:
 endif
 
 FORCE:
+
+# Keep intermediate objects (tests link from them) so nothing rebuilds needlessly.
+.SECONDARY:
 
 clean:
 	rm -rf build bin

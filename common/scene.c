@@ -527,24 +527,29 @@ static bool load_ply_file(Builder *b, const char *file, const Transform *xf,
     return ok;
 }
 
-/* Assimp's post-processing trusts the importer's indices; a bad file can
- * make it fault. Check them first. */
-static bool assimp_scene_is_sane(const struct aiScene *as)
+/* Assimp's post-processing trusts the importer's indices and coordinates;
+ * a bad file can make it fault or hide a NaN. Check them first: NULL if
+ * sane, else what is wrong. */
+static const char *assimp_scene_problem(const struct aiScene *as)
 {
     for (unsigned mi = 0; mi < as->mNumMeshes; mi++) {
         const struct aiMesh *mesh = as->mMeshes[mi];
         if (!mesh || (mesh->mNumVertices && !mesh->mVertices))
-            return false;
+            return "malformed mesh (no vertex data)";
+        for (unsigned v = 0; v < mesh->mNumVertices; v++)
+            if (!isfinite(mesh->mVertices[v].x) || !isfinite(mesh->mVertices[v].y) ||
+                !isfinite(mesh->mVertices[v].z))
+                return "a vertex has a non-finite vertex coordinate";
         for (unsigned f = 0; f < mesh->mNumFaces; f++) {
             const struct aiFace *face = &mesh->mFaces[f];
             if (face->mNumIndices && !face->mIndices)
-                return false;
+                return "malformed mesh (face without indices)";
             for (unsigned i = 0; i < face->mNumIndices; i++)
                 if (face->mIndices[i] >= mesh->mNumVertices)
-                    return false;
+                    return "malformed mesh (face index out of range)";
         }
     }
-    return true;
+    return NULL;
 }
 
 static bool load_mesh_file(Builder *b, const char *file, const Transform *xf,
@@ -561,9 +566,10 @@ static bool load_mesh_file(Builder *b, const char *file, const Transform *xf,
         fclose(probe);
         return sg_fail(err, "%s: cannot read mesh: %s", file, why && *why ? why : "unknown format");
     }
-    if (!assimp_scene_is_sane(as)) {
+    const char *problem = assimp_scene_problem(as);
+    if (problem) {
         aiReleaseImport(as);
-        return sg_fail(err, "%s: malformed mesh (face indices out of range)", file);
+        return sg_fail(err, "%s: %s", file, problem);
     }
     as = aiApplyPostProcessing(as, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                                        aiProcess_PreTransformVertices | aiProcess_SortByPType);

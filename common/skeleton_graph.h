@@ -10,6 +10,7 @@
 #define SG_SKELETON_GRAPH_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "error.h"
@@ -44,6 +45,10 @@ typedef struct SgSkeleton {
 bool sg_skeleton_write_ply(const SgSkeleton *skeleton, const char *path, SgError *err);
 /* Validates counts, indices and values; never reads out of bounds. */
 bool sg_skeleton_read_ply(SgSkeleton *skeleton, const char *path, SgError *err);
+/* The same from bytes in memory (`path` names them in messages); for tests
+ * and fuzzing. The file's `light` property is optional (light = -1). */
+bool sg_skeleton_parse_ply(SgSkeleton *skeleton, const void *data, size_t size,
+                           const char *path, SgError *err);
 void sg_skeleton_release(SgSkeleton *skeleton);
 
 #ifdef __cplusplus

@@ -5,7 +5,7 @@ set -u
 passed=0 failed=0 status=0
 for t in "$@"; do
   echo "== $(basename "$t")"
-  out=$("$t" --ascii 2>&1); rc=$?
+  out=$("$t" 2>&1); rc=$?
   printf '%s\n' "$out" | grep -vE '^\[----\] .*: (Assertion Passed|tests/)' || true
   line=$(printf '%s\n' "$out" | grep -E 'Synthesis: Tested' | tail -1)
   if [ -z "$line" ]; then

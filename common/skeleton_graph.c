@@ -1,0 +1,579 @@
+/* skeleton.ply: writer (binary_little_endian) and a defensive reader
+ * (ascii and binary_little_endian). The reader loads the whole file, parses
+ * the header into a list of elements and properties, then decodes each
+ * element with bounds checks on every read: a malformed or truncated file
+ * ends in a one-line error naming the file, never in a read past the end. */
+#include "skeleton_graph.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "output_file.h"
+
+/* ---- writer ------------------------------------------------------------ */
+
+static void put_u32(unsigned char *p, uint32_t v)
+{
+    p[0] = (unsigned char)v;
+    p[1] = (unsigned char)(v >> 8);
+    p[2] = (unsigned char)(v >> 16);
+    p[3] = (unsigned char)(v >> 24);
+}
+
+static void put_f32(unsigned char *p, float f)
+{
+    uint32_t v;
+    memcpy(&v, &f, 4);
+    put_u32(p, v);
+}
+
+static void put_i32(unsigned char *p, int32_t i)
+{
+    uint32_t v;
+    memcpy(&v, &i, 4);
+    put_u32(p, v);
+}
+
+enum { SG_PLY_VERTEX_BYTES = 37, SG_PLY_EDGE_BYTES = 8 };
+
+bool sg_skeleton_write_ply(const SgSkeleton *skeleton, const char *path, SgError *err)
+{
+    /* Refuse to write what the reader would refuse to read. */
+    for (uint32_t v = 0; v < skeleton->node_count; v++) {
+        const SgSkeletonNode *n = &skeleton->nodes[v];
+        if (!isfinite(n->position[0]) || !isfinite(n->position[1]) ||
+            !isfinite(n->position[2]) || !isfinite(n->radius))
+            return sg_fail(err, "%s: node %u has a non-finite position or radius", path, v);
+        if (n->kind > SG_NODE_CAMERA)
+            return sg_fail(err, "%s: node %u has unknown kind %u", path, v, n->kind);
+    }
+    for (uint32_t e = 0; e < skeleton->edge_count; e++)
+        if (skeleton->edges[e][0] >= skeleton->node_count ||
+            skeleton->edges[e][1] >= skeleton->node_count ||
+            skeleton->edges[e][0] > INT32_MAX || skeleton->edges[e][1] > INT32_MAX)
+            return sg_fail(err, "%s: edge %u refers to a missing node", path, e);
+
+    SgOutputFile out;
+    if (!sg_output_open(&out, path, err))
+        return false;
+    fprintf(out.file,
+            "ply\n"
+            "format binary_little_endian 1.0\n"
+            "comment skeleton-guided path tracing: curvilinear skeleton graph\n"
+            "element vertex %u\n"
+            "property float x\nproperty float y\nproperty float z\n"
+            "property int i\nproperty int j\nproperty int k\n"
+            "property uchar kind\n"
+            "property float radius\n"
+            "property int lifespan\n"
+            "property int light\n"
+            "element edge %u\n"
+            "property int vertex1\nproperty int vertex2\n"
+            "end_header\n",
+            skeleton->node_count, skeleton->edge_count);
+    unsigned char rec[SG_PLY_VERTEX_BYTES];
+    for (uint32_t v = 0; v < skeleton->node_count; v++) {
+        const SgSkeletonNode *n = &skeleton->nodes[v];
+        for (int a = 0; a < 3; a++) {
+            put_f32(rec + 4 * a, n->position[a]);
+            put_i32(rec + 12 + 4 * a, n->voxel[a]);
+        }
+        rec[24] = n->kind;
+        put_f32(rec + 25, n->radius);
+        put_i32(rec + 29, n->lifespan);
+        put_i32(rec + 33, n->kind == SG_NODE_LIGHT ? n->light : -1);
+        fwrite(rec, 1, sizeof rec, out.file);
+    }
+    for (uint32_t e = 0; e < skeleton->edge_count; e++) {
+        put_u32(rec, skeleton->edges[e][0]);
+        put_u32(rec + 4, skeleton->edges[e][1]);
+        fwrite(rec, 1, SG_PLY_EDGE_BYTES, out.file);
+    }
+    return sg_output_commit(&out, err);
+}
+
+/* ---- reader ------------------------------------------------------------ */
+
+typedef enum PlyType {
+    PLY_NONE, PLY_I8, PLY_U8, PLY_I16, PLY_U16, PLY_I32, PLY_U32, PLY_F32, PLY_F64
+} PlyType;
+
+static const struct {
+    const char *name;
+    PlyType type;
+} ply_type_names[] = {
+    {"char", PLY_I8},    {"int8", PLY_I8},     {"uchar", PLY_U8},   {"uint8", PLY_U8},
+    {"short", PLY_I16},  {"int16", PLY_I16},   {"ushort", PLY_U16}, {"uint16", PLY_U16},
+    {"int", PLY_I32},    {"int32", PLY_I32},   {"uint", PLY_U32},   {"uint32", PLY_U32},
+    {"float", PLY_F32},  {"float32", PLY_F32}, {"double", PLY_F64}, {"float64", PLY_F64},
+};
+
+static int ply_type_size(PlyType t)
+{
+    switch (t) {
+    case PLY_I8: case PLY_U8: return 1;
+    case PLY_I16: case PLY_U16: return 2;
+    case PLY_I32: case PLY_U32: case PLY_F32: return 4;
+    case PLY_F64: return 8;
+    default: return 0;
+    }
+}
+
+static bool ply_type_is_float(PlyType t) { return t == PLY_F32 || t == PLY_F64; }
+
+static PlyType ply_type_parse(const char *s)
+{
+    for (size_t i = 0; i < sizeof ply_type_names / sizeof ply_type_names[0]; i++)
+        if (strcmp(s, ply_type_names[i].name) == 0)
+            return ply_type_names[i].type;
+    return PLY_NONE;
+}
+
+/* Where a known property's value goes. */
+typedef enum PlyField {
+    F_UNKNOWN = -1,
+    F_X, F_Y, F_Z, F_I, F_J, F_K, F_KIND, F_RADIUS, F_LIFESPAN, F_LIGHT, /* vertex */
+    F_V1, F_V2,                                                           /* edge */
+    F_COUNT
+} PlyField;
+
+static const char *const field_names[F_COUNT] = {
+    "x", "y", "z", "i", "j", "k", "kind", "radius", "lifespan", "light", "vertex1", "vertex2",
+};
+
+enum { PLY_MAX_PROPS = 64, PLY_MAX_ELEMENTS = 16 };
+
+typedef struct PlyProperty {
+    PlyType type;       /* scalar type, or the item type of a list */
+    PlyType count_type; /* PLY_NONE for a scalar */
+    PlyField field;
+} PlyProperty;
+
+typedef struct PlyElement {
+    char name[32];
+    uint64_t count;
+    int property_count;
+    PlyProperty properties[PLY_MAX_PROPS];
+} PlyElement;
+
+typedef struct PlyReader {
+    const char *path;
+    const unsigned char *data;
+    size_t size;
+    size_t pos;
+    bool ascii;
+    int element_count;
+    PlyElement elements[PLY_MAX_ELEMENTS];
+} PlyReader;
+
+/* Next header line into `line` (without the end of line); false at the end
+ * of the data or when a line is absurdly long. */
+static bool header_line(PlyReader *r, char *line, size_t cap)
+{
+    size_t n = 0;
+    while (r->pos < r->size) {
+        unsigned char c = r->data[r->pos++];
+        if (c == '\n') {
+            if (n > 0 && line[n - 1] == '\r')
+                n--;
+            line[n] = 0;
+            return true;
+        }
+        if (c == 0 || n + 1 >= cap)
+            return false;
+        line[n++] = (char)c;
+    }
+    return false;
+}
+
+static bool parse_header(PlyReader *r, SgError *err)
+{
+    char line[512];
+    if (!header_line(r, line, sizeof line) || strcmp(line, "ply") != 0)
+        return sg_fail(err, "%s: not a PLY file (no 'ply' magic line)", r->path);
+    bool have_format = false;
+    PlyElement *current = NULL;
+    for (;;) {
+        if (!header_line(r, line, sizeof line))
+            return sg_fail(err, "%s: PLY header is truncated or malformed (no end_header)",
+                           r->path);
+        char *save = NULL;
+        char *word = strtok_r(line, " \t", &save);
+        if (!word)
+            continue;
+        if (strcmp(word, "end_header") == 0)
+            break;
+        if (strcmp(word, "comment") == 0 || strcmp(word, "obj_info") == 0)
+            continue;
+        if (strcmp(word, "format") == 0) {
+            const char *fmt = strtok_r(NULL, " \t", &save);
+            const char *version = strtok_r(NULL, " \t", &save);
+            if (!fmt || !version || strcmp(version, "1.0") != 0)
+                return sg_fail(err, "%s: malformed PLY format line", r->path);
+            if (strcmp(fmt, "ascii") == 0)
+                r->ascii = true;
+            else if (strcmp(fmt, "binary_little_endian") == 0)
+                r->ascii = false;
+            else
+                return sg_fail(err, "%s: unsupported PLY format '%s' (ascii or "
+                               "binary_little_endian expected)", r->path, fmt);
+            have_format = true;
+        } else if (strcmp(word, "element") == 0) {
+            const char *name = strtok_r(NULL, " \t", &save);
+            const char *count = strtok_r(NULL, " \t", &save);
+            if (!name || !count)
+                return sg_fail(err, "%s: malformed PLY element line", r->path);
+            if (r->element_count >= PLY_MAX_ELEMENTS)
+                return sg_fail(err, "%s: too many PLY elements", r->path);
+            char *end;
+            errno = 0;
+            unsigned long long n = strtoull(count, &end, 10);
+            if (*end || count[0] == '-' || errno || n > UINT32_MAX)
+                return sg_fail(err, "%s: bad count '%s' for element %s", r->path, count, name);
+            current = &r->elements[r->element_count++];
+            memset(current, 0, sizeof *current);
+            snprintf(current->name, sizeof current->name, "%s", name);
+            current->count = n;
+        } else if (strcmp(word, "property") == 0) {
+            if (!current)
+                return sg_fail(err, "%s: PLY property before any element", r->path);
+            if (current->property_count >= PLY_MAX_PROPS)
+                return sg_fail(err, "%s: too many properties in element %s", r->path,
+                               current->name);
+            PlyProperty *p = &current->properties[current->property_count++];
+            const char *type = strtok_r(NULL, " \t", &save);
+            if (type && strcmp(type, "list") == 0) {
+                const char *ct = strtok_r(NULL, " \t", &save);
+                type = strtok_r(NULL, " \t", &save);
+                p->count_type = ct ? ply_type_parse(ct) : PLY_NONE;
+                if (p->count_type == PLY_NONE || ply_type_is_float(p->count_type))
+                    return sg_fail(err, "%s: bad list count type in element %s", r->path,
+                                   current->name);
+            }
+            const char *name = strtok_r(NULL, " \t", &save);
+            p->type = type ? ply_type_parse(type) : PLY_NONE;
+            if (p->type == PLY_NONE || !name)
+                return sg_fail(err, "%s: malformed property line in element %s", r->path,
+                               current->name);
+            p->field = F_UNKNOWN;
+            int first = -1, last = -1;
+            if (strcmp(current->name, "vertex") == 0)
+                first = F_X, last = F_LIGHT;
+            else if (strcmp(current->name, "edge") == 0)
+                first = F_V1, last = F_V2;
+            for (int f = first; f >= 0 && f <= last; f++)
+                if (strcmp(name, field_names[f]) == 0)
+                    p->field = (PlyField)f;
+            if (p->field == F_UNKNOWN)
+                continue;
+            for (int q = 0; q + 1 < current->property_count; q++)
+                if (current->properties[q].field == p->field)
+                    return sg_fail(err, "%s: property %s.%s given twice", r->path,
+                                   current->name, name);
+            if (p->count_type != PLY_NONE)
+                return sg_fail(err, "%s: property %s.%s must be a scalar, not a list",
+                               r->path, current->name, name);
+            bool wants_float = p->field == F_X || p->field == F_Y || p->field == F_Z ||
+                               p->field == F_RADIUS;
+            if (wants_float != ply_type_is_float(p->type))
+                return sg_fail(err, "%s: property %s.%s has type %s, expected %s", r->path,
+                               current->name, name, type,
+                               wants_float ? "float or double" : "an integer type");
+        } else {
+            return sg_fail(err, "%s: unknown PLY header keyword '%s'", r->path, word);
+        }
+    }
+    if (!have_format)
+        return sg_fail(err, "%s: PLY header has no format line", r->path);
+    return true;
+}
+
+static uint64_t rd_u(const unsigned char *p, int n)
+{
+    uint64_t v = 0;
+    for (int i = n - 1; i >= 0; i--)
+        v = (v << 8) | p[i];
+    return v;
+}
+
+/* Reads one binary value; false when the data ends first. */
+static bool read_binary(PlyReader *r, PlyType t, double *out)
+{
+    int n = ply_type_size(t);
+    if (r->size - r->pos < (size_t)n)
+        return false;
+    const unsigned char *p = r->data + r->pos;
+    r->pos += (size_t)n;
+    uint64_t u = rd_u(p, n);
+    switch (t) {
+    case PLY_I8: *out = (int8_t)u; break;
+    case PLY_U8: *out = (uint8_t)u; break;
+    case PLY_I16: *out = (int16_t)u; break;
+    case PLY_U16: *out = (uint16_t)u; break;
+    case PLY_I32: *out = (int32_t)(uint32_t)u; break;
+    case PLY_U32: *out = (uint32_t)u; break;
+    case PLY_F32: { uint32_t b = (uint32_t)u; float f; memcpy(&f, &b, 4); *out = f; break; }
+    case PLY_F64: { double d; memcpy(&d, &u, 8); *out = d; break; }
+    default: return false;
+    }
+    return true;
+}
+
+/* Reads one ascii token as a value of type t; 0 = ok, 1 = end of data,
+ * 2 = not a valid number of that type. */
+static int read_ascii(PlyReader *r, PlyType t, double *out)
+{
+    while (r->pos < r->size && (r->data[r->pos] == ' ' || r->data[r->pos] == '\t' ||
+                                r->data[r->pos] == '\n' || r->data[r->pos] == '\r'))
+        r->pos++;
+    if (r->pos >= r->size)
+        return 1;
+    char token[80];
+    size_t n = 0;
+    while (r->pos < r->size && r->data[r->pos] != ' ' && r->data[r->pos] != '\t' &&
+           r->data[r->pos] != '\n' && r->data[r->pos] != '\r') {
+        if (n + 1 >= sizeof token)
+            return 2;
+        token[n++] = (char)r->data[r->pos++];
+    }
+    token[n] = 0;
+    char *end;
+    errno = 0;
+    if (ply_type_is_float(t)) {
+        *out = strtod(token, &end);
+        if (*end)
+            return 2;
+        if (t == PLY_F32 && isfinite(*out))
+            *out = (float)*out;
+        return 0;
+    }
+    long long v = strtoll(token, &end, 10);
+    if (*end || errno)
+        return 2;
+    long long lo, hi;
+    switch (t) {
+    case PLY_I8: lo = INT8_MIN, hi = INT8_MAX; break;
+    case PLY_U8: lo = 0, hi = UINT8_MAX; break;
+    case PLY_I16: lo = INT16_MIN, hi = INT16_MAX; break;
+    case PLY_U16: lo = 0, hi = UINT16_MAX; break;
+    case PLY_I32: lo = INT32_MIN, hi = INT32_MAX; break;
+    default: lo = 0, hi = UINT32_MAX; break;
+    }
+    if (v < lo || v > hi)
+        return 2;
+    *out = (double)v;
+    return 0;
+}
+
+static bool read_value(PlyReader *r, PlyType t, double *out, const PlyElement *e, uint64_t row,
+                       SgError *err)
+{
+    if (r->ascii) {
+        int rc = read_ascii(r, t, out);
+        if (rc == 1)
+            return sg_fail(err, "%s: truncated (%s %llu of %llu)", r->path, e->name,
+                           (unsigned long long)row, (unsigned long long)e->count);
+        if (rc == 2)
+            return sg_fail(err, "%s: malformed number in %s %llu", r->path, e->name,
+                           (unsigned long long)row);
+        return true;
+    }
+    if (!read_binary(r, t, out))
+        return sg_fail(err, "%s: truncated (%s %llu of %llu)", r->path, e->name,
+                       (unsigned long long)row, (unsigned long long)e->count);
+    return true;
+}
+
+/* Smallest number of bytes one row of e can take: bounds element counts by
+ * the file size before anything is allocated. */
+static size_t min_row_bytes(const PlyReader *r, const PlyElement *e)
+{
+    size_t bytes = 0;
+    for (int p = 0; p < e->property_count; p++) {
+        const PlyProperty *q = &e->properties[p];
+        if (r->ascii)
+            bytes += 2; /* a digit and a separator */
+        else
+            bytes += (size_t)ply_type_size(q->count_type != PLY_NONE ? q->count_type : q->type);
+    }
+    return bytes;
+}
+
+static bool in_int_range(double v) { return v >= INT32_MIN && v <= INT32_MAX; }
+
+bool sg_skeleton_parse_ply(SgSkeleton *skeleton, const void *data, size_t size,
+                           const char *path, SgError *err)
+{
+    memset(skeleton, 0, sizeof *skeleton);
+    PlyReader *r = calloc(1, sizeof *r);
+    if (!r)
+        return sg_fail(err, "%s: out of memory", path);
+    r->path = path;
+    r->data = data;
+    r->size = size;
+    bool ok = parse_header(r, err);
+
+    const PlyElement *vertex = NULL, *edge = NULL;
+    for (int i = 0; ok && i < r->element_count; i++) {
+        const PlyElement *e = &r->elements[i];
+        if (strcmp(e->name, "vertex") == 0 || strcmp(e->name, "edge") == 0) {
+            const PlyElement **slot = e->name[0] == 'v' ? &vertex : &edge;
+            if (*slot)
+                ok = sg_fail(err, "%s: element %s given twice", path, e->name);
+            *slot = e;
+        }
+        size_t row = min_row_bytes(r, e);
+        if (ok && row > 0 && e->count > (size - r->pos) / row)
+            ok = sg_fail(err, "%s: truncated (element %s declares %llu rows, the file is too "
+                         "short)", path, e->name, (unsigned long long)e->count);
+        if (ok && row == 0 && e->count > 0 && (e == vertex || e == edge))
+            ok = sg_fail(err, "%s: element %s has no properties", path, e->name);
+    }
+    if (ok && !vertex)
+        ok = sg_fail(err, "%s: no 'vertex' element", path);
+    bool have[F_COUNT] = {false};
+    for (int i = 0; ok && i < r->element_count; i++)
+        for (int p = 0; p < r->elements[i].property_count; p++)
+            if (r->elements[i].properties[p].field != F_UNKNOWN)
+                have[r->elements[i].properties[p].field] = true;
+    for (int f = F_X; ok && f <= F_LIFESPAN; f++)
+        if (!have[f])
+            ok = sg_fail(err, "%s: vertex property '%s' is missing", path, field_names[f]);
+    if (ok && edge && (!have[F_V1] || !have[F_V2]))
+        ok = sg_fail(err, "%s: edge properties 'vertex1' and 'vertex2' are required", path);
+
+    if (ok && vertex->count > 0) {
+        skeleton->nodes = calloc(vertex->count, sizeof *skeleton->nodes);
+        ok = skeleton->nodes || sg_fail(err, "%s: out of memory", path);
+    }
+    if (ok && edge && edge->count > 0) {
+        skeleton->edges = calloc(edge->count, sizeof *skeleton->edges);
+        ok = skeleton->edges || sg_fail(err, "%s: out of memory", path);
+    }
+
+    /* Decode elements in file order. */
+    for (int i = 0; ok && i < r->element_count; i++) {
+        const PlyElement *e = &r->elements[i];
+        for (uint64_t row = 0; ok && row < e->count; row++) {
+            double v[F_COUNT] = {0};
+            v[F_LIGHT] = -1;
+            for (int p = 0; ok && p < e->property_count; p++) {
+                const PlyProperty *q = &e->properties[p];
+                double value;
+                if (q->count_type == PLY_NONE) {
+                    ok = read_value(r, q->type, &value, e, row, err);
+                    if (ok && q->field != F_UNKNOWN)
+                        v[q->field] = value;
+                    continue;
+                }
+                /* An unknown list: read its length, skip its items. */
+                ok = read_value(r, q->count_type, &value, e, row, err);
+                if (ok && value < 0)
+                    ok = sg_fail(err, "%s: negative list length in %s %llu", path, e->name,
+                                 (unsigned long long)row);
+                for (double item = 0; ok && item < value; item++) {
+                    double ignored;
+                    ok = read_value(r, q->type, &ignored, e, row, err);
+                }
+            }
+            if (!ok)
+                break;
+            if (e == vertex) {
+                SgSkeletonNode *n = &skeleton->nodes[row];
+                for (int a = 0; a < 3; a++) {
+                    if (!isfinite(v[F_X + a]) || fabs(v[F_X + a]) > 3.0e38)
+                        ok = sg_fail(err, "%s: vertex %llu has a non-finite position", path,
+                                     (unsigned long long)row);
+                    n->position[a] = (float)v[F_X + a];
+                }
+                if (ok && (!isfinite(v[F_RADIUS]) || v[F_RADIUS] < 0 || v[F_RADIUS] > 3.0e38))
+                    ok = sg_fail(err, "%s: vertex %llu has a bad radius", path,
+                                 (unsigned long long)row);
+                if (ok && (v[F_KIND] < 0 || v[F_KIND] > SG_NODE_CAMERA))
+                    ok = sg_fail(err, "%s: vertex %llu has unknown kind %g", path,
+                                 (unsigned long long)row, v[F_KIND]);
+                if (ok && (!in_int_range(v[F_I]) || !in_int_range(v[F_J]) ||
+                           !in_int_range(v[F_K]) || !in_int_range(v[F_LIFESPAN]) ||
+                           !in_int_range(v[F_LIGHT]) || v[F_LIGHT] < -1))
+                    ok = sg_fail(err, "%s: vertex %llu has an out-of-range integer", path,
+                                 (unsigned long long)row);
+                if (!ok)
+                    break;
+                n->voxel[0] = (int)v[F_I];
+                n->voxel[1] = (int)v[F_J];
+                n->voxel[2] = (int)v[F_K];
+                n->kind = (uint8_t)v[F_KIND];
+                n->radius = (float)v[F_RADIUS];
+                n->lifespan = (int)v[F_LIFESPAN];
+                n->light = n->kind == SG_NODE_LIGHT ? (int)v[F_LIGHT] : -1;
+            } else if (e == edge) {
+                for (int a = 0; a < 2; a++)
+                    if (v[F_V1 + a] < 0 || v[F_V1 + a] >= (double)vertex->count)
+                        ok = sg_fail(err, "%s: edge %llu refers to vertex %g, which does not "
+                                     "exist (%llu vertices)", path, (unsigned long long)row,
+                                     v[F_V1 + a], (unsigned long long)vertex->count);
+                if (ok && v[F_V1] == v[F_V2])
+                    ok = sg_fail(err, "%s: edge %llu joins vertex %g to itself", path,
+                                 (unsigned long long)row, v[F_V1]);
+                if (!ok)
+                    break;
+                skeleton->edges[row][0] = (uint32_t)v[F_V1];
+                skeleton->edges[row][1] = (uint32_t)v[F_V2];
+            }
+        }
+    }
+    if (ok) {
+        skeleton->node_count = (uint32_t)vertex->count;
+        skeleton->edge_count = edge ? (uint32_t)edge->count : 0;
+    } else {
+        sg_skeleton_release(skeleton);
+    }
+    free(r);
+    return ok;
+}
+
+bool sg_skeleton_read_ply(SgSkeleton *skeleton, const char *path, SgError *err)
+{
+    memset(skeleton, 0, sizeof *skeleton);
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return sg_fail(err, "%s: cannot open: %s", path, strerror(errno));
+    unsigned char *data = NULL;
+    size_t size = 0, cap = 0;
+    bool ok = true;
+    for (;;) {
+        if (size == cap) {
+            size_t next = cap ? cap * 2 : (size_t)1 << 16;
+            unsigned char *grown = realloc(data, next);
+            if (!grown) {
+                ok = sg_fail(err, "%s: out of memory", path);
+                break;
+            }
+            data = grown;
+            cap = next;
+        }
+        size_t got = fread(data + size, 1, cap - size, f);
+        size += got;
+        if (got == 0) {
+            if (ferror(f))
+                ok = sg_fail(err, "%s: read error: %s", path, strerror(errno));
+            break;
+        }
+    }
+    fclose(f);
+    if (ok)
+        ok = sg_skeleton_parse_ply(skeleton, data, size, path, err);
+    free(data);
+    return ok;
+}
+
+void sg_skeleton_release(SgSkeleton *skeleton)
+{
+    free(skeleton->nodes);
+    free(skeleton->edges);
+    memset(skeleton, 0, sizeof *skeleton);
+}

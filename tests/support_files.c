@@ -1,0 +1,83 @@
+#include "support_files.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+const char *sg_test_tmpdir(void)
+{
+    char *path = malloc(4096);
+    const char *base = getenv("TMPDIR");
+    snprintf(path, 4096, "%s/sg-test-XXXXXX", base && *base ? base : "/tmp");
+    if (!mkdtemp(path)) {
+        perror("mkdtemp");
+        abort();
+    }
+    return path;
+}
+
+char *sg_test_write(const char *dir, const char *name, const char *text)
+{
+    char *path = malloc(4096);
+    snprintf(path, 4096, "%s/%s", dir, name);
+    FILE *f = fopen(path, "wb");
+    if (!f) {
+        perror(path);
+        abort();
+    }
+    fputs(text, f);
+    fclose(f);
+    return path;
+}
+
+bool sg_test_exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+const char *sg_test_program(const char *name, char *buf, size_t size)
+{
+    const char *bin = getenv("SG_BIN");
+    snprintf(buf, size, "%s/%s", bin && *bin ? bin : "bin", name);
+    return buf;
+}
+
+int sg_test_run(const char *command, char *err_text, size_t size)
+{
+    char errfile[] = "/tmp/sg-test-stderr-XXXXXX";
+    int fd = mkstemp(errfile);
+    if (fd < 0)
+        abort();
+    close(fd);
+    char full[16384];
+    snprintf(full, sizeof full, "SG_QUIET=1 %s 2>%s", command, errfile);
+    int status = system(full);
+    if (err_text && size) {
+        FILE *f = fopen(errfile, "rb");
+        size_t n = f ? fread(err_text, 1, size - 1, f) : 0;
+        err_text[n] = 0;
+        if (f)
+            fclose(f);
+    }
+    unlink(errfile);
+    if (status == -1)
+        return -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+int sg_test_count_lines(const char *text)
+{
+    int n = 0;
+    for (const char *c = text; *c; c++)
+        n += *c == '\n';
+    return n;
+}
+
+bool sg_test_have_shared_scenes(void)
+{
+    return sg_test_exists("../shared/scenes/README.md");
+}

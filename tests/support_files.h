@@ -1,0 +1,23 @@
+/* Test support: temporary directories, files, and running the programs. */
+#ifndef SG_TEST_SUPPORT_FILES_H
+#define SG_TEST_SUPPORT_FILES_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+/* A fresh directory under $TMPDIR (or /tmp); path valid until exit. */
+const char *sg_test_tmpdir(void);
+/* Writes text to dir/name and returns the path (static storage per call slot). */
+char *sg_test_write(const char *dir, const char *name, const char *text);
+bool sg_test_exists(const char *path);
+/* Path of a program in bin/ (SG_BIN, else ./bin). */
+const char *sg_test_program(const char *name, char *buf, size_t size);
+/* Runs a shell command; returns its exit status and stores its stderr
+ * (at most size bytes) in err_text if given. */
+int sg_test_run(const char *command, char *err_text, size_t size);
+/* Number of lines in text. */
+int sg_test_count_lines(const char *text);
+/* True when ../shared/scenes exists (third-party scenes for some tests). */
+bool sg_test_have_shared_scenes(void);
+
+#endif
