@@ -1,0 +1,33 @@
+/* Internal to step 3: the skeleton graph in compressed adjacency form. */
+#ifndef SG_IMPORTANCE_GRAPH_H
+#define SG_IMPORTANCE_GRAPH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "importance.h"
+
+typedef struct SgGraph {
+    uint32_t node_count;
+    uint32_t *first;   /* node_count + 1: neighbours of n are adjacent[first[n] .. first[n+1]) */
+    uint32_t *adjacent;
+    double *length;    /* Euclidean length of each half-edge */
+} SgGraph;
+
+bool sg_graph_build(const SgSkeleton *skeleton, SgGraph *graph, SgError *err);
+void sg_graph_release(SgGraph *graph);
+/* stack: node_count entries of scratch. Returns the component count. */
+uint32_t sg_graph_components(const SgGraph *graph, uint32_t *component, uint32_t *stack);
+/* Multi-source Dijkstra; heap_memory: sg_graph_heap_bytes(graph) bytes. */
+void sg_graph_shortest_paths(const SgGraph *graph, const uint32_t *sources,
+                             uint32_t source_count, double *dist, uint32_t *pred,
+                             void *heap_memory);
+size_t sg_graph_heap_bytes(const SgGraph *graph);
+
+/* Importance point of `node` for the light whose shortest-path tree is
+ * (pred, dist) (dist 0 at the light's nodes). */
+void sg_importance_point(const SgGrid *grid, const SgSkeleton *skeleton, const uint32_t *pred,
+                         const double *dist, uint32_t node, const double light_position[3],
+                         float point[3]);
+
+#endif
