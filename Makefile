@@ -110,10 +110,16 @@ bench-deps:
 deps:
 	@bash scripts/install-deps.sh
 
+# make test: the suites in an optimized build, then again under
+# AddressSanitizer + UBSan (SG_SANITIZED=1 lets heavy tests scale down).
 test: deps
+	@$(MAKE) --no-print-directory -j$$(nproc) all
 	@$(MAKE) --no-print-directory check-tests
+	@$(MAKE) --no-print-directory -j$$(nproc) SANITIZE=1 all
+	@SG_SANITIZED=1 $(MAKE) --no-print-directory SANITIZE=1 check-tests
 
 check-tests: $(PROGRAMS) $(TEST_BIN)
+	@echo "== tests in $(BUILD)"
 	@SG_BIN=$(abspath $(BIN)) bash tests/run-tests.sh $(TEST_BIN)
 
 demo: deps
