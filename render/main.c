@@ -283,6 +283,8 @@ int main(int argc, char **argv)
         o.guide.importance_point = cache_guide;
         o.guide.ctx = cache;
         o.guide.light_weight = follow;
+        /* 1.5 voxels: a wall on a voxel boundary makes both voxels beside it solid */
+        o.guide.query_offset = 1.5 * sg_cache_voxel_size(cache);
     }
 
     int spp_target = a.spp > 0 ? (int)a.spp : scene->render.spp > 0 ? scene->render.spp : 16;

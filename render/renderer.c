@@ -53,6 +53,7 @@ struct SgRenderer {
     uint32_t *light_tris;   /* triangle ids grouped by light */
     double *light_tri_cdf;  /* per light, cumulative area fractions */
     double *follow_cdf;     /* guide: cumulative follow probability per light */
+    double *light_centre;   /* 3 per light, local coordinates (SgLight.position) */
 
     /* camera in local coordinates */
     Vec3 cam_pos, cam_forward, cam_right, cam_up;
@@ -142,6 +143,13 @@ static bool setup_lights(SgRenderer *r, const SgScene *s, SgError *err)
     r->lights = calloc(r->light_count, sizeof *r->lights);
     r->light_cdf = calloc(r->light_count, sizeof *r->light_cdf);
     r->follow_cdf = calloc(r->light_count, sizeof *r->follow_cdf);
+    r->light_centre = calloc(3 * r->light_count, sizeof *r->light_centre);
+    if (!r->light_centre)
+        return sg_fail(err, "%s: out of memory for the light table", s->path);
+    for (uint32_t l = 0; l < s->light_count; l++) {
+        for (int i = 0; i < 3; i++)
+            r->light_centre[3 * l + i] = s->lights[l].position[i] - r->centre[i];
+    }
     uint32_t total_tris = 0;
     for (uint32_t l = 0; l < s->light_count; l++)
         total_tris += s->lights[l].triangle_count;
@@ -380,6 +388,7 @@ void sg_renderer_free(SgRenderer *r)
     free(r->light_tris);
     free(r->light_tri_cdf);
     free(r->follow_cdf);
+    free(r->light_centre);
     free(r->sum);
     free(r->last);
     free(r);
@@ -532,17 +541,26 @@ typedef struct PathStats {
 } PathStats;
 
 /* Direction toward the guide's importance point, or false. */
-static bool guide_axis(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, Vec3 *axis)
+
+static bool guide_axis(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, Vec3 *axis, bool *at_light)
 {
     float u = sg_rng_float(rng); /* drawn always: keeps the streams aligned */
     if (!r->light_count || r->follow_cdf[r->light_count - 1] <= 0.0)
         return false;
     uint32_t l = pick_cdf(r->follow_cdf, r->light_count, u * r->follow_cdf[r->light_count - 1]);
-    double world[3] = {p.x + r->centre[0], p.y + r->centre[1], p.z + r->centre[2]};
+    double off = r->opt.guide.query_offset;
+    double world[3] = {p.x + r->centre[0] + off * n.x, p.y + r->centre[1] + off * n.y,
+                       p.z + r->centre[2] + off * n.z};
     double q[3];
     if (!r->opt.guide.importance_point(r->opt.guide.ctx, world, l, q))
         return false;
-    double d[3] = {q[0] - world[0], q[1] - world[1], q[2] - world[2]};
+    /* the importance point of a node that sees the light is the light's
+     * position (stored as float by the cache) */
+    double to_light[3] = {q[0] - (r->light_centre[3 * l] + r->centre[0]),
+                          q[1] - (r->light_centre[3 * l + 1] + r->centre[1]),
+                          q[2] - (r->light_centre[3 * l + 2] + r->centre[2])};
+    *at_light = d3_length(to_light) < 1e-4 * r->scale;
+    double d[3] = {q[0] - (p.x + r->centre[0]), q[1] - (p.y + r->centre[1]), q[2] - (p.z + r->centre[2])};
     double len = d3_length(d);
     if (!(len > 1e-6 * r->scale))
         return false;
@@ -557,6 +575,11 @@ static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStat
 {
     Vec3 radiance = v3(0, 0, 0);
     Vec3 beta = v3(1, 1, 1);
+    /* What beta would be under BSDF sampling (the product of albedos):
+     * Russian roulette follows it, not beta, so that a guided path is not
+     * killed for carrying a small weight where its pdf was large. Any
+     * survival probability is unbiased once divided out. */
+    Vec3 rr_beta = v3(1, 1, 1);
     bool specular_bounce = true; /* the camera ray counts as one */
     float prev_pdf = 0.0f;
     Vec3 prev_p = o;
@@ -592,6 +615,7 @@ static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStat
         if (m->type == SG_MATERIAL_MIRROR) {
             d = v3_normalize(sg_reflect(wo, n));
             beta = v3_mul(beta, m->ks);
+            rr_beta = v3_mul(rr_beta, m->ks);
             o = offset_origin(r, h.p, n);
             specular_bounce = true;
         } else if (m->type == SG_MATERIAL_DIELECTRIC) {
@@ -622,7 +646,14 @@ static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStat
                                                m->diffuse_weight);
             BounceSampler bs = {0, {lobe, n, r->opt.lobe_exponent, 1.0f}};
             Vec3 axis;
-            bool guided = mode != SG_SAMPLING_BSDF && guide_axis(r, h.p, n, rng, &axis);
+            bool at_light = false;
+            bool guided = mode != SG_SAMPLING_BSDF && guide_axis(r, h.p, n, rng, &axis, &at_light);
+            /* Where the importance point is the light itself the light is in
+             * view and next-event estimation already samples it: the guided
+             * mode keeps to the BSDF there (a rule on the position alone,
+             * so it stays unbiased). The paper's rule has its own test. */
+            if (mode == SG_SAMPLING_GUIDED && at_light)
+                guided = false;
             Vec3 origin = offset_origin(r, h.p, n);
 
             /* next-event estimation */
@@ -689,6 +720,7 @@ static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStat
                 break; /* below the surface: f = 0, the path ends */
             Vec3 f = eval_bsdf(m, &lobe, wi);
             beta = v3_mul(beta, v3_scale(f, cos_x / pdf));
+            rr_beta = v3_mul(rr_beta, v3_add(m->kd, m->ks));
             d = wi;
             o = origin;
             prev_pdf = pdf;
@@ -698,10 +730,11 @@ static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStat
 
         /* Russian roulette after a few bounces: unbiased (divide by survival) */
         if (depth >= 2) {
-            float q = fminf(0.95f, v3_max_component(beta));
+            float q = fminf(0.95f, v3_max_component(rr_beta));
             if (!(sg_rng_float(rng) < q))
                 break;
             beta = v3_scale(beta, 1.0f / q);
+            rr_beta = v3_scale(rr_beta, 1.0f / q);
         }
         if (!(v3_max_component(beta) > 0.0f))
             break;

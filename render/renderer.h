@@ -35,6 +35,10 @@ typedef struct SgGuide {
     /* Probability weight of following each light (scene light order);
      * NULL: the lights' power. A zero weight never follows that light. */
     const double *light_weight;
+    /* The guide is asked at the hit point moved this far (world units) along
+     * the normal facing the incoming ray: a cache's voxel size, so that the
+     * query lands in the free space on the point's own side of the wall. */
+    double query_offset;
 } SgGuide;
 
 typedef struct SgRenderOptions {

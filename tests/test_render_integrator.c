@@ -116,9 +116,11 @@ static void furnace_case(SgSampling mode, double scale)
     cr_assert(st.std_error < 0.02, "furnace %s: standard error %.4f is suspiciously large",
               sg_sampling_name(mode), st.std_error);
     /* and no pixel far off: each has 64 samples, sigma_pixel = se * sqrt(768).
-     * Not for the paper's rule: its lobe-only weights have unbounded
-     * variance (the paper's fireflies), so single pixels may stray. */
-    if (mode == SG_SAMPLING_SKELETON) {
+     * Only for BSDF sampling, whose weights are bounded by the albedo: a
+     * guided weight may reach 1/alpha times that at every bounce, and the
+     * paper's lobe-only weights are unbounded (its fireflies), so the tails
+     * are too heavy for a Gaussian bound on single pixels. */
+    if (mode != SG_SAMPLING_BSDF) {
         sgt_scene_free(s);
         return;
     }
