@@ -20,6 +20,12 @@ typedef struct LightTable {
     uint32_t first, count; /* its triangles in r->light_tris / r->light_tri_cdf */
 } LightTable;
 
+typedef struct TriInfo {
+    Vec3 normal;       /* unit geometric normal (winding order) */
+    uint32_t material;
+    uint32_t light;    /* SG_NO_LIGHT if not emissive */
+} TriInfo;
+
 typedef struct Material {
     SgMaterialType type;
     Vec3 kd, ks, emission;
@@ -40,9 +46,7 @@ struct SgRenderer {
     uint32_t triangle_count;
     Vec3 *vertices;       /* local coordinates */
     uint32_t *indices;
-    Vec3 *normals;        /* unit geometric normal per triangle (winding order) */
-    uint32_t *tri_material;
-    uint32_t *tri_light;
+    TriInfo *tris;        /* per triangle, packed: one cache line per hit */
 
     uint32_t material_count;
     Material *materials;
@@ -190,7 +194,7 @@ static bool setup_lights(SgRenderer *r, const SgScene *s, SgError *err)
         Vec3 e = v3(0, 0, 0);
         if (L->triangle_count) {
             uint32_t t0 = s->light_triangles[L->first_triangle];
-            e = r->materials[r->tri_material[t0]].emission;
+            e = r->materials[r->tris[t0].material].emission;
         }
         power[l] = area > 0 ? area * luminance(e) : 0.0;
         total_power += power[l];
@@ -293,15 +297,13 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
     r->triangle_count = s->triangle_count;
     r->vertices = malloc(sizeof(Vec3) * s->vertex_count + 16);
     r->indices = malloc(sizeof(uint32_t) * 3 * s->triangle_count);
-    r->normals = malloc(sizeof(Vec3) * s->triangle_count);
-    r->tri_material = malloc(sizeof(uint32_t) * s->triangle_count);
-    r->tri_light = malloc(sizeof(uint32_t) * s->triangle_count);
+    r->tris = malloc(sizeof(TriInfo) * s->triangle_count);
     r->material_count = s->material_count;
     r->materials = calloc(s->material_count ? s->material_count : 1, sizeof *r->materials);
     size_t pixels = (size_t)o->width * o->height;
     r->sum = calloc(pixels * 3, sizeof *r->sum);
     r->last = calloc(pixels * 3, sizeof *r->last);
-    if (!r->vertices || !r->indices || !r->normals || !r->tri_material || !r->tri_light ||
+    if (!r->vertices || !r->indices || !r->tris ||
         !r->materials || !r->sum || !r->last) {
         sg_renderer_free(r);
         return sg_fail(err, "%s: out of memory", path), NULL;
@@ -324,10 +326,10 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
             return sg_fail(err, "%s: triangle %u has a bad vertex or material index", path, t), NULL;
         }
         memcpy(r->indices + 3 * t, id, 3 * sizeof *id);
-        r->tri_material[t] = s->triangle_material[t];
-        r->tri_light[t] = s->triangle_light ? s->triangle_light[t] : SG_NO_LIGHT;
-        if (r->tri_light[t] != SG_NO_LIGHT && r->tri_light[t] >= s->light_count)
-            r->tri_light[t] = SG_NO_LIGHT;
+        r->tris[t].material = s->triangle_material[t];
+        r->tris[t].light = s->triangle_light ? s->triangle_light[t] : SG_NO_LIGHT;
+        if (r->tris[t].light != SG_NO_LIGHT && r->tris[t].light >= s->light_count)
+            r->tris[t].light = SG_NO_LIGHT;
         /* normal in double from the world positions: exact direction */
         double n[3], e1[3], e2[3];
         const double *p = s->positions;
@@ -335,7 +337,7 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         d3_sub(p + 3 * id[2], p + 3 * id[0], e2);
         d3_cross(e1, e2, n);
         double nl = d3_length(n);
-        r->normals[t] = nl > 0 ? v3((float)(n[0] / nl), (float)(n[1] / nl), (float)(n[2] / nl)) : v3(0, 0, 1);
+        r->tris[t].normal = nl > 0 ? v3((float)(n[0] / nl), (float)(n[1] / nl), (float)(n[2] / nl)) : v3(0, 0, 1);
     }
     if (!setup_lights(r, s, err)) {
         sg_renderer_free(r);
@@ -379,9 +381,7 @@ void sg_renderer_free(SgRenderer *r)
         rtcReleaseDevice(r->device);
     free(r->vertices);
     free(r->indices);
-    free(r->normals);
-    free(r->tri_material);
-    free(r->tri_light);
+    free(r->tris);
     free(r->materials);
     free(r->lights);
     free(r->light_cdf);
@@ -505,7 +505,7 @@ static inline float power_heuristic(float a, float b)
 /* The light's solid-angle pdf of reaching point y on triangle tri from x. */
 static float light_pdf(const SgRenderer *r, uint32_t tri, float dist2, float cos_light)
 {
-    uint32_t l = r->tri_light[tri];
+    uint32_t l = r->tris[tri].light;
     if (l == SG_NO_LIGHT || cos_light <= 0.0f)
         return 0.0f;
     return (float)r->lights[l].pick_pdf * r->lights[l].inv_area * dist2 / cos_light;
@@ -590,11 +590,11 @@ static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStat
         st->rays++;
         if (!h.found)
             break;
-        Vec3 ng = r->normals[h.tri];
+        Vec3 ng = r->tris[h.tri].normal;
         float cos_o = v3_dot(d, ng);
         if (depth == 0 && first_pass && cos_o > 0.0f)
             st->backface++;
-        const Material *m = &r->materials[r->tri_material[h.tri]];
+        const Material *m = &r->materials[r->tris[h.tri].material];
 
         /* emission (one-sided, toward the winding normal) */
         if (m->emissive && cos_o < 0.0f) {
@@ -677,9 +677,9 @@ static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStat
                 float dist2 = v3_dot(to, to);
                 float dist = sqrtf(dist2);
                 Vec3 wi = v3_scale(to, 1.0f / dist);
-                float cos_l = -v3_dot(wi, r->normals[t]);
+                float cos_l = -v3_dot(wi, r->tris[t].normal);
                 float cos_x = v3_dot(wi, n);
-                const Material *lm = &r->materials[r->tri_material[t]];
+                const Material *lm = &r->materials[r->tris[t].material];
                 /* The skeleton rule asks whether the point is directly lit:
                  * the light sample is visible (even where the point's own
                  * cosine is zero), so it traces the shadow ray then too. */

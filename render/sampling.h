@@ -29,6 +29,13 @@ float sg_pdf_cosine_hemisphere(Vec3 n, Vec3 w);
 Vec3 sg_sample_cosine_power(Vec3 a, float p, float u1, float u2);
 float sg_pdf_cosine_power(Vec3 a, float p, Vec3 w);
 
+/* The cosine-power lobe folded onto the hemisphere of n: a lobe sample
+ * below the surface is mirrored across it, so that no sample is wasted
+ * where a reflective BSDF is zero. pdf(w) = lobe(a, w) + lobe(a', w) for
+ * w.n > 0 (a' = a mirrored across the surface), 0 below. */
+Vec3 sg_sample_folded_lobe(Vec3 a, Vec3 n, float p, float u1, float u2);
+float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w);
+
 /* The non-delta BSDF of the renderer's diffuse and glossy materials:
  *   f(wo, wi) = kd / pi + ks (p + 2) / (2 pi) max(0, wi.r)^p,  r = reflect(wo, n),
  * for wi above the surface (n faces wo), zero below. kd + ks <= 1 per channel
@@ -49,7 +56,8 @@ float sg_pdf_glossy(const SgGlossyLobe *lobe, Vec3 w);
 
 /* One-sample mixture (defensive importance sampling): the glossy BSDF
  * sampler with probability alpha, the cosine-power lobe around `axis`
- * otherwise; pdf = alpha p_bsdf + (1 - alpha) p_lobe. */
+ * folded onto the hemisphere of bsdf.n otherwise;
+ * pdf = alpha p_bsdf + (1 - alpha) p_folded_lobe. */
 typedef struct SgMixture {
     SgGlossyLobe bsdf;
     Vec3 axis;

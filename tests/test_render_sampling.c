@@ -15,7 +15,7 @@
 #define THETA_BINS 80
 #define PHI_BINS 160
 #define SAMPLES 1000000
-#define TESTS_IN_FILE 16
+#define TESTS_IN_FILE 18
 
 typedef Vec3 (*SampleFn)(const void *ctx, float u0, float u1, float u2);
 typedef float (*PdfFn)(const void *ctx, Vec3 w);
@@ -83,6 +83,15 @@ static Vec3 sphere_dir(double theta, double phi)
 static double integrate_bin(PdfFn pdf, const void *ctx, double t0, double t1, double p0,
                             double p1, int sub)
 {
+    /* Evaluate just inside the bin: a pdf that jumps on a bin edge (a lobe
+     * folded at the surface, with the normal on a coordinate axis) is then
+     * integrated from the correct side. */
+    const double inset = 1e-9;
+    double width_t = t1 - t0, width_p = p1 - p0;
+    t0 += inset;
+    t1 -= inset;
+    p0 += inset;
+    p1 -= inset;
     double ht = (t1 - t0) / sub, hp = (p1 - p0) / sub, sum = 0.0;
     for (int i = 0; i <= sub; i++) {
         double wt = (i == 0 || i == sub) ? 1 : (i % 2 ? 4 : 2);
@@ -93,7 +102,7 @@ static double integrate_bin(PdfFn pdf, const void *ctx, double t0, double t1, do
             sum += wt * wp * pdf(ctx, sphere_dir(theta, phi)) * sin(theta);
         }
     }
-    return sum * ht * hp / 9.0;
+    return sum * ht * hp / 9.0 * (width_t * width_p) / ((t1 - t0) * (p1 - p0));
 }
 
 typedef struct Chi2Result {
@@ -281,6 +290,35 @@ Test(render_sampling, cosine_power_10000_narrow_lobe)
      * the tolerance; the statistical error is sqrt(var/n). */
     cr_assert(fabs(mean - expected) < 4.0 * sqrt(var / n) + 1e-7,
               "E[1-cos] = %.4g, expected %.4g", mean, expected);
+}
+
+typedef struct FoldCtx {
+    Vec3 axis, n;
+    float exponent;
+} FoldCtx;
+static Vec3 folded_sample(const void *c, float u0, float u1, float u2)
+{
+    (void)u0;
+    const FoldCtx *f = c;
+    return sg_sample_folded_lobe(f->axis, f->n, f->exponent, u1, u2);
+}
+static float folded_pdf(const void *c, Vec3 w)
+{
+    const FoldCtx *f = c;
+    return sg_pdf_folded_lobe(f->axis, f->n, f->exponent, w);
+}
+
+Test(render_sampling, folded_lobe_grazing_axis)
+{
+    /* axis 10 degrees above the surface: half the lobe is folded back */
+    FoldCtx c = {tilted(0.98f, 0.0f, 0.17f), v3(0, 0, 1), 8.0f};
+    assert_chi2("folded lobe 8 grazing", folded_sample, folded_pdf, &c, 14, 8);
+}
+
+Test(render_sampling, folded_lobe_axis_below_tilted_normal)
+{
+    FoldCtx c = {tilted(-0.3f, 0.5f, -0.2f), tilted(0.1f, 0.7f, 0.3f), 3.0f};
+    assert_chi2("folded lobe 3 below", folded_sample, folded_pdf, &c, 15, 8);
 }
 
 Test(render_sampling, glossy_diffuse_plus_phong)
