@@ -28,11 +28,17 @@
 
 static const char *scene_dir;
 
-static char *write_scene(const char *name, const char *text)
+/* Writes scene_dir/name; the path stays valid until the next call. */
+static const char *write_scene(const char *name, const char *text)
 {
+    static char path[4200];
     if (!scene_dir)
         scene_dir = sg_test_tmpdir();
-    return sg_test_write(scene_dir, name, text);
+    snprintf(path, sizeof path, "%s/%s", scene_dir, name);
+    FILE *f = fopen(path, "wb");
+    cr_assert(f, "cannot write %s", path);
+    cr_assert(fputs(text, f) >= 0 && fclose(f) == 0, "cannot write %s", path);
+    return path;
 }
 
 static SgScene *load_text(const char *text, SgError *err)
@@ -638,7 +644,7 @@ Test(pbrt_programs, voxelize_reads_pbrt_and_prints_warnings)
     sg_test_program("voxelize", prog, sizeof prog);
     if (!sg_test_exists(prog))
         cr_skip_test("bin/voxelize not built");
-    char *scene = write_scene(
+    const char *scene = write_scene(
         "room.pbrt", HEADER
         "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 4 0 0 4 0 4 0 0 4  0 4 0 4 4 0 4 4 4 0 4 4 ]\n"
         "  \"integer indices\" [ 0 1 2 0 2 3  4 6 5 4 7 6 ]\n"
