@@ -719,6 +719,42 @@ static const struct {
     {"glass-SF11", 1.7847f},
 };
 
+/* One lobe of the CIE 1931 matching functions' analytic fit (Wyman,
+ * Sloan and Shirley 2013, "Simple analytic approximations to the CIE XYZ
+ * colour matching functions"). */
+static double cie_lobe(double lambda, double mu, double sigma_low, double sigma_high)
+{
+    double t = (lambda - mu) / (lambda < mu ? sigma_low : sigma_high);
+    return exp(-0.5 * t * t);
+}
+
+/* Linear sRGB of a blackbody at kelvin, scaled to luminance 1 as pbrt
+ * normalizes blackbody emitters. */
+static void blackbody_rgb(double kelvin, float out[3])
+{
+    const double h = 6.62606957e-34, c = 299792458.0, kb = 1.3806488e-23;
+    double xyz[3] = {0, 0, 0};
+    for (double lambda = 360; lambda <= 830; lambda += 1) {
+        double l = lambda * 1e-9;
+        double planck = 2 * h * c * c / (pow(l, 5) * (exp(h * c / (l * kb * kelvin)) - 1));
+        xyz[0] += planck * (1.056 * cie_lobe(lambda, 599.8, 37.9, 31.0) +
+                            0.362 * cie_lobe(lambda, 442.0, 16.0, 26.7) -
+                            0.065 * cie_lobe(lambda, 501.1, 20.4, 26.2));
+        xyz[1] += planck * (0.821 * cie_lobe(lambda, 568.8, 46.9, 40.5) +
+                            0.286 * cie_lobe(lambda, 530.9, 16.3, 31.1));
+        xyz[2] += planck * (1.217 * cie_lobe(lambda, 437.0, 11.8, 36.0) +
+                            0.681 * cie_lobe(lambda, 459.0, 26.0, 13.8));
+    }
+    double rgb[3] = {3.2406 * xyz[0] - 1.5372 * xyz[1] - 0.4986 * xyz[2],
+                     -0.9689 * xyz[0] + 1.8758 * xyz[1] + 0.0415 * xyz[2],
+                     0.0557 * xyz[0] - 0.2040 * xyz[1] + 1.0570 * xyz[2]};
+    for (int a = 0; a < 3; a++)
+        rgb[a] = fmax(rgb[a], 0); /* outside the sRGB gamut: clip */
+    double y = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+    for (int a = 0; a < 3; a++)
+        out[a] = y > 0 ? (float)(rgb[a] / y) : 1.0f;
+}
+
 /* A spectrum or colour parameter as linear RGB. which: "eta"/"k" for
  * named metal spectra, NULL otherwise. Sets *present. */
 static bool param_color(Parser *p, const char *name, const float fallback[3], float out[3],
@@ -760,9 +796,9 @@ static bool param_color(Parser *p, const char *name, const float fallback[3], fl
         return true;
     }
     if (!strcmp(type, "blackbody")) {
-        /* pbrt normalizes blackbody emitters to luminance 1 */
-        warn_at(p, &at, "blackbody spectra are taken as white of the same luminance");
-        out[0] = out[1] = out[2] = 1;
+        if (param->count != 1 || !(p->numbers[param->first] > 0))
+            return fail_at(p, &at, "\"blackbody %s\" needs one temperature in kelvin", name);
+        blackbody_rgb(p->numbers[param->first], out);
         return true;
     }
     if (!strcmp(type, "spectrum")) {

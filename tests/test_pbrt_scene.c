@@ -361,14 +361,34 @@ Test(pbrt_lights, radiance_scale_and_emitting_side)
     sg_scene_free(s);
 }
 
-Test(pbrt_lights, blackbody_and_two_sided_warn)
+static double rgb_luminance(const float c[3])
 {
-    SgScene *s = load_ok(HEADER "AreaLightSource \"diffuse\" \"blackbody L\" 3000\n"
-                                "    \"bool twosided\" true\n" TRIANGLE);
-    cr_assert_eq(s->light_count, 1);
-    cr_expect(has_warning(s, "blackbody"));
+    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+}
+
+Test(pbrt_lights, blackbody_has_luminance_one_and_two_sided_warns)
+{
+    SgScene *s = load_ok(HEADER "AttributeBegin\n"
+                                "AreaLightSource \"diffuse\" \"blackbody L\" 2700 \"float scale\" 3\n"
+                                "    \"bool twosided\" true\n" TRIANGLE "AttributeEnd\n"
+                                "Translate 5 0 0\n"
+                                "AreaLightSource \"diffuse\" \"blackbody L\" [ 6504 ]\n" TRIANGLE);
+    cr_assert_eq(s->light_count, 2);
     cr_expect(has_warning(s, "two-sided"));
-    cr_expect_float_eq(s->lights[0].radiance[1], 1.0f, 1e-6);
+    const float *warm = s->lights[0].radiance, *d65 = s->lights[1].radiance;
+    if (warm[0] < d65[0]) {
+        const float *t = warm;
+        warm = d65;
+        d65 = t;
+    }
+    /* pbrt normalizes a blackbody to luminance 1 (times "scale"). */
+    cr_expect(fabs(rgb_luminance(warm) - 3) < 1e-4, "luminance %g", rgb_luminance(warm));
+    cr_expect(fabs(rgb_luminance(d65) - 1) < 1e-5, "luminance %g", rgb_luminance(d65));
+    cr_expect(warm[0] > warm[1] && warm[1] > warm[2], "2700 K is orange: %g %g %g", warm[0],
+              warm[1], warm[2]);
+    /* 6504 K is close to sRGB's white (D65 is not exactly a blackbody). */
+    for (int c = 0; c < 3; c++)
+        cr_expect(fabs(d65[c] - 1) < 0.1, "6504 K channel %d: %g", c, d65[c]);
     sg_scene_free(s);
 }
 
