@@ -4,7 +4,7 @@
  * thousand nodes (one every 2 voxels along its branches) with 4 lights.
  * Prints build seconds, peak RSS, cache bytes and lookup cost, with the
  * targets beside them.
- *   importance_bench [--quick] [--threads N] [--node-step N] [--exact-runs] [--keep FILE]
+ *   importance_bench [--quick] [--threads N] [--node-step N] [--run-tolerance T] [--keep FILE]
  * --node-step 1 gives a node on every voxel of a branch, as a thinning does. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -233,7 +233,7 @@ static double peak_rss_mb(void)
 int main(int argc, char **argv)
 {
     int d = 1, threads = 2;
-    bool exact = false;
+    double tolerance = 0; /* exact runs */
     int node_step = 2; /* voxels between skeleton nodes along a branch */
     const char *keep = NULL;
     for (int i = 1; i < argc; i++) {
@@ -243,12 +243,12 @@ int main(int argc, char **argv)
             threads = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--node-step") && i + 1 < argc)
             node_step = atoi(argv[++i]) > 0 ? atoi(argv[i]) : 2;
-        else if (!strcmp(argv[i], "--exact-runs"))
-            exact = true;
+        else if (!strcmp(argv[i], "--run-tolerance") && i + 1 < argc)
+            tolerance = atof(argv[++i]);
         else if (!strcmp(argv[i], "--keep") && i + 1 < argc)
             keep = argv[++i];
         else {
-            fprintf(stderr, "usage: importance_bench [--quick] [--threads N] [--node-step N] [--exact-runs] "
+            fprintf(stderr, "usage: importance_bench [--quick] [--threads N] [--node-step N] [--run-tolerance T] "
                             "[--keep FILE]\n");
             return 2;
         }
@@ -265,7 +265,7 @@ int main(int argc, char **argv)
         snprintf(path, sizeof path, "%s", keep);
     else
         snprintf(path, sizeof path, "/tmp/importance_bench_%ld.cache", (long)getpid());
-    SgImportanceOptions opt = {.threads = threads, .quiet = true, .exact_runs = exact};
+    SgImportanceOptions opt = {.threads = threads, .quiet = true, .run_tolerance = tolerance};
     SgImportanceStats st;
     SgError err = {0};
     struct timespec c0, c1;
@@ -337,8 +337,10 @@ int main(int argc, char **argv)
            g->nx, g->ny, g->nz, (unsigned long long)st.medium_voxels,
            100.0 * st.labelled_voxels / (st.medium_voxels ? st.medium_voxels : 1), st.nodes,
            s.edge_count, st.components, st.lights, threads, t_scene);
-    printf("run walk: %s\n", exact ? "exact (every node tested)"
-                                    : "chunked (tolerance 1/8 of the distance)");
+    if (tolerance > 0)
+        printf("run walk: chunked, tolerance %g of the distance\n", tolerance);
+    else
+        printf("run walk: exact (every node tested)\n");
     printf("%-34s %12s %14s\n", "metric", "value", "target");
     printf("%-34s %12.2f %14s\n", "build seconds (total)", st.seconds_total,
            d == 1 ? "< 4" : "-");

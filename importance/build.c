@@ -249,6 +249,8 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
     if (ok) {
         stats.medium_voxels = labels.medium_voxels;
         stats.labelled_voxels = labels.labelled_voxels;
+        stats.label_rounds = labels.rounds;
+        stats.label_settled = labels.settled;
     }
 
     /* 2. Graph, components, the light table. */
@@ -272,10 +274,7 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
         stats.components = sg_graph_components(&graph, component, scratch);
 
     int threads = sg_thread_count(options->threads);
-    double tolerance = options->run_tolerance < 0 ? 0 : options->run_tolerance > 0
-                           ? options->run_tolerance : SG_IMPORTANCE_RUN_TOLERANCE;
-    if (options->exact_runs)
-        tolerance = 0;
+    double tolerance = options->run_tolerance > 0 ? options->run_tolerance : 0;
     SgVisibility vis = {0};
     if (ok)
         ok = sg_visibility_init(&vis, grid, err);

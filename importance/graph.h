@@ -24,11 +24,12 @@ void sg_graph_shortest_paths(const SgGraph *graph, const uint32_t *sources,
                              void *heap_memory);
 size_t sg_graph_heap_bytes(const SgGraph *graph);
 
-/* Segment visibility with an occupancy accelerator (4x4x4 bricks). */
+/* Segment visibility with a two-level occupancy accelerator: a bit per
+ * 4^3 brick and per 16^3 super-brick that is all medium. */
 typedef struct SgVisibility {
     const SgGrid *grid;
-    uint64_t *full; /* bit per brick: all medium; NULL: none */
-    size_t bx, by;
+    uint64_t *full[2]; /* level 0: 4^3 bricks, level 1: 16^3; NULL: no accelerator */
+    size_t bx[2], by[2];
 } SgVisibility;
 
 bool sg_visibility_init(SgVisibility *vis, const SgGrid *grid, SgError *err);
