@@ -75,6 +75,10 @@ typedef struct PbrtMaterial {
     SgMaterial material;
     bool invisible; /* "interface": the shape only bounds a medium */
     uint32_t scene_id; /* UINT32_MAX until used */
+    /* Named by NamedMaterial before its MakeNamedMaterial (pbrt-v4 resolves
+     * names after parsing): shapes use it now, the definition fills it in. */
+    bool pending;
+    Token first_use;
 } PbrtMaterial;
 
 typedef struct EmissiveMaterial {
@@ -254,6 +258,12 @@ static bool push_file(Parser *p, const char *path, const Token *from)
     if (p->depth >= MAX_INCLUDE_DEPTH)
         return fail_at(p, from, "Include nested more than %d deep (does a file include itself?)",
                        MAX_INCLUDE_DEPTH);
+    size_t n = strlen(path);
+    if (n > 3 && !strcmp(path + n - 3, ".gz")) {
+        if (from)
+            return fail_at(p, from, "%s: compressed files are not read: gunzip it first", path);
+        return sg_fail(p->err, "%s: compressed files are not read: gunzip it first", path);
+    }
     FILE *f = fopen(path, "rb");
     if (!f) {
         if (from)
@@ -1096,6 +1106,31 @@ static bool make_named_material_statement(Parser *p, const Token *statement)
     uint32_t index;
     if (!make_material(p, statement, type, label, &m))
         return false;
+    for (size_t i = p->material_count; i-- > 0;) {
+        PbrtMaterial *old = &p->materials[i];
+        if (!old->name || !string_is(&name, old->name))
+            continue;
+        if (!old->pending) {
+            warn_at(p, statement, "MakeNamedMaterial redefines a name: later uses get the new one");
+            break;
+        }
+        /* Fill in the forward reference, and what shapes already got. */
+        old->material = m.material;
+        old->invisible = m.invisible;
+        old->pending = false;
+        SgScene *scene = p->core.scene;
+        if (old->scene_id != UINT32_MAX)
+            scene->materials[old->scene_id] = m.material;
+        for (size_t k = 0; k < p->emissive_count; k++)
+            if (p->emissive[k].material == i) {
+                SgMaterial *e = &scene->materials[p->emissive[k].scene_id];
+                float emission[3];
+                memcpy(emission, e->emission, sizeof emission);
+                *e = m.material;
+                memcpy(e->emission, emission, sizeof emission);
+            }
+        return true;
+    }
     if (!(m.name = token_dup(&name)))
         return sg_fail(p->err, "%s: out of memory", p->core.path);
     if (!add_pbrt_material(p, &m, &index)) {
@@ -1115,7 +1150,21 @@ static bool named_material_statement(Parser *p, const Token *statement)
             p->state.material = (uint32_t)i;
             return true;
         }
-    return fail_at(p, &name, "NamedMaterial \"%.*s\" is not defined", (int)name.len, name.s);
+    PbrtMaterial m;
+    memset(&m, 0, sizeof m);
+    char label[64];
+    snprintf(label, sizeof label, "%.*s", (int)(name.len > 63 ? 63 : name.len), name.s);
+    sg_material_default(&m.material, label);
+    m.scene_id = UINT32_MAX;
+    m.pending = true;
+    m.first_use = name;
+    if (!(m.name = token_dup(&name)))
+        return sg_fail(p->err, "%s: out of memory", p->core.path);
+    if (!add_pbrt_material(p, &m, &p->state.material)) {
+        free(m.name);
+        return false;
+    }
+    return true;
 }
 
 /* The scene material of the current state (emissive copies cached). */
@@ -2006,6 +2055,10 @@ SgScene *sg_pbrt_scene_load(const char *path, SgError *err)
         ok = fail_at(&p, begin, "%.*s has no matching %s", (int)begin->len, begin->s,
                      token_is(begin, "TransformBegin") ? "TransformEnd" : "AttributeEnd");
     }
+    for (size_t i = 0; ok && i < p.material_count; i++)
+        if (p.materials[i].pending)
+            ok = fail_at(&p, &p.materials[i].first_use, "NamedMaterial \"%s\" is never defined",
+                         p.materials[i].name);
     ok = ok && finish_camera(&p);
     if (ok && s->triangle_count == 0)
         ok = sg_fail(err, "%s: the scene has no triangles%s", path,

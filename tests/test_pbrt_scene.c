@@ -317,6 +317,22 @@ Test(pbrt_materials, mapped_to_ours)
     sg_scene_free(s);
 }
 
+Test(pbrt_materials, named_before_defined_like_pbrt_v4)
+{
+    SgScene *s = load_ok(HEADER "NamedMaterial \"late\"\n" TRIANGLE
+                                "AreaLightSource \"diffuse\" \"rgb L\" [ 2 2 2 ]\n" TRIANGLE
+                                "MakeNamedMaterial \"late\" \"string type\" \"conductor\"\n"
+                                "    \"float roughness\" 0 \"rgb reflectance\" [ 0.9 0.9 0.9 ]\n");
+    cr_assert_eq(s->triangle_count, 2);
+    for (uint32_t t = 0; t < 2; t++) {
+        cr_expect_eq(material_of(s, t)->type, SG_MATERIAL_MIRROR, "triangle %u", t);
+        cr_expect_float_eq(material_of(s, t)->specular[0], 0.9f, 1e-6);
+    }
+    cr_expect_float_eq(material_of(s, 1)->emission[0], 2.0f, 1e-6, "keeps its emission");
+    cr_expect_float_eq(material_of(s, 0)->emission[0], 0.0f, 1e-9);
+    sg_scene_free(s);
+}
+
 /* ---- area lights -------------------------------------------------------- */
 
 Test(pbrt_lights, radiance_scale_and_emitting_side)
@@ -621,7 +637,9 @@ Test(pbrt_errors, missing_files_and_names)
     expect_error(HEADER "\nShape \"plymesh\" \"string filename\" \"models/none.ply\"\n", 5,
                  "models/none.ply: cannot open mesh");
     expect_error(HEADER "Include \"none.pbrt\"\n", 4, "none.pbrt: cannot open");
-    expect_error(HEADER "NamedMaterial \"nothing\"\n", 4, "\"nothing\" is not defined");
+    expect_error(HEADER "Include \"part.pbrt.gz\"\n", 4, "gunzip it first");
+    expect_error(HEADER TRIANGLE "NamedMaterial \"nothing\"\n" TRIANGLE, 5,
+                 "\"nothing\" is never defined");
     expect_error(HEADER "ObjectInstance \"nothing\"\n", 4, "no such object");
     expect_error(HEADER "Material \"diffuse\" \"texture reflectance\" \"none\"\n", 4,
                  "no texture named \"none\"");
