@@ -1495,7 +1495,8 @@ static bool emit_mesh(Parser *p, const Token *at, const char *what, const double
                 if (det < 0)
                     for (int a = 0; a < 3; a++)
                         nw[a] = -nw[a];
-                flip = d3_dot(n, nw) < 0;
+                if (d3_length(nw) > 0) /* else: the winding decides */
+                    flip = d3_dot(n, nw) < 0;
             }
             if (flip) {
                 uint32_t k = idx[1];
@@ -1557,11 +1558,8 @@ static bool plymesh(Parser *p, const Token *statement)
     SgError local = {0};
     if (!sg_ply_mesh_read(&mesh, path, &local))
         return fail_at(p, statement, "%s", local.message);
-    if (p->state.area_light && !p->defining)
-        warn_at(p, statement, "emissive plymesh: the emitting side follows the winding (PLY "
-                              "normals are not read)");
     bool ok = emit_mesh(p, statement, path, mesh.positions, mesh.vertex_count, mesh.indices,
-                        mesh.triangle_count, NULL);
+                        mesh.triangle_count, mesh.normals);
     sg_ply_mesh_release(&mesh);
     return ok;
 }

@@ -337,8 +337,17 @@ Test(pbrt_materials, named_before_defined_like_pbrt_v4)
 
 Test(pbrt_lights, radiance_scale_and_emitting_side)
 {
+    /* light 4: a PLY whose normals (-z) disagree with its winding (+z) */
+    write_scene("lamp.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                            "property float y\nproperty float z\nproperty float nx\n"
+                            "property float ny\nproperty float nz\nelement face 1\n"
+                            "property list uchar int vertex_indices\nend_header\n"
+                            "0 0 0 0 0 -1\n1 0 0 0 0 -1\n0 1 0 0 0 -1\n3 0 1 2\n");
     SgScene *s = load_ok(
         HEADER
+        "AttributeBegin\n  Translate 20 0 0\n"
+        "  AreaLightSource \"diffuse\" \"rgb L\" [ 7 7 7 ]\n"
+        "  Shape \"plymesh\" \"string filename\" \"lamp.ply\"\nAttributeEnd\n"
         "AttributeBegin\n" /* light 0: winding faces +z */
         "  AreaLightSource \"diffuse\" \"rgb L\" [ 1 2 3 ] \"float scale\" 2\n" TRIANGLE
         "AttributeEnd\n"
@@ -356,12 +365,12 @@ Test(pbrt_lights, radiance_scale_and_emitting_side)
         "  Translate 15 0 0\n  Scale 1 1 -1\n"
         "  AreaLightSource \"diffuse\" \"rgb L\" [ 6 6 6 ]\n" TRIANGLE
         "AttributeEnd\n" TRIANGLE /* not emissive: the block ended */);
-    cr_assert_eq(s->light_count, 4);
-    cr_assert_eq(s->triangle_count, 5);
-    cr_expect_eq(s->triangle_light[4], SG_NO_LIGHT);
-    double expected_z[4] = {1, -1, -1, -1};
-    float expected_r[4] = {2, 4, 5, 6};
-    for (uint32_t k = 0; k < 4; k++) {
+    cr_assert_eq(s->light_count, 5);
+    cr_assert_eq(s->triangle_count, 6);
+    cr_expect_eq(s->triangle_light[5], SG_NO_LIGHT);
+    double expected_z[5] = {1, -1, -1, -1, -1};
+    float expected_r[5] = {2, 4, 5, 6, 7};
+    for (uint32_t k = 0; k < 5; k++) {
         const SgLight *l = NULL;
         for (uint32_t i = 0; i < s->light_count; i++)
             if (fabsf(s->lights[i].radiance[0] - expected_r[k]) < 1e-6f)
