@@ -605,7 +605,7 @@ static bool parse_params(Parser *p)
             return false;
         Param *param = &p->params[p->param_count++];
         memset(param, 0, sizeof *param);
-        snprintf(param->type, sizeof param->type, "%s", type);
+        snprintf(param->type, sizeof param->type, "%.15s", type); /* a known type: short */
         snprintf(param->name, sizeof param->name, "%s", name);
         param->line = decl.line;
         param->source = decl.source;
