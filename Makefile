@@ -16,7 +16,14 @@ ifeq ($(origin CXX),default)
 CXX := c++
 endif
 
-ifeq ($(SANITIZE),1)
+ifeq ($(FUZZ),1)
+# libFuzzer builds: everything instrumented with clang for coverage.
+CC := clang
+CXX := clang++
+BUILD ?= build/fuzz
+SANFLAGS := -fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
+OPT := -O1
+else ifeq ($(SANITIZE),1)
 BUILD ?= build/asan
 SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 OPT := -O1
@@ -25,7 +32,7 @@ BUILD ?= build/release
 OPT := -O2
 endif
 BIN ?= bin
-ifeq ($(SANITIZE),1)
+ifneq ($(filter 1,$(SANITIZE) $(FUZZ)),)
 BIN := $(BUILD)/bin
 endif
 
@@ -61,7 +68,7 @@ TEST_SUPPORT_OBJ := $(TEST_SUPPORT_SRC:%.c=$(BUILD)/%.o)
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
-.PHONY: all test check-tests demo scene bench bench-quick deps bench-deps clean distclean FORCE
+.PHONY: all test check-tests demo scene bench bench-quick deps bench-deps fuzz fuzz-run clean distclean FORCE
 .DEFAULT_GOAL := all
 
 all: $(PROGRAMS)
@@ -103,6 +110,32 @@ bench: bench-deps $(PROGRAMS) $(BENCH_BIN)
 bench-quick: bench-deps $(PROGRAMS) $(BENCH_BIN)
 	@SG_QUICK=1 SG_BIN=$(abspath $(BIN)) SG_BENCH_BIN=$(abspath $(BUILD)/bench) bash bench/run.sh
 
+# make fuzz: every tests/fuzz/fuzz_*.c is a libFuzzer target; each runs for
+# FUZZ_SECONDS from its seed corpus tests/fuzz/corpus/NAME/ (new inputs go
+# to build/fuzz/corpus/NAME/, crashes to build/fuzz/crashes/).
+FUZZ_SRC := $(wildcard tests/fuzz/fuzz_*.c)
+FUZZ_SECONDS ?= 60
+# Linked by the C++ driver: UBSan's C++ checks in the wrappers need its runtime.
+$(BUILD)/fuzzers/%: $(BUILD)/tests/fuzz/%.o $(STEP_LIBS) $(BUILD)/libcommon.a
+	@mkdir -p $(@D)
+	$(CXX) $(LDFLAGS) -fsanitize=fuzzer -o $@ $< $(STEP_LIBS) $(BUILD)/libcommon.a $(PROG_LDLIBS)
+
+fuzz: deps
+	@$(MAKE) --no-print-directory FUZZ=1 -j$$(nproc) $(FUZZ_SRC:tests/fuzz/%.c=build/fuzz/fuzzers/%)
+	@$(MAKE) --no-print-directory FUZZ=1 fuzz-run
+
+fuzz-run:
+	@mkdir -p $(BUILD)/crashes
+	@for t in $(FUZZ_SRC:tests/fuzz/%.c=%); do \
+	  mkdir -p $(BUILD)/corpus/$$t tests/fuzz/corpus/$$t; \
+	  echo "== $$t ($(FUZZ_SECONDS) s)"; \
+	  UBSAN_OPTIONS=halt_on_error=1 LSAN_OPTIONS=suppressions=$(abspath tests/lsan.supp) \
+	  $(BUILD)/fuzzers/$$t -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=4096 \
+	    -artifact_prefix=$(BUILD)/crashes/$$t- $(BUILD)/corpus/$$t tests/fuzz/corpus/$$t \
+	    2>&1 | grep -E "^(#[0-9]+ +DONE|==[0-9]+==|SUMMARY|artifact_prefix|Test unit written)" ; \
+	done; \
+	if ls $(BUILD)/crashes/* >/dev/null 2>&1; then echo "fuzz: crashes in $(BUILD)/crashes/"; ls $(BUILD)/crashes; exit 1; fi
+
 # Tests run from the repository root; they find bin/ through SG_BIN.
 bench-deps:
 	@SG_WITH_BENCH_TOOLS=1 bash scripts/install-deps.sh
@@ -110,10 +143,16 @@ bench-deps:
 deps:
 	@bash scripts/install-deps.sh
 
+# make test: the suites in an optimized build, then again under
+# AddressSanitizer + UBSan (SG_SANITIZED=1 lets heavy tests scale down).
 test: deps
+	@$(MAKE) --no-print-directory -j$$(nproc) all
 	@$(MAKE) --no-print-directory check-tests
+	@$(MAKE) --no-print-directory -j$$(nproc) SANITIZE=1 all
+	@SG_SANITIZED=1 $(MAKE) --no-print-directory SANITIZE=1 check-tests
 
 check-tests: $(PROGRAMS) $(TEST_BIN)
+	@echo "== tests in $(BUILD)"
 	@SG_BIN=$(abspath $(BIN)) bash tests/run-tests.sh $(TEST_BIN)
 
 demo: deps

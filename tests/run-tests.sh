@@ -3,6 +3,8 @@
 # "tests: N passed, N failed" over all of them. Exit status 1 if any failed.
 set -u
 passed=0 failed=0 status=0
+export LSAN_OPTIONS="suppressions=$(cd "$(dirname "$0")" && pwd)/lsan.supp:print_suppressions=0${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
 for t in "$@"; do
   echo "== $(basename "$t")"
   out=$("$t" 2>&1); rc=$?

@@ -7,7 +7,8 @@
 
 /* A fresh directory under $TMPDIR (or /tmp); path valid until exit. */
 const char *sg_test_tmpdir(void);
-/* Writes text to dir/name and returns the path (static storage per call slot). */
+/* Writes text to dir/name and returns the path. Both return storage from a
+ * ring of 32 static slots: do not free. */
 char *sg_test_write(const char *dir, const char *name, const char *text);
 bool sg_test_exists(const char *path);
 /* Path of a program in bin/ (SG_BIN, else ./bin). */

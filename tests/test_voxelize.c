@@ -187,7 +187,6 @@ static SgScene *load_text(const char *dir, const char *name, const char *json)
     SgError err = {0};
     SgScene *s = sg_scene_load(path, &err);
     cr_assert_not_null(s, "scene failed to load: %s", err.message);
-    free(path);
     return s;
 }
 
