@@ -854,6 +854,17 @@ static bool param_color(Parser *p, const char *name, const float fallback[3], fl
     return fail_at(p, &at, "\"%s %s\" is not a colour", type, name);
 }
 
+/* A float parameter that may also be a (float) texture: its average. */
+static bool param_scalar(Parser *p, const char *name, double fallback, double *out)
+{
+    const float f[3] = {(float)fallback, (float)fallback, (float)fallback};
+    float v[3];
+    if (!param_color(p, name, f, v, NULL))
+        return false;
+    *out = find_param(p, name) ? v[0] : fallback;
+    return true;
+}
+
 static bool texture_statement(Parser *p, const Token *statement)
 {
     Token name, type, klass;
@@ -881,7 +892,7 @@ static bool texture_statement(Parser *p, const Token *statement)
         float a[3], b[3];
         double amount = 0.5;
         if (!param_color(p, "tex1", one, a, NULL) || !param_color(p, "tex2", zero, b, NULL) ||
-            (string_is(&klass, "mix") && !param_float(p, "amount", 0.5, &amount)))
+            (string_is(&klass, "mix") && !param_scalar(p, "amount", 0.5, &amount)))
             return false;
         for (int c = 0; c < 3; c++)
             value[c] = (float)((1 - amount) * a[c] + amount * b[c]);
@@ -919,17 +930,6 @@ static void clamp_albedo(Parser *p, const Token *at, float c[3], const char *wha
             warn_at(p, at, "%s above 1 clamped to 1", what);
             c[a] = 1;
         }
-}
-
-/* A float parameter that may also be a (float) texture: its average. */
-static bool param_scalar(Parser *p, const char *name, double fallback, double *out)
-{
-    const float f[3] = {(float)fallback, (float)fallback, (float)fallback};
-    float v[3];
-    if (!param_color(p, name, f, v, NULL))
-        return false;
-    *out = find_param(p, name) ? v[0] : fallback;
-    return true;
 }
 
 /* Microfacet roughness to a Phong exponent (alpha^2 = 2 / (n + 2)). */
@@ -981,7 +981,7 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
         double exponent, alpha, eta;
         float reflectance[3];
         if (!param_color(p, "reflectance", half, reflectance, NULL) ||
-            !roughness_exponent(p, &exponent, &alpha) || !param_float(p, "eta", 1.5, &eta))
+            !roughness_exponent(p, &exponent, &alpha) || !param_scalar(p, "eta", 1.5, &eta))
             return false;
         clamp_albedo(p, at, reflectance, "reflectance");
         if (!(eta >= 1))
@@ -1048,7 +1048,7 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
     if (string_is(type, "mix")) {
         const Param *names = find_param(p, "materials");
         double amount;
-        if (!param_float(p, "amount", 0.5, &amount))
+        if (!param_scalar(p, "amount", 0.5, &amount))
             return false;
         warn_at(p, at, "Material \"mix\" is replaced by the material with the larger weight");
         if (names && names->kind == PARAM_STRINGS && names->count == 2) {

@@ -317,6 +317,30 @@ Test(pbrt_materials, mapped_to_ours)
     sg_scene_free(s);
 }
 
+Test(pbrt_materials, textures_as_their_average)
+{
+    SgScene *s = load_ok(
+        HEADER "Texture \"quarter\" \"float\" \"constant\" \"float value\" 0.25\n"
+               "Texture \"flat\" \"spectrum\" \"constant\" \"rgb value\" [ 0.2 0.4 0.6 ]\n"
+               "Texture \"m\" \"spectrum\" \"mix\" \"texture tex1\" \"flat\"\n"
+               "    \"rgb tex2\" [ 1 1 1 ] \"texture amount\" \"quarter\"\n"
+               "Texture \"c\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [ 1 0 0 ]\n"
+               "    \"rgb tex2\" [ 0 0 1 ]\n"
+               "Material \"diffuse\" \"texture reflectance\" \"m\"\n" TRIANGLE
+               "Material \"coateddiffuse\" \"texture reflectance\" \"c\"\n"
+               "    \"texture roughness\" \"quarter\"\n" TRIANGLE);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect_float_eq(m->diffuse[0], 0.75f * 0.2f + 0.25f, 1e-6);
+    cr_expect_float_eq(m->diffuse[2], 0.75f * 0.6f + 0.25f, 1e-6);
+    m = material_of(s, 1);
+    cr_expect_float_eq(m->diffuse[0], 0.5f * 0.96f, 1e-6, "checkerboard: mean of the two");
+    cr_expect_float_eq(m->diffuse[1], 0.0f, 1e-9);
+    /* remaproughness (default true): alpha = sqrt(0.25) = 0.5, n = 2/0.25 - 2 */
+    cr_expect_float_eq(m->exponent, 6.0f, 1e-4);
+    cr_expect_eq(s->warning_count, 0);
+    sg_scene_free(s);
+}
+
 Test(pbrt_materials, named_before_defined_like_pbrt_v4)
 {
     SgScene *s = load_ok(HEADER "NamedMaterial \"late\"\n" TRIANGLE
