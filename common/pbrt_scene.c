@@ -806,9 +806,15 @@ static bool param_color(Parser *p, const char *name, const float fallback[3], fl
         return true;
     }
     if (!strcmp(type, "blackbody")) {
-        if (param->count != 1 || !(p->numbers[param->first] > 0))
+        /* pbrt-v3 wrote [kelvin scale] */
+        if (param->count < 1 || param->count > 2 || !(p->numbers[param->first] > 0))
             return fail_at(p, &at, "\"blackbody %s\" needs one temperature in kelvin", name);
         blackbody_rgb(p->numbers[param->first], out);
+        double scale = param->count == 2 ? p->numbers[param->first + 1] : 1;
+        if (!(scale >= 0))
+            return fail_at(p, &at, "\"blackbody %s\": negative scale", name);
+        for (int a = 0; a < 3; a++)
+            out[a] = (float)(out[a] * scale);
         return true;
     }
     if (!strcmp(type, "spectrum")) {
@@ -932,22 +938,38 @@ static void clamp_albedo(Parser *p, const Token *at, float c[3], const char *wha
         }
 }
 
-/* Microfacet roughness to a Phong exponent (alpha^2 = 2 / (n + 2)). */
-static bool roughness_exponent(Parser *p, double *exponent, double *alpha_out)
+/* pbrt-v3's roughness remapping (a fit in log roughness). */
+static double v3_roughness_to_alpha(double rough)
+{
+    double x = log(fmax(rough, 1e-3));
+    return 1.62142 + 0.819955 * x + 0.1734 * x * x + 0.0171201 * x * x * x +
+           0.000640711 * x * x * x * x;
+}
+
+/* Microfacet roughness to a Phong exponent (alpha^2 = 2 / (n + 2)).
+ * fallback: the material's default roughness; v3: pbrt-v3's remapping. */
+static bool roughness_exponent_of(Parser *p, double fallback, bool v3, double *exponent,
+                                  double *alpha_out)
 {
     double rough, u, v;
     bool remap;
-    if (!param_scalar(p, "uroughness", 0, &u) || !param_scalar(p, "vroughness", 0, &v) ||
+    if (!param_scalar(p, "uroughness", fallback, &u) ||
+        !param_scalar(p, "vroughness", fallback, &v) ||
         !param_bool(p, "remaproughness", true, &remap) ||
         !param_scalar(p, "roughness", 0.5 * (u + v), &rough))
         return false;
     if (!(rough >= 0))
         rough = 0;
-    double alpha = remap ? sqrt(rough) : rough;
+    double alpha = !remap ? rough : v3 ? v3_roughness_to_alpha(rough) : sqrt(rough);
     *alpha_out = alpha;
     double n = alpha > 0 ? 2 / (alpha * alpha) - 2 : 1e4;
     *exponent = fmin(fmax(n, 1), 1e4);
     return true;
+}
+
+static bool roughness_exponent(Parser *p, double *exponent, double *alpha_out)
+{
+    return roughness_exponent_of(p, 0, false, exponent, alpha_out);
 }
 
 /* Smooth-enough conductors become mirrors: a Phong lobe this narrow is a
@@ -967,7 +989,8 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
         warn_at(p, at, "bump and normal maps (\"displacement\", \"normalmap\") are ignored");
     if (string_is(type, "diffuse") || string_is(type, "diffusetransmission") ||
         string_is(type, "subsurface") || string_is(type, "measured") ||
-        string_is(type, "hair")) {
+        string_is(type, "hair") || string_is(type, "kdsubsurface") ||
+        string_is(type, "fourier") || string_is(type, "disney")) {
         if (!string_is(type, "diffuse"))
             warn_at(p, at, "Material \"%.*s\" is not supported: diffuse instead", (int)type->len,
                     type->s);
@@ -996,13 +1019,14 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
         m->exponent = (float)exponent;
         return true;
     }
-    if (string_is(type, "conductor") || string_is(type, "coatedconductor")) {
+    if (string_is(type, "conductor") || string_is(type, "coatedconductor") ||
+        string_is(type, "metal")) {
         if (string_is(type, "coatedconductor"))
             warn_at(p, at, "Material \"coatedconductor\" is approximated by its conductor");
         float eta[3], k[3], reflectance[3];
         bool has_reflectance;
         const NamedMetal *cu = &named_metals[3];
-        bool coated = string_is(type, "coatedconductor");
+        bool coated = string_is(type, "coatedconductor"), v3 = string_is(type, "metal");
         if (!param_color(p, coated ? "conductor.eta" : "eta", cu->eta, eta, NULL) ||
             !param_color(p, coated ? "conductor.k" : "k", cu->k, k, NULL) ||
             !param_color(p, "reflectance", half, reflectance, &has_reflectance))
@@ -1014,10 +1038,66 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
             m->diffuse[a] = 0;
         }
         double exponent, alpha;
-        if (!roughness_exponent(p, &exponent, &alpha))
+        if (!roughness_exponent_of(p, v3 ? 0.01 : 0, v3, &exponent, &alpha))
             return false;
         m->type = alpha < MIRROR_ALPHA ? SG_MATERIAL_MIRROR : SG_MATERIAL_GLOSSY;
         m->exponent = (float)exponent;
+        return true;
+    }
+    /* pbrt-v3 materials: Bitterli's collection first came in v3 syntax. */
+    if (string_is(type, "matte") || string_is(type, "translucent")) {
+        if (string_is(type, "translucent"))
+            warn_at(p, at, "Material \"translucent\" is taken as diffuse (its Kd)");
+        if (!param_color(p, "Kd", half, m->diffuse, NULL))
+            return false;
+        clamp_albedo(p, at, m->diffuse, "Kd");
+        m->type = SG_MATERIAL_DIFFUSE;
+        return true;
+    }
+    if (string_is(type, "plastic") || string_is(type, "substrate") || string_is(type, "uber")) {
+        bool substrate = string_is(type, "substrate");
+        float d = substrate ? 0.5f : 0.25f;
+        const float kd[3] = {d, d, d};
+        double exponent, alpha, opacity;
+        if (!param_color(p, "Kd", kd, m->diffuse, NULL) ||
+            !param_color(p, "Ks", kd, m->specular, NULL) ||
+            !roughness_exponent_of(p, 0.1, true, &exponent, &alpha) ||
+            !param_scalar(p, "opacity", 1, &opacity))
+            return false;
+        if (opacity < 1 || find_param(p, "Kr") || find_param(p, "Kt"))
+            warn_at(p, at, "uber opacity, Kr and Kt are ignored");
+        for (int a = 0; a < 3; a++) { /* keep energy: scale the pair down */
+            float sum = m->diffuse[a] + m->specular[a];
+            if (sum > 1) {
+                m->diffuse[a] /= sum;
+                m->specular[a] /= sum;
+            }
+        }
+        m->type = SG_MATERIAL_GLOSSY;
+        m->exponent = (float)exponent;
+        return true;
+    }
+    if (string_is(type, "mirror")) {
+        const float kr[3] = {0.9f, 0.9f, 0.9f};
+        if (!param_color(p, "Kr", kr, m->specular, NULL))
+            return false;
+        clamp_albedo(p, at, m->specular, "Kr");
+        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
+        m->type = SG_MATERIAL_MIRROR;
+        return true;
+    }
+    if (string_is(type, "glass")) {
+        double ior;
+        if (!param_scalar(p, "index", 1.5, &ior) ||
+            (find_param(p, "eta") && !param_scalar(p, "eta", 1.5, &ior)))
+            return false;
+        if (ior > 0 && ior < 1)
+            ior = 1 / ior;
+        if (!(ior >= 1 && ior <= 10))
+            return fail_at(p, at, "glass index %g is out of range", ior);
+        m->type = SG_MATERIAL_DIELECTRIC;
+        m->ior = (float)ior;
+        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
         return true;
     }
     if (string_is(type, "dielectric") || string_is(type, "thindielectric")) {
@@ -1058,6 +1138,7 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
                     *out = p->materials[i];
                     out->name = NULL;
                     out->scene_id = UINT32_MAX;
+                    out->pending = false;
                     snprintf(out->material.name, sizeof out->material.name, "%s", label);
                     return true;
                 }

@@ -341,6 +341,37 @@ Test(pbrt_materials, textures_as_their_average)
     sg_scene_free(s);
 }
 
+Test(pbrt_materials, pbrt_v3_materials)
+{
+    SgScene *s = load_ok(
+        HEADER "Material \"matte\" \"color Kd\" [ 0.3 0.2 0.1 ]\n" TRIANGLE
+               "Material \"plastic\" \"rgb Kd\" [ 0.8 0.8 0.8 ] \"rgb Ks\" [ 0.4 0.4 0.4 ]\n"
+               "    \"float roughness\" 0.02 \"bool remaproughness\" \"false\"\n" TRIANGLE
+               "Material \"mirror\"\n" TRIANGLE
+               "Material \"glass\" \"float index\" 1.7\n" TRIANGLE
+               "Material \"metal\" \"float roughness\" 0.001\n" TRIANGLE
+               "Material \"substrate\"\n" TRIANGLE);
+    cr_assert_eq(s->triangle_count, 6);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect(m->type == SG_MATERIAL_DIFFUSE && fabsf(m->diffuse[0] - 0.3f) < 1e-6f);
+    m = material_of(s, 1); /* Kd + Ks = 1.2: scaled to 1, keeping the ratio */
+    cr_expect_eq(m->type, SG_MATERIAL_GLOSSY);
+    cr_expect_float_eq(m->diffuse[0], 0.8f / 1.2f, 1e-6);
+    cr_expect_float_eq(m->specular[0], 0.4f / 1.2f, 1e-6);
+    cr_expect_float_eq(m->exponent, (float)(2 / 4e-4 - 2), 1e-1);
+    m = material_of(s, 2);
+    cr_expect(m->type == SG_MATERIAL_MIRROR && fabsf(m->specular[1] - 0.9f) < 1e-6f);
+    m = material_of(s, 3);
+    cr_expect(m->type == SG_MATERIAL_DIELECTRIC && fabsf(m->ior - 1.7f) < 1e-6f);
+    m = material_of(s, 4); /* v3 remapping of 0.001: alpha ~ 0.05, a glossy copper */
+    cr_expect_eq(m->type, SG_MATERIAL_GLOSSY);
+    cr_expect(m->specular[0] > m->specular[2], "copper is red");
+    m = material_of(s, 5);
+    cr_expect(m->type == SG_MATERIAL_GLOSSY && fabsf(m->diffuse[0] - 0.5f) < 1e-6f);
+    cr_expect_eq(s->warning_count, 0);
+    sg_scene_free(s);
+}
+
 Test(pbrt_materials, named_before_defined_like_pbrt_v4)
 {
     SgScene *s = load_ok(HEADER "NamedMaterial \"late\"\n" TRIANGLE
