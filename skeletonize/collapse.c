@@ -1,0 +1,582 @@
+/* Directional parallel collapse [CC09], 1D variant with the lifespan /
+ * opening rule [Cha10].
+ *
+ * A step runs 18 sub-steps: direction x, y, z; orientation +, -; coface
+ * dimension 3, 2, 1. Sub-step s removes, at once, every free pair of its
+ * kind that was free when it began (CC09: such pairs cannot interfere).
+ * Free faces wait in 18 queues (flat uint32 arrays of cell ids); a face is
+ * queued when it becomes free, which can only happen when one of its
+ * cofaces is removed, so after a removal only the faces of the removed
+ * cells are re-tested: each step costs the size of the current border.
+ * A face is queued when, right after one of its cofaces goes, it has
+ * exactly one coface left (or at the start). Cofaces only ever go, so that
+ * count passes 1 once: a cell is queued at most once, with no need for a
+ * "queued" bit per cell. A queued face may stop being free (its coface
+ * goes with another face): it is checked again when its sub-step comes. */
+#include "collapse.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define KINDS 18
+#define SQUARE_BITS 0x68u /* masks 3, 5, 6 */
+
+typedef struct U32Vec {
+    uint32_t *a;
+    size_t n, cap;
+} U32Vec;
+
+typedef struct EdgeVec {
+    SgIsolatedEdge *a;
+    size_t n, cap;
+} EdgeVec;
+
+typedef struct Collapse {
+    SgComplex *cx;
+    uint8_t *cells, *cons;
+    size_t st[3];
+    U32Vec queue_a[KINDS], queue_b[KINDS];
+    U32Vec *cur, *next; /* this step's and next step's queues */
+    U32Vec pairs;       /* f, g, f, g, ... */
+    EdgeVec live;       /* isolated edges not yet kept */
+    EdgeVec kept;       /* isolated edges in the constraint set */
+    const uint16_t *dist8, *open8; /* lattice layout: voxel at its lower corner */
+    int substep;
+    int32_t step;
+    uint64_t squares, removed, total;
+    uint32_t cavities_broken_total, forced_total;
+    int64_t filter256;
+    bool oom;
+} Collapse;
+
+static bool vec_reserve(void **a, size_t *cap, size_t need, size_t size)
+{
+    if (need <= *cap)
+        return true;
+    size_t cap2 = *cap ? *cap : 256;
+    while (cap2 < need)
+        cap2 *= 2;
+    void *p = realloc(*a, cap2 * size);
+    if (!p)
+        return false;
+    *a = p;
+    *cap = cap2;
+    return true;
+}
+
+static inline void u32_push(Collapse *c, U32Vec *v, uint32_t x)
+{
+    if (v->n == v->cap && !vec_reserve((void **)&v->a, &v->cap, v->n + 1, sizeof *v->a)) {
+        c->oom = true;
+        return;
+    }
+    v->a[v->n++] = x;
+}
+
+static inline void edge_push(Collapse *c, EdgeVec *v, SgIsolatedEdge e)
+{
+    if (v->n == v->cap && !vec_reserve((void **)&v->a, &v->cap, v->n + 1, sizeof *v->a)) {
+        c->oom = true;
+        return;
+    }
+    v->a[v->n++] = e;
+}
+
+static inline bool has(const uint8_t *bits, size_t v, unsigned m)
+{
+    return bits[v] >> m & 1;
+}
+
+/* Kind (0..17) of the free pair with face f, or -1 if f is not a free,
+ * removable face; *g receives the coface. */
+static inline int free_kind(const Collapse *c, uint32_t f, uint32_t *g)
+{
+    size_t v = f >> 3;
+    unsigned m = f & 7;
+    const uint8_t *cells = c->cells;
+    if (!has(cells, v, m) || has(c->cons, v, m))
+        return -1;
+    int count = 0, axis = 0, ori = 0;
+    size_t gv = 0;
+    unsigned gm = 0;
+    for (int a = 0; a < 3; a++) {
+        unsigned bit = 1u << a;
+        if (m & bit)
+            continue;
+        unsigned cm = m | bit;
+        if (has(cells, v, cm)) {
+            if (++count > 1)
+                return -1;
+            gv = v, gm = cm, axis = a, ori = 0;
+        }
+        size_t w = v - c->st[a];
+        if (has(cells, w, cm)) {
+            if (++count > 1)
+                return -1;
+            gv = w, gm = cm, axis = a, ori = 1;
+        }
+    }
+    if (count != 1 || has(c->cons, gv, gm))
+        return -1;
+    *g = (uint32_t)(gv * 8 + gm);
+    return axis * 6 + ori * 3 + (3 - sg_cell_dim(gm));
+}
+
+static inline void consider(Collapse *c, uint32_t h)
+{
+    uint32_t g;
+    int k = free_kind(c, h, &g);
+    if (k < 0)
+        return;
+    u32_push(c, k > c->substep ? &c->cur[k] : &c->next[k], h);
+}
+
+static inline void consider_faces(Collapse *c, uint32_t cell)
+{
+    size_t v = cell >> 3;
+    unsigned m = cell & 7;
+    for (int a = 0; a < 3; a++) {
+        unsigned bit = 1u << a;
+        if (!(m & bit))
+            continue;
+        unsigned fm = m ^ bit;
+        consider(c, (uint32_t)(v * 8 + fm));
+        consider(c, (uint32_t)((v + c->st[a]) * 8 + fm));
+    }
+}
+
+static uint16_t edge_opening(const Collapse *c, size_t v, unsigned m)
+{
+    /* the voxels holding edge (v, m): cubes at v - d, d sharing no axis with m */
+    uint16_t best = 0;
+    for (unsigned d = 0; d < 8; d++) {
+        if (d & m)
+            continue;
+        size_t w = v - ((d & 1) ? c->st[0] : 0) - ((d & 2) ? c->st[1] : 0) - ((d & 4) ? c->st[2] : 0);
+        if (c->open8[w] > best)
+            best = c->open8[w];
+    }
+    return best;
+}
+
+/* A square was removed: record its edges that have no square left. */
+static void note_isolated_edges(Collapse *c, uint32_t square)
+{
+    size_t v = square >> 3;
+    unsigned m = square & 7;
+    for (int a = 0; a < 3; a++) {
+        unsigned bit = 1u << a;
+        if (!(m & bit))
+            continue;
+        unsigned em = m ^ bit;
+        size_t ends[2] = {v, v + c->st[a]};
+        for (int i = 0; i < 2; i++) {
+            size_t w = ends[i];
+            if (!has(c->cells, w, em))
+                continue;
+            bool isolated = true;
+            for (int b = 0; b < 3 && isolated; b++) {
+                unsigned bb = 1u << b;
+                if (em & bb)
+                    continue;
+                if (has(c->cells, w, em | bb) || has(c->cells, w - c->st[b], em | bb))
+                    isolated = false;
+            }
+            if (isolated)
+                edge_push(c, &c->live,
+                          (SgIsolatedEdge){(uint32_t)(w * 8 + em), c->step, -1,
+                                           edge_opening(c, w, em)});
+        }
+    }
+}
+
+static void remove_cell(Collapse *c, uint32_t cell)
+{
+    c->cells[cell >> 3] &= (uint8_t) ~(1u << (cell & 7));
+}
+
+static void run_substep(Collapse *c, int s)
+{
+    c->substep = s;
+    U32Vec *q = &c->cur[s];
+    c->pairs.n = 0;
+    for (size_t i = 0; i < q->n; i++) {
+        uint32_t f = q->a[i], g;
+        if (free_kind(c, f, &g) == s) {
+            u32_push(c, &c->pairs, f);
+            u32_push(c, &c->pairs, g);
+        }
+    }
+    q->n = 0;
+    if (q->cap > (1u << 16)) { /* the border moves on: do not keep the slack */
+        free(q->a);
+        q->a = NULL;
+        q->cap = 0;
+    }
+    if (c->oom)
+        return;
+    /* The pairs were all tested against the complex as the sub-step found
+     * it; removing them one by one now gives the same complex. Noting an
+     * edge right after each square goes notes it exactly once (when its
+     * last square goes); a face tested too early is tested again when its
+     * other coface goes. */
+    c->removed += c->pairs.n;
+    int coface_dim = 3 - s % 3;
+    for (size_t i = 0; i < c->pairs.n; i += 2) {
+        uint32_t f = c->pairs.a[i], g = c->pairs.a[i + 1];
+        remove_cell(c, f);
+        remove_cell(c, g);
+        if (coface_dim == 3) {
+            /* each edge of the square f is also an edge of another square
+             * of the cube g, still here: no edge becomes isolated */
+            c->squares--;
+        } else if (coface_dim == 2) {
+            c->squares--;
+            note_isolated_edges(c, g);
+        }
+        consider_faces(c, g);
+        consider_faces(c, f);
+    }
+}
+
+static int compare_edge_cell(const void *a, const void *b)
+{
+    uint32_t x = ((const SgIsolatedEdge *)a)->cell, y = ((const SgIsolatedEdge *)b)->cell;
+    return (x > y) - (x < y);
+}
+
+/* After step l: an isolated edge with l - birth(e) > opening(e) is kept. */
+static void apply_lifespan_rule(Collapse *c)
+{
+    EdgeVec *live = &c->live;
+    size_t w = 0;
+    for (size_t i = 0; i < live->n; i++) {
+        SgIsolatedEdge e = live->a[i];
+        size_t v = e.cell >> 3;
+        unsigned m = e.cell & 7;
+        if (!has(c->cells, v, m))
+            continue;
+        if ((int64_t)(c->step - e.birth) * 8 * 256 > (int64_t)e.open8 * c->filter256) {
+            c->cons[v] |= (uint8_t)(1u << m);
+            e.kept = c->step;
+            edge_push(c, &c->kept, e);
+            continue;
+        }
+        live->a[w++] = e;
+    }
+    live->n = w;
+}
+
+/* ---- cavities ---------------------------------------------------------- */
+
+static int compare_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+static uint32_t uf_find(uint32_t *parent, uint32_t x)
+{
+    while (parent[x] != x) {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    return x;
+}
+
+static size_t square_index(const U32Vec *squares, uint32_t cell)
+{
+    size_t lo = 0, hi = squares->n;
+    while (lo < hi) {
+        size_t mid = (lo + hi) / 2;
+        if (squares->a[mid] < cell)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+static uint16_t voxel_dist8(const Collapse *c, size_t v)
+{
+    return c->dist8[v];
+}
+
+/* The collapse is stuck with squares left: no free face anywhere. The
+ * squares left bound regions of space; a square with different regions on
+ * its two sides lies on a closed surface (a 2-cycle), and removing it
+ * merges the two regions: b2 drops by one and b1 is unchanged (removing a
+ * 2-cell changes chi by one, and b0 does not move). Squares are tried from
+ * the thinnest air outwards and a union-find over regions picks one per
+ * cavity. If no square separates two regions (a stuck contractible 2D
+ * part, in theory possible), one square is removed anyway and counted as a
+ * forced break, which adds a loop. */
+static bool break_cavities(Collapse *c)
+{
+    SgComplex *cx = c->cx;
+    U32Vec squares = {0};
+    for (size_t v = 0; v < cx->vertex_count; v++) {
+        unsigned bits = c->cells[v] & SQUARE_BITS;
+        for (unsigned m = 3; bits && m <= 6; m++)
+            if (bits >> m & 1)
+                u32_push(c, &squares, (uint32_t)(v * 8 + m));
+    }
+    size_t n = squares.n;
+    uint32_t *side = malloc(2 * n * sizeof *side);
+    uint64_t *visited = calloc((cx->vertex_count + 63) / 64, sizeof *visited);
+    uint64_t *order = malloc(n * sizeof *order);
+    uint32_t *ring = NULL, *parent = NULL;
+    size_t ring_cap = 1u << 16, head = 0, count = 0;
+    ring = malloc(ring_cap * sizeof *ring);
+    bool ok = false;
+    if (c->oom || !side || !visited || !order || !ring)
+        goto done;
+    for (size_t i = 0; i < 2 * n; i++)
+        side[i] = UINT32_MAX;
+    /* lattice vertices on the far padding layer own no voxel: never enter */
+    for (size_t v = 0; v < cx->vertex_count; v++) {
+        int p[3];
+        sg_complex_coords(cx, v, p);
+        if (p[0] == cx->nx + 1 || p[1] == cx->ny + 1 || p[2] == cx->nz + 1)
+            visited[v >> 6] |= 1ull << (v & 63);
+    }
+    uint32_t regions = 0;
+    for (size_t i = 0; i < n; i++) {
+        for (int s = 0; s < 2; s++) {
+            if (side[2 * i + s] != UINT32_MAX)
+                continue;
+            size_t w = squares.a[i] >> 3;
+            unsigned normal = 7u ^ (squares.a[i] & 7);
+            int a = normal == 1 ? 0 : normal == 2 ? 1 : 2;
+            size_t start = s == 1 ? w : w - c->st[a]; /* side 1: the voxel above */
+            uint32_t region = regions++;
+            visited[start >> 6] |= 1ull << (start & 63);
+            head = 0, count = 0;
+            ring[count++] = (uint32_t)start;
+            while (count) {
+                size_t u = ring[head];
+                head = (head + 1) & (ring_cap - 1);
+                count--;
+                for (int b = 0; b < 3; b++) {
+                    unsigned sm = 7u ^ (1u << b);
+                    for (int dir = 0; dir < 2; dir++) {
+                        /* dir 0: neighbour u + e_b, wall square at u + e_b, u below it;
+                           dir 1: neighbour u - e_b, wall square at u, u above it */
+                        if (dir == 1 && u < c->st[b])
+                            continue;
+                        size_t nu = dir == 0 ? u + c->st[b] : u - c->st[b];
+                        size_t sq_at = dir == 0 ? nu : u;
+                        if (has(c->cells, sq_at, sm)) {
+                            size_t k = square_index(&squares, (uint32_t)(sq_at * 8 + sm));
+                            side[2 * k + (dir == 0 ? 0 : 1)] = region;
+                            continue;
+                        }
+                        if (nu >= cx->vertex_count || (visited[nu >> 6] >> (nu & 63) & 1))
+                            continue;
+                        visited[nu >> 6] |= 1ull << (nu & 63);
+                        if (count == ring_cap) { /* grow the ring, unwrapping it */
+                            uint32_t *bigger = malloc(2 * ring_cap * sizeof *bigger);
+                            if (!bigger)
+                                goto done;
+                            for (size_t j = 0; j < count; j++)
+                                bigger[j] = ring[(head + j) & (ring_cap - 1)];
+                            free(ring);
+                            ring = bigger;
+                            ring_cap *= 2;
+                            head = 0;
+                        }
+                        ring[(head + count) & (ring_cap - 1)] = (uint32_t)nu;
+                        count++;
+                    }
+                }
+            }
+        }
+    }
+    parent = malloc((size_t)regions * sizeof *parent);
+    if (!parent)
+        goto done;
+    for (uint32_t r = 0; r < regions; r++)
+        parent[r] = r;
+    for (size_t i = 0; i < n; i++) {
+        size_t w = squares.a[i] >> 3;
+        unsigned normal = 7u ^ (squares.a[i] & 7);
+        int a = normal == 1 ? 0 : normal == 2 ? 1 : 2;
+        uint64_t thin = (uint64_t)voxel_dist8(c, w) + voxel_dist8(c, w - c->st[a]);
+        order[i] = thin << 32 | (uint64_t)i;
+    }
+    qsort(order, n, sizeof *order, compare_u64);
+    c->substep = KINDS - 1; /* everything freed now waits for the next step */
+    uint32_t broken = 0;
+    for (size_t j = 0; j < n; j++) {
+        size_t i = (size_t)(order[j] & 0xffffffffu);
+        uint32_t ra = uf_find(parent, side[2 * i]), rb = uf_find(parent, side[2 * i + 1]);
+        if (ra == rb)
+            continue;
+        parent[ra] = rb;
+        remove_cell(c, squares.a[i]);
+        c->squares--;
+        c->removed++;
+        broken++;
+        note_isolated_edges(c, squares.a[i]);
+        consider_faces(c, squares.a[i]);
+    }
+    c->cavities_broken_total += broken;
+    if (broken == 0 && n > 0) {
+        size_t i = (size_t)(order[0] & 0xffffffffu);
+        remove_cell(c, squares.a[i]);
+        c->squares--;
+        c->removed++;
+        c->forced_total++;
+        note_isolated_edges(c, squares.a[i]);
+        consider_faces(c, squares.a[i]);
+    }
+    ok = !c->oom;
+done:
+    free(squares.a);
+    free(side);
+    free(visited);
+    free(order);
+    free(ring);
+    free(parent);
+    if (!ok)
+        c->oom = true;
+    return ok;
+}
+
+/* ---- driver ------------------------------------------------------------ */
+
+static bool interior_vertex(const Collapse *c, size_t v)
+{
+    /* all 8 voxels around v present: every cell of v has two cofaces per axis */
+    const uint8_t *cells = c->cells;
+    for (unsigned d = 0; d < 8; d++) {
+        size_t w = v - ((d & 1) ? c->st[0] : 0) - ((d & 2) ? c->st[1] : 0) -
+                   ((d & 4) ? c->st[2] : 0);
+        if (!(cells[w] & 0x80))
+            return false;
+    }
+    return true;
+}
+
+static int popcount8(unsigned x)
+{
+    int n = 0;
+    for (; x; x &= x - 1)
+        n++;
+    return n;
+}
+
+bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
+                 const uint16_t *dist8, const uint16_t *open8, double filter_scale,
+                 SgProgress *progress,
+                 SgCollapseResult *result, SgError *err)
+{
+    memset(result, 0, sizeof *result);
+    Collapse c = {.cx = cx, .cells = cx->cells, .dist8 = dist8, .open8 = open8};
+    /* the rule compares 8 x lifespan with scale x (8 x opening): in 1/256 */
+    c.filter256 = filter_scale >= 0 && filter_scale < 1e6 ? (int64_t)(filter_scale * 256 + 0.5) : 256;
+    for (int a = 0; a < 3; a++)
+        c.st[a] = cx->stride[a];
+    c.cur = c.queue_a;
+    c.next = c.queue_b;
+    c.cons = calloc(cx->vertex_count, 1);
+    bool ok = false;
+    if (!c.cons) {
+        c.oom = true;
+        goto done;
+    }
+    for (size_t i = 0; i < constrained_count; i++)
+        c.cons[constrained[i] >> 3] |= (uint8_t)(1u << (constrained[i] & 7));
+
+    /* the first free faces: only vertices next to the outside of the medium */
+    c.substep = KINDS - 1;
+    for (int z = 0; z <= cx->nz; z++) {
+        for (int y = 0; y <= cx->ny; y++) {
+            size_t v = sg_complex_vertex(cx, 0, y, z);
+            for (int x = 0; x <= cx->nx; x++, v++) {
+                unsigned bits = c.cells[v];
+                if (!bits)
+                    continue;
+                c.total += (uint64_t)popcount8(bits);
+                c.squares += (uint64_t)popcount8(bits & SQUARE_BITS);
+                if (interior_vertex(&c, v))
+                    continue;
+                for (unsigned m = 0; m < 7; m++)
+                    if (bits >> m & 1)
+                        consider(&c, (uint32_t)(v * 8 + m));
+            }
+        }
+        if (c.oom)
+            goto done;
+    }
+
+    if (progress)
+        progress->total = c.total; /* cells removed / cells at the start */
+    for (;;) {
+        bool any = false;
+        for (int k = 0; k < KINDS; k++)
+            any |= c.next[k].n > 0;
+        if (!any) {
+            if (c.squares == 0)
+                break;
+            if (!break_cavities(&c))
+                goto done;
+            continue;
+        }
+        c.step++;
+        U32Vec *t = c.cur;
+        c.cur = c.next;
+        c.next = t;
+        for (int s = 0; s < KINDS && !c.oom; s++)
+            run_substep(&c, s);
+        if (c.oom)
+            goto done;
+        apply_lifespan_rule(&c);
+        if (c.oom)
+            goto done;
+        if (progress)
+            sg_progress_update(progress, c.removed);
+    }
+
+    /* every surviving edge: kept ones and live ones still present */
+    size_t total = c.kept.n + c.live.n;
+    result->edges = malloc((total ? total : 1) * sizeof *result->edges);
+    if (!result->edges) {
+        c.oom = true;
+        goto done;
+    }
+    size_t w = 0;
+    for (size_t i = 0; i < c.kept.n; i++)
+        result->edges[w++] = c.kept.a[i];
+    for (size_t i = 0; i < c.live.n; i++)
+        if (has(c.cells, c.live.a[i].cell >> 3, c.live.a[i].cell & 7))
+            result->edges[w++] = c.live.a[i];
+    qsort(result->edges, w, sizeof *result->edges, compare_edge_cell);
+    result->edge_count = w;
+    result->steps = (uint32_t)c.step;
+    result->cavities_broken = c.cavities_broken_total;
+    result->forced_breaks = c.forced_total;
+    ok = true;
+done:
+    for (int k = 0; k < KINDS; k++) {
+        free(c.queue_a[k].a);
+        free(c.queue_b[k].a);
+    }
+    free(c.pairs.a);
+    free(c.live.a);
+    free(c.kept.a);
+    free(c.cons);
+    if (!ok) {
+        sg_collapse_result_release(result);
+        return sg_fail(err, "collapse: out of memory");
+    }
+    return true;
+}
+
+void sg_collapse_result_release(SgCollapseResult *r)
+{
+    if (!r)
+        return;
+    free(r->edges);
+    memset(r, 0, sizeof *r);
+}

@@ -1,0 +1,76 @@
+/* Step 2: the curvilinear skeleton of the medium.
+ *
+ * The medium's voxels are closed unit cubes of a cubical complex; a
+ * directional parallel collapse [CC09], restricted to 1D output by the
+ * lifespan/opening rule of [Cha10], thins it to a graph with the medium's
+ * components and tunnels, passing through the lights (and optionally the
+ * camera). Cavities (solids floating in the air) are broken on purpose so
+ * that the result is 1D; the count is reported. */
+#ifndef SG_SKELETONIZE_H
+#define SG_SKELETONIZE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "error.h"
+#include "grid.h"
+#include "medium.h"
+#include "skeleton_graph.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct SgSkeletonOptions {
+    bool camera_constraint; /* the camera's voxel joins the constraint set */
+    int threads;            /* <= 0: every core */
+    bool progress;          /* progress line on a terminal (stderr) */
+    double filter_scale;    /* the lifespan rule keeps an edge when
+                               lifespan > filter_scale x opening; 1 is [Cha10]'s
+                               parameter-free rule (default), 0 keeps every
+                               edge as soon as it is isolated (no filter) */
+} SgSkeletonOptions;
+
+typedef struct SgSkeletonStats {
+    uint64_t medium_voxels;
+    uint32_t nodes, edges;
+    uint32_t components;     /* of the graph */
+    int64_t loops;           /* E - V + components */
+    uint32_t cavities_broken;  /* squares removed to open cavities (b2 of the medium) */
+    uint32_t forced_breaks;    /* squares removed although no cavity was behind them
+                                  (a stuck, non-collapsible 2D part); 0 in practice */
+    uint32_t constraints;      /* light (+ camera) constraint cells */
+    bool camera_constrained;   /* the camera's voxel was in the medium and is a node */
+    uint32_t steps;            /* collapse steps */
+    double mean_centredness;   /* mean over nodes of dist(node voxel) / max dist in its 3x3x3 */
+    double seconds_distance, seconds_collapse, seconds_total;
+} SgSkeletonStats;
+
+void sg_skeleton_options_default(SgSkeletonOptions *opt);
+
+/* Thins medium->grid (1 = medium voxel). Light i with a seed inside the
+ * medium gives a node of kind SG_NODE_LIGHT, light = i, voxel = seed.
+ * On failure *out is left empty. stats may be NULL. */
+bool sg_skeletonize(const SgMedium *medium, const SgSkeletonOptions *opt, SgSkeleton *out,
+                    SgSkeletonStats *stats, SgError *err);
+
+/* Same on a bare grid with explicit constraint voxels (kind[i] is the
+ * SgNodeKind, light[i] the light index or -1). */
+bool sg_skeletonize_grid(const SgGrid *grid, uint32_t constraint_count, const int (*voxels)[3],
+                         const uint8_t *kinds, const int *lights, const SgSkeletonOptions *opt,
+                         SgSkeleton *out, SgSkeletonStats *stats, SgError *err);
+
+/* Free-space measures used by the skeleton (exposed for tests and step 3).
+ * dist8[v]: 8 x Euclidean distance from voxel v's centre to the nearest
+ * centre of a voxel outside the medium (the grid's outside counts as
+ * outside), 0 outside the medium, saturated at 65535.
+ * open8[v]: 8 x opening value: the radius of the largest such ball that
+ * lies in the medium and contains v (approximate propagation, see
+ * distance.c). Arrays have nx*ny*nz entries, x fastest; free() them. */
+bool sg_distance_opening(const SgGrid *grid, int threads, uint16_t **dist8, uint16_t **open8,
+                         SgError *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
