@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "image_io.h"
 #include "ply_mesh.h"
 #include "scene_builder.h"
 #include "vecmath.h"
@@ -112,6 +113,13 @@ typedef struct Object {
     size_t shape_count, shape_capacity;
 } Object;
 
+typedef struct ImageAverage {
+    char *path;
+    bool linear; /* the encoding it was averaged with */
+    float value[3];
+    bool readable;
+} ImageAverage;
+
 typedef struct Warning {
     char kind[160];   /* what could not be honoured */
     char where[4200]; /* file:line of the first occurrence */
@@ -166,6 +174,9 @@ typedef struct Parser {
 
     Warning *warnings;
     size_t warning_count, warning_capacity;
+
+    ImageAverage *images; /* image files read for textures, by path */
+    size_t image_count, image_capacity;
 } Parser;
 
 /* Grows *array to hold needed items of size item. */
@@ -871,6 +882,73 @@ static bool param_scalar(Parser *p, const char *name, double fallback, double *o
     return true;
 }
 
+static bool resolve_path(Parser *p, const Token *at, const Token *name, char *out, size_t size)
+{
+    int n = name->len && name->s[0] == '/'
+                ? snprintf(out, size, "%.*s", (int)name->len, name->s)
+                : snprintf(out, size, "%s%.*s", p->base_dir, (int)name->len, name->s);
+    if (n < 0 || (size_t)n >= size)
+        return fail_at(p, at, "file name too long");
+    return true;
+}
+
+static bool has_suffix(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), k = strlen(suffix);
+    if (n < k)
+        return false;
+    for (size_t i = 0; i < k; i++) {
+        char a = s[n - k + i], b = suffix[i];
+        if ((a >= 'A' && a <= 'Z' ? a + 32 : a) != b)
+            return false;
+    }
+    return true;
+}
+
+static double srgb_to_linear(double c)
+{
+    return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
+}
+
+/* The mean linear colour of an image file (cached by path). gamma: 0 for
+ * linear data, -1 for sRGB, else the exponent. False if it cannot be read. */
+static bool image_average(Parser *p, const char *path, double gamma, float out[3])
+{
+    for (size_t i = 0; i < p->image_count; i++)
+        if (!strcmp(p->images[i].path, path) && p->images[i].linear == (gamma == 0)) {
+            memcpy(out, p->images[i].value, 3 * sizeof(float));
+            return p->images[i].readable;
+        }
+    int w = 0, h = 0;
+    float *rgb = NULL;
+    SgError ignored = {0};
+    bool readable = sg_image_read(path, &w, &h, &rgb, &ignored);
+    double sum[3] = {0, 0, 0};
+    if (readable) {
+        /* A few hundred thousand pixels give the mean well enough. */
+        size_t step = 1 + (size_t)w * (size_t)h / 262144, n = 0;
+        for (size_t i = 0; i < (size_t)w * (size_t)h; i += step, n++)
+            for (int c = 0; c < 3; c++) {
+                double v = rgb[3 * i + c];
+                v = !isfinite(v) || v < 0 ? 0 : v;
+                sum[c] += gamma == 0 ? v : gamma < 0 ? srgb_to_linear(v) : pow(v, gamma);
+            }
+        for (int c = 0; c < 3; c++)
+            out[c] = (float)(sum[c] / (double)(n ? n : 1));
+    }
+    free(rgb);
+    if (RESERVE(p, p->images, p->image_count, p->image_capacity, 1)) {
+        ImageAverage *a = &p->images[p->image_count];
+        if ((a->path = strdup(path))) {
+            a->linear = gamma == 0;
+            a->readable = readable;
+            memcpy(a->value, readable ? out : (const float[3]){0, 0, 0}, sizeof a->value);
+            p->image_count++;
+        }
+    }
+    return readable;
+}
+
 static bool texture_statement(Parser *p, const Token *statement)
 {
     Token name, type, klass;
@@ -904,15 +982,42 @@ static bool texture_statement(Parser *p, const Token *statement)
             value[c] = (float)((1 - amount) * a[c] + amount * b[c]);
     } else if (string_is(&klass, "imagemap")) {
         const Token *file = param_string(p, "filename");
+        const Token *encoding = param_string(p, "encoding");
         float scale[3];
-        if (!param_color(p, "scale", one, scale, NULL))
+        bool invert;
+        if (!param_color(p, "scale", one, scale, NULL) || !param_bool(p, "invert", false, &invert))
             return false;
-        for (int c = 0; c < 3; c++)
-            value[c] = grey[c] * scale[c];
         if (!file)
             return fail_at(p, statement, "imagemap texture without \"string filename\"");
-        warn_at(p, statement,
-                "image textures are not read: their average colour is taken as grey 0.5");
+        char path[8192];
+        if (!resolve_path(p, statement, file, path, sizeof path))
+            return false;
+        /* pbrt's default: 8-bit images hold sRGB, float formats linear values */
+        double gamma = has_suffix(path, ".exr") || has_suffix(path, ".pfm") ||
+                               has_suffix(path, ".hdr")
+                           ? 0
+                           : -1;
+        if (encoding && string_is(encoding, "linear"))
+            gamma = 0;
+        else if (encoding && string_is(encoding, "sRGB"))
+            gamma = -1;
+        else if (encoding && encoding->len > 6 && encoding->len < 40 &&
+                 !memcmp(encoding->s, "gamma ", 6)) {
+            char number[40];
+            snprintf(number, sizeof number, "%.*s", (int)encoding->len - 6, encoding->s + 6);
+            gamma = atof(number) > 0 ? atof(number) : -1;
+        }
+        float average[3];
+        if (!image_average(p, path, gamma, average)) {
+            memcpy(average, grey, sizeof average);
+            warn_at(p, statement, "image textures that cannot be read (missing files) are "
+                                  "taken as grey 0.5");
+        }
+        for (int c = 0; c < 3; c++) {
+            value[c] = average[c] * scale[c];
+            if (invert)
+                value[c] = value[c] < 1 ? 1 - value[c] : 0;
+        }
     } else {
         warn_at(p, statement, "Texture \"%.*s\" is not supported: taken as grey 0.5",
                 (int)klass.len, klass.s);
@@ -1615,15 +1720,6 @@ static bool emit_mesh(Parser *p, const Token *at, const char *what, const double
                                   triangle_count, &xf, material, p->err);
 }
 
-static bool resolve_path(Parser *p, const Token *at, const Token *name, char *out, size_t size)
-{
-    int n = name->len && name->s[0] == '/'
-                ? snprintf(out, size, "%.*s", (int)name->len, name->s)
-                : snprintf(out, size, "%s%.*s", p->base_dir, (int)name->len, name->s);
-    if (n < 0 || (size_t)n >= size)
-        return fail_at(p, at, "file name too long");
-    return true;
-}
 
 static bool plymesh(Parser *p, const Token *statement)
 {
@@ -2102,6 +2198,9 @@ static void parser_release(Parser *p)
     }
     free(p->objects);
     free(p->warnings);
+    for (size_t i = 0; i < p->image_count; i++)
+        free(p->images[i].path);
+    free(p->images);
 }
 
 SgScene *sg_pbrt_scene_load(const char *path, SgError *err)

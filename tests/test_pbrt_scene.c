@@ -10,6 +10,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "image_io.h"
 #include "scene.h"
 #include "support_files.h"
 
@@ -338,6 +339,49 @@ Test(pbrt_materials, textures_as_their_average)
     /* remaproughness (default true): alpha = sqrt(0.25) = 0.5, n = 2/0.25 - 2 */
     cr_expect_float_eq(m->exponent, 6.0f, 1e-4);
     cr_expect_eq(s->warning_count, 0);
+    sg_scene_free(s);
+}
+
+Test(pbrt_materials, image_textures_as_their_mean_linear_colour)
+{
+    if (!scene_dir)
+        scene_dir = sg_test_tmpdir();
+    /* Left half (0.2, 0.4, 0.6), right half (0.6, 0.4, 0.2): mean 0.4. */
+    enum { W = 64, H = 32 };
+    static float rgb[W * H * 3];
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++)
+            for (int c = 0; c < 3; c++)
+                rgb[3 * (y * W + x) + c] = x < W / 2 ? 0.2f * (1 + c) : 0.2f * (3 - c);
+    char png[4200], exr[4200];
+    snprintf(png, sizeof png, "%s/wood.png", scene_dir);
+    snprintf(exr, sizeof exr, "%s/wood.exr", scene_dir);
+    SgError err = {0};
+    cr_assert(sg_image_write_png(png, W, H, rgb, 0, &err), "%s", err.message);
+    cr_assert(sg_image_write_exr(exr, W, H, rgb, NULL, 0, &err), "%s", err.message);
+    SgScene *s = load_ok(
+        HEADER "Texture \"a\" \"spectrum\" \"imagemap\" \"string filename\" \"wood.png\"\n"
+               "Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"wood.exr\"\n"
+               "    \"float scale\" 0.5\n"
+               "Texture \"c\" \"spectrum\" \"imagemap\" \"string filename\" \"wood.png\"\n"
+               "    \"string encoding\" \"linear\"\n"
+               "Texture \"d\" \"spectrum\" \"imagemap\" \"string filename\" \"none.png\"\n"
+               "Material \"diffuse\" \"texture reflectance\" \"a\"\n" TRIANGLE
+               "Material \"diffuse\" \"texture reflectance\" \"b\"\n" TRIANGLE
+               "Material \"diffuse\" \"texture reflectance\" \"c\"\n" TRIANGLE
+               "Material \"diffuse\" \"texture reflectance\" \"d\"\n" TRIANGLE);
+    for (int c = 0; c < 3; c++) {
+        /* the PNG holds sRGB bytes: decoded back to linear, up to 8-bit rounding */
+        cr_expect(fabsf(material_of(s, 0)->diffuse[c] - 0.4f) < 0.004f, "png %d: %g", c,
+                  material_of(s, 0)->diffuse[c]);
+        cr_expect(fabsf(material_of(s, 1)->diffuse[c] - 0.2f) < 1e-4f, "exr %d: %g", c,
+                  material_of(s, 1)->diffuse[c]);
+        cr_expect_float_eq(material_of(s, 3)->diffuse[c], 0.5f, 1e-6, "missing file: grey");
+    }
+    /* read as linear, the sRGB bytes are brighter than the colour they encode */
+    cr_expect(material_of(s, 2)->diffuse[1] > 0.6f, "%g", material_of(s, 2)->diffuse[1]);
+    cr_expect(has_warning(s, "scene.pbrt:9: image textures that cannot be read"));
+    cr_expect_eq(s->warning_count, 1);
     sg_scene_free(s);
 }
 
