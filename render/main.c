@@ -269,9 +269,12 @@ int main(int argc, char **argv)
             sg_fail(&err, "%s: out of memory", a.scene);
             goto done;
         }
-        uint32_t dropped = 0;
+        uint32_t dropped = 0, camera_node;
+        /* A camera outside the medium (in front of an open box, say) cannot
+         * be tested: then every light is followed. */
+        bool testable = sg_cache_nearest_node(cache, scene->camera.position, &camera_node);
         for (uint32_t l = 0; l < scene->light_count; l++) {
-            if (sg_cache_light_reaches(cache, l, scene->camera.position))
+            if (!testable || sg_cache_light_reaches(cache, l, scene->camera.position))
                 follow[l] = scene->lights[l].power;
             else
                 dropped++;
