@@ -489,7 +489,7 @@ static Vec3 eval_bsdf(const Material *m, const SgGlossyLobe *lobe, Vec3 wi)
     if (m->type == SG_MATERIAL_GLOSSY) {
         float c = v3_dot(wi, lobe->r);
         if (c > 0.0f) {
-            float s = (m->exponent + 2.0f) * (0.5f * SG_INV_PI) * powf(fminf(c, 1.0f), m->exponent);
+            float s = (m->exponent + 2.0f) * (0.5f * SG_INV_PI) * sg_pow_exponent(fminf(c, 1.0f), m->exponent);
             f = v3_add(f, v3_scale(m->ks, s));
         }
     }
