@@ -108,8 +108,8 @@ void sg_render_options_default(SgRenderOptions *o, const SgScene *scene)
     o->height = scene && scene->has_camera && scene->camera.height > 0 ? scene->camera.height : 240;
     o->max_depth = scene && scene->render.max_depth > 0 ? scene->render.max_depth : 8;
     o->sampling = SG_SAMPLING_BSDF;
-    o->lobe_exponent = 4.0f;
-    o->alpha = 0.5f;
+    o->lobe_exponent = 8.0f;
+    o->alpha = 0.75f;
 }
 
 static float luminance(Vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
