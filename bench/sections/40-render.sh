@@ -113,8 +113,9 @@ else
     name=$(basename "$sc" .json)
     if ! precompute "$sc" "$out/$name"; then echo "$name: precompute failed"; continue; fi
     "$bin/render" "$sc" --sampling bsdf --time $ref_seconds --seed 999 -o "$out/$name/ref.exr" --quiet
-    for mode in bsdf guided skeleton; do
-      for seed in $(seq $seeds); do
+    # modes interleaved, so that a change in the machine's load hits all alike
+    for seed in $(seq $seeds); do
+      for mode in bsdf guided skeleton; do
         "$bin/render" "$sc" --cache "$out/$name/importance.cache" --sampling $mode --time $seconds \
           --seed $seed -o "$out/$name/$mode.exr" --reference "$out/$name/ref.exr" \
           --log "$out/$name/$mode-$seed.csv" --quiet
