@@ -271,10 +271,19 @@ int main(int argc, char **argv)
             sg_fail(&err, "%s: out of memory", a.scene);
             goto done;
         }
-        uint32_t dropped = 0, camera_node;
-        /* A camera outside the medium (in front of an open box, say) cannot
-         * be tested: then every light is followed. */
-        bool testable = sg_cache_nearest_node(cache, scene->camera.position, &camera_node);
+        uint32_t dropped = 0;
+        /* The litmus test needs the camera inside the voxel grid: one outside
+         * the scene's box (in front of an open box, say) cannot be tested,
+         * so every light is followed. Inside the box but outside the medium,
+         * the camera is in air no light reaches: nothing is followed. */
+        int dims[3];
+        double origin[3], h = sg_cache_voxel_size(cache);
+        sg_cache_grid(cache, dims, origin);
+        bool testable = true;
+        for (int a = 0; a < 3; a++)
+            if (!(scene->camera.position[a] >= origin[a] &&
+                  scene->camera.position[a] <= origin[a] + dims[a] * h))
+                testable = false;
         for (uint32_t l = 0; l < scene->light_count; l++) {
             if (!testable || sg_cache_light_reaches(cache, l, scene->camera.position))
                 follow[l] = scene->lights[l].power;
