@@ -159,7 +159,8 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
     sg_progress_begin(&progress, "skeleton: collapse", 0);
     if (!opt.progress)
         progress.enabled = false;
-    if (!sg_collapse(&cx, anchor_cells, anchor_count, dist8, open8, opt.filter_scale, &progress,
+    if (!sg_collapse(&cx, anchor_cells, anchor_count, dist8, open8, opt.filter_scale, opt.threads,
+                     opt.parallel_grain, &progress,
                      &col, err))
         goto done;
     sg_progress_end(&progress);

@@ -48,6 +48,8 @@ typedef struct SgSkeletonOptions {
     bool camera_constraint; /* the camera's voxel joins the constraint set */
     int threads;            /* <= 0: every core */
     bool progress;          /* progress line on a terminal (stderr) */
+    uint32_t parallel_grain; /* collapse sub-steps with fewer queued faces run
+                               on one thread; 0: default; tests use 1 */
     double filter_scale;    /* the lifespan rule keeps an edge when
                                lifespan > filter_scale x opening; 1 is [Cha10]'s
                                parameter-free rule (default), 0 keeps every
