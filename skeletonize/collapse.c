@@ -338,6 +338,8 @@ static void run_parallel(Collapse *c, Job job)
 
 static bool append_u32(U32Vec *dst, U32Vec *src)
 {
+    if (src->n == 0)
+        return true;
     if (!vec_reserve((void **)&dst->a, &dst->cap, dst->n + src->n, sizeof *dst->a))
         return false;
     memcpy(dst->a + dst->n, src->a, src->n * sizeof *src->a);
