@@ -6,6 +6,7 @@
 #define SG_IMPORTANCE_CACHE_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "error.h"
@@ -34,6 +35,36 @@ bool sg_cache_importance_point(const SgImportanceCache *cache, const double p[3]
 /* Litmus test (paper 3.3): can light `light` reach the world position p
  * (the camera, typically) through the medium? */
 bool sg_cache_light_reaches(const SgImportanceCache *cache, uint32_t light, const double p[3]);
+
+/* ---- additions (step 3 helper) ----------------------------------------
+ * Lookups by position accept points in a medium voxel and, because surface
+ * points lie in solid voxels under conservative voxelization, points in a
+ * non-medium voxel next to the medium: the adjacent medium voxel whose
+ * centre is nearest to p is used. Points further from the medium fail. For
+ * thin walls, query at p offset by about one voxel (sg_cache_voxel_size)
+ * along the normal facing the incoming ray. */
+
+/* Validates bytes in memory (16-byte aligned, kept alive by the caller
+ * until sg_cache_close); `name` names them in messages. For tests, fuzzing. */
+SgImportanceCache *sg_cache_open_memory(const void *data, size_t size, const char *name,
+                                        SgError *err);
+
+/* Nearest skeleton node (geodesic) of the voxel at p. */
+bool sg_cache_nearest_node(const SgImportanceCache *cache, const double p[3], uint32_t *node);
+bool sg_cache_node_position(const SgImportanceCache *cache, uint32_t node, double p[3]);
+/* Importance point of a node for a light; false if the light cannot reach it. */
+bool sg_cache_node_importance_point(const SgImportanceCache *cache, uint32_t node,
+                                    uint32_t light, double point[3]);
+/* The light has a place on the skeleton (false: sealed off, reaches nothing). */
+bool sg_cache_light_has_paths(const SgImportanceCache *cache, uint32_t light);
+
+uint64_t sg_cache_skeleton_hash(const SgImportanceCache *cache);
+uint64_t sg_cache_medium_hash(const SgImportanceCache *cache);
+uint32_t sg_cache_component_count(const SgImportanceCache *cache);
+uint64_t sg_cache_medium_voxels(const SgImportanceCache *cache);
+uint64_t sg_cache_bytes(const SgImportanceCache *cache);
+double sg_cache_voxel_size(const SgImportanceCache *cache);
+void sg_cache_grid(const SgImportanceCache *cache, int dims[3], double origin[3]);
 
 #ifdef __cplusplus
 }

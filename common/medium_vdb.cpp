@@ -11,9 +11,51 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <new>
 #include <string>
 
+#include <unistd.h>
+
 #include "output_file.h"
+
+// OpenVDB trusts the sizes stored in a file: a corrupt or truncated file can
+// ask operator new for terabytes. The standard says such a request throws
+// std::bad_alloc, which sg_medium_read turns into a one-line error, but
+// sanitizer runtimes abort in their own operator new instead. Routing the
+// global new/delete through malloc/free keeps the standard behaviour in
+// every build. A request larger than the machine's memory is refused before
+// it reaches the allocator, so no sanitizer has anything to say about it.
+static bool sg_allocation_possible(std::size_t size)
+{
+    static const std::size_t physical = [] {
+        long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+        return pages > 0 && page > 0 ? (std::size_t)pages * (std::size_t)page : SIZE_MAX;
+    }();
+    return size <= physical;
+}
+
+void *operator new(std::size_t size)
+{
+    if (sg_allocation_possible(size))
+        if (void *p = std::malloc(size ? size : 1))
+            return p;
+    throw std::bad_alloc();
+}
+void *operator new[](std::size_t size) { return ::operator new(size); }
+void *operator new(std::size_t size, const std::nothrow_t &) noexcept
+{
+    return sg_allocation_possible(size) ? std::malloc(size ? size : 1) : nullptr;
+}
+void *operator new[](std::size_t size, const std::nothrow_t &) noexcept
+{
+    return ::operator new(size, std::nothrow);
+}
+void operator delete(void *p) noexcept { std::free(p); }
+void operator delete[](void *p) noexcept { std::free(p); }
+void operator delete(void *p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void *p, std::size_t) noexcept { std::free(p); }
+void operator delete(void *p, const std::nothrow_t &) noexcept { std::free(p); }
+void operator delete[](void *p, const std::nothrow_t &) noexcept { std::free(p); }
 
 namespace {
 

@@ -1,6 +1,6 @@
-/* Scene loading: the JSON description (cJSON) and its meshes (Assimp).
- * Everything ends up in flat world-space arrays; lights are grouped from
- * emissive triangles. See README.md, "Scene format". */
+/* Scene loading: the JSON description (cJSON) and its meshes (Assimp);
+ * a .pbrt file goes to pbrt_scene.c. Both fill the flat world-space arrays
+ * through scene_builder.h. See README.md, "Scene format". */
 #include "scene.h"
 
 #include <assimp/ObjMaterial.h>
@@ -17,64 +17,18 @@
 #include <string.h>
 #include <strings.h>
 
-#include "hash.h"
+#include "pbrt_scene.h"
 #include "ply_mesh.h"
+#include "scene_builder.h"
 #include "vecmath.h"
 
-/* ---- growable arrays ---------------------------------------------------- */
-
 typedef struct Builder {
-    SgScene *scene;
-    const char *json_path;
+    SgSceneBuilder core;
+    SgScene *scene;         /* core.scene */
+    const char *json_path;  /* core.path */
     char base_dir[4096];
-    uint32_t vertex_capacity, triangle_capacity, material_capacity;
     const cJSON *material_overrides; /* the "materials" object, or NULL */
-    uint32_t dropped_degenerate;
 } Builder;
-
-static bool grow(void **array, uint32_t *capacity, uint32_t needed, size_t item,
-                 SgError *err, const char *path)
-{
-    if (needed <= *capacity)
-        return true;
-    uint64_t cap = *capacity ? *capacity : 1024;
-    while (cap < needed)
-        cap *= 2;
-    if (cap > UINT32_MAX)
-        return sg_fail(err, "%s: scene too large (more than 4 billion elements)", path);
-    void *p = realloc(*array, (size_t)cap * item);
-    if (!p)
-        return sg_fail(err, "%s: out of memory", path);
-    *array = p;
-    *capacity = (uint32_t)cap;
-    return true;
-}
-
-static bool add_vertices(Builder *b, uint32_t count, SgError *err)
-{
-    SgScene *s = b->scene;
-    if ((uint64_t)s->vertex_count + count > UINT32_MAX)
-        return sg_fail(err, "%s: too many vertices", b->json_path);
-    return grow((void **)&s->positions, &b->vertex_capacity, s->vertex_count + count,
-                3 * sizeof(double), err, b->json_path);
-}
-
-static bool add_triangles(Builder *b, uint32_t count, SgError *err)
-{
-    SgScene *s = b->scene;
-    if ((uint64_t)s->triangle_count + count > UINT32_MAX)
-        return sg_fail(err, "%s: too many triangles", b->json_path);
-    uint32_t cap = b->triangle_capacity;
-    if (!grow((void **)&s->indices, &cap, s->triangle_count + count, 3 * sizeof(uint32_t), err,
-              b->json_path))
-        return false;
-    uint32_t cap2 = b->triangle_capacity;
-    if (!grow((void **)&s->triangle_material, &cap2, s->triangle_count + count,
-              sizeof(uint32_t), err, b->json_path))
-        return false;
-    b->triangle_capacity = cap;
-    return true;
-}
 
 /* ---- JSON helpers ------------------------------------------------------- */
 
@@ -157,16 +111,6 @@ static bool member_int(const char *path, const cJSON *obj, const char *owner, co
 
 /* ---- materials ---------------------------------------------------------- */
 
-static void default_material(SgMaterial *m, const char *name)
-{
-    memset(m, 0, sizeof *m);
-    snprintf(m->name, sizeof m->name, "%.63s", name);
-    m->type = SG_MATERIAL_DIFFUSE;
-    m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0.5f;
-    m->exponent = 1;
-    m->ior = 1.5f;
-}
-
 static bool apply_material_json(const char *path, const cJSON *obj, const char *name,
                                 SgMaterial *m, SgError *err)
 {
@@ -207,17 +151,6 @@ static bool apply_material_json(const char *path, const cJSON *obj, const char *
     return true;
 }
 
-static bool add_material(Builder *b, const SgMaterial *m, uint32_t *id, SgError *err)
-{
-    SgScene *s = b->scene;
-    if (!grow((void **)&s->materials, &b->material_capacity, s->material_count + 1,
-              sizeof(SgMaterial), err, b->json_path))
-        return false;
-    s->materials[s->material_count] = *m;
-    *id = s->material_count++;
-    return true;
-}
-
 /* A material named in the JSON "materials" object, looked up by name. */
 static bool named_material(Builder *b, const char *name, uint32_t *id, SgError *err)
 {
@@ -233,8 +166,9 @@ static bool named_material(Builder *b, const char *name, uint32_t *id, SgError *
         return sg_fail(err, "%s: material \"%s\" is not defined in \"materials\"", b->json_path,
                        name);
     SgMaterial m;
-    default_material(&m, name);
-    return apply_material_json(b->json_path, obj, name, &m, err) && add_material(b, &m, id, err);
+    sg_material_default(&m, name);
+    return apply_material_json(b->json_path, obj, name, &m, err) &&
+           sg_builder_add_material(&b->core, &m, id, err);
 }
 
 static void read_color(const struct aiMaterial *mat, const char *key, unsigned type,
@@ -259,7 +193,7 @@ static bool convert_material(Builder *b, const struct aiMaterial *mat, const cha
         snprintf(label, sizeof label, "%.63s", name.data);
     else
         snprintf(label, sizeof label, "mesh%u", mesh_index);
-    default_material(m, label);
+    sg_material_default(m, label);
     m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
     read_color(mat, AI_MATKEY_COLOR_DIFFUSE, m->diffuse);
     read_color(mat, AI_MATKEY_COLOR_SPECULAR, m->specular);
@@ -312,41 +246,10 @@ static bool convert_material(Builder *b, const struct aiMaterial *mat, const cha
 
 /* ---- transforms --------------------------------------------------------- */
 
-typedef struct Transform {
-    double m[3][4]; /* row-major affine */
-} Transform;
-
-static void transform_identity(Transform *t)
-{
-    memset(t, 0, sizeof *t);
-    t->m[0][0] = t->m[1][1] = t->m[2][2] = 1;
-}
-
-static void transform_point(const Transform *t, const double p[3], double out[3])
-{
-    for (int r = 0; r < 3; r++)
-        out[r] = t->m[r][0] * p[0] + t->m[r][1] * p[1] + t->m[r][2] * p[2] + t->m[r][3];
-}
-
-/* out = a * b (apply b first). */
-static void transform_compose(const Transform *a, const Transform *b, Transform *out)
-{
-    Transform r;
-    for (int i = 0; i < 3; i++) {
-        for (int j = 0; j < 4; j++) {
-            double v = (j == 3) ? a->m[i][3] : 0;
-            for (int k = 0; k < 3; k++)
-                v += a->m[i][k] * b->m[k][j];
-            r.m[i][j] = v;
-        }
-    }
-    *out = r;
-}
-
-static bool parse_transform(const char *path, const cJSON *obj, const char *owner, Transform *t,
+static bool parse_transform(const char *path, const cJSON *obj, const char *owner, SgTransform *t,
                             SgError *err)
 {
-    transform_identity(t);
+    sg_transform_identity(t);
     if (!obj)
         return true;
     if (!cJSON_IsObject(obj))
@@ -371,10 +274,10 @@ static bool parse_transform(const char *path, const cJSON *obj, const char *owne
                 t->m[r][c] = v[4 * r + c];
         return true;
     }
-    Transform s, rot, tr;
-    transform_identity(&s);
-    transform_identity(&rot);
-    transform_identity(&tr);
+    SgTransform s, rot, tr;
+    sg_transform_identity(&s);
+    sg_transform_identity(&rot);
+    sg_transform_identity(&tr);
     const cJSON *scale = cJSON_GetObjectItemCaseSensitive(obj, "scale");
     if (scale) {
         double k[3];
@@ -421,76 +324,18 @@ static bool parse_transform(const char *path, const cJSON *obj, const char *owne
     if (has_translate)
         for (int a = 0; a < 3; a++)
             tr.m[a][3] = translate[a];
-    Transform rs;
-    transform_compose(&rot, &s, &rs);
-    transform_compose(&tr, &rs, t);
+    SgTransform rs;
+    sg_transform_compose(&rot, &s, &rs);
+    sg_transform_compose(&tr, &rs, t);
     return true;
 }
 
 /* ---- geometry ----------------------------------------------------------- */
 
-static bool is_degenerate(const double *a, const double *b, const double *c)
-{
-    double e1[3], e2[3], e3[3], n[3];
-    d3_sub(b, a, e1);
-    d3_sub(c, a, e2);
-    d3_sub(c, b, e3);
-    d3_cross(e1, e2, n);
-    double longest = fmax(d3_dot(e1, e1), fmax(d3_dot(e2, e2), d3_dot(e3, e3)));
-    /* Relative test: independent of the scene's unit. */
-    return !(d3_length(n) > 1e-12 * longest);
-}
-
-/* Appends one triangle whose vertices are already in the vertex array. */
-static void push_triangle(Builder *b, uint32_t i0, uint32_t i1, uint32_t i2, uint32_t material)
-{
-    SgScene *s = b->scene;
-    const double *p = s->positions;
-    if (is_degenerate(p + 3 * i0, p + 3 * i1, p + 3 * i2)) {
-        b->dropped_degenerate++;
-        return;
-    }
-    uint32_t t = s->triangle_count++;
-    s->indices[3 * t + 0] = i0;
-    s->indices[3 * t + 1] = i1;
-    s->indices[3 * t + 2] = i2;
-    s->triangle_material[t] = material;
-}
-
-static bool check_point(Builder *b, const char *what, const double p[3], SgError *err)
-{
-    for (int a = 0; a < 3; a++)
-        if (!isfinite(p[a]))
-            return sg_fail(err, "%s: %s has a non-finite vertex coordinate", b->json_path, what);
-    return true;
-}
-
 static bool has_extension(const char *file, const char *ext)
 {
     size_t n = strlen(file), e = strlen(ext);
     return n > e && !strcasecmp(file + n - e, ext);
-}
-
-/* Appends a mesh given as flat positions and triangle indices (already
- * bounds-checked) with one material. */
-static bool append_mesh(Builder *b, const char *file, const double *positions,
-                        uint32_t vertex_count, const uint32_t *indices, uint32_t triangle_count,
-                        const Transform *xf, uint32_t material, SgError *err)
-{
-    SgScene *s = b->scene;
-    uint32_t base = s->vertex_count;
-    if (!add_vertices(b, vertex_count, err) || !add_triangles(b, triangle_count, err))
-        return false;
-    for (uint32_t v = 0; v < vertex_count; v++) {
-        if (!check_point(b, file, positions + 3 * (size_t)v, err))
-            return false;
-        transform_point(xf, positions + 3 * (size_t)v, s->positions + 3 * (size_t)(base + v));
-    }
-    s->vertex_count += vertex_count;
-    for (uint32_t t = 0; t < triangle_count; t++)
-        push_triangle(b, base + indices[3 * (size_t)t], base + indices[3 * (size_t)t + 1],
-                      base + indices[3 * (size_t)t + 2], material);
-    return true;
 }
 
 /* The material of a mesh with none of its own: the override if given. */
@@ -506,14 +351,14 @@ static bool plain_material(Builder *b, const char *file, const char *material_na
         m = b->scene->materials[*id];
     } else {
         const char *slash = strrchr(file, '/');
-        default_material(&m, slash ? slash + 1 : file);
+        sg_material_default(&m, slash ? slash + 1 : file);
     }
     if (emission)
         memcpy(m.emission, emission, sizeof m.emission);
-    return add_material(b, &m, id, err);
+    return sg_builder_add_material(&b->core, &m, id, err);
 }
 
-static bool load_ply_file(Builder *b, const char *file, const Transform *xf,
+static bool load_ply_file(Builder *b, const char *file, const SgTransform *xf,
                           const char *material_name, const float *emission, SgError *err)
 {
     SgPlyMesh mesh;
@@ -521,8 +366,8 @@ static bool load_ply_file(Builder *b, const char *file, const Transform *xf,
         return false;
     uint32_t material;
     bool ok = plain_material(b, file, material_name, emission, &material, err) &&
-              append_mesh(b, file, mesh.positions, mesh.vertex_count, mesh.indices,
-                          mesh.triangle_count, xf, material, err);
+              sg_builder_append_mesh(&b->core, file, mesh.positions, mesh.vertex_count,
+                                     mesh.indices, mesh.triangle_count, xf, material, err);
     sg_ply_mesh_release(&mesh);
     return ok;
 }
@@ -552,7 +397,7 @@ static const char *assimp_scene_problem(const struct aiScene *as)
     return NULL;
 }
 
-static bool load_mesh_file(Builder *b, const char *file, const Transform *xf,
+static bool load_mesh_file(Builder *b, const char *file, const SgTransform *xf,
                            const char *material_name, const float *emission, SgError *err)
 {
     if (has_extension(file, ".ply"))
@@ -587,7 +432,7 @@ static bool load_mesh_file(Builder *b, const char *file, const Transform *xf,
         ok = convert_material(b, as->mMaterials[m], file, m, &mat, err);
         if (ok && emission)
             memcpy(mat.emission, emission, sizeof mat.emission);
-        ok = ok && add_material(b, &mat, &material_ids[m], err);
+        ok = ok && sg_builder_add_material(&b->core, &mat, &material_ids[m], err);
     }
     double *positions = NULL;
     uint32_t *indices = NULL;
@@ -621,8 +466,8 @@ static bool load_mesh_file(Builder *b, const char *file, const Transform *xf,
                             : mesh->mMaterialIndex < as->mNumMaterials
                                 ? material_ids[mesh->mMaterialIndex]
                                 : material_ids[0];
-        ok = append_mesh(b, file, positions, mesh->mNumVertices, indices, triangles, xf,
-                         material, err);
+        ok = sg_builder_append_mesh(&b->core, file, positions, mesh->mNumVertices, indices,
+                                    triangles, xf, material, err);
     }
     free(positions);
     free(indices);
@@ -631,7 +476,8 @@ static bool load_mesh_file(Builder *b, const char *file, const Transform *xf,
     return ok;
 }
 
-static bool load_inline_mesh(Builder *b, const cJSON *mesh, const char *owner, const Transform *xf,
+static bool load_inline_mesh(Builder *b, const cJSON *mesh, const char *owner,
+                             const SgTransform *xf,
                              const char *material_name, const float *emission, SgError *err)
 {
     const cJSON *vertices = cJSON_GetObjectItemCaseSensitive(mesh, "vertices");
@@ -647,17 +493,18 @@ static bool load_inline_mesh(Builder *b, const cJSON *mesh, const char *owner, c
             return false;
         m = b->scene->materials[material];
     } else {
-        default_material(&m, owner);
+        sg_material_default(&m, owner);
     }
     if (emission || !material_name) {
         if (emission)
             memcpy(m.emission, emission, sizeof m.emission);
-        if (!add_material(b, &m, &material, err))
+        if (!sg_builder_add_material(&b->core, &m, &material, err))
             return false;
     }
     SgScene *s = b->scene;
     uint32_t base = s->vertex_count;
-    if (!add_vertices(b, (uint32_t)(nv / 3), err) || !add_triangles(b, (uint32_t)(nt / 3), err))
+    if (!sg_builder_add_vertices(&b->core, (uint32_t)(nv / 3), err) ||
+        !sg_builder_add_triangles(&b->core, (uint32_t)(nt / 3), err))
         return false;
     const cJSON *v = vertices->child;
     for (int i = 0; i < nv / 3; i++) {
@@ -667,9 +514,9 @@ static bool load_inline_mesh(Builder *b, const cJSON *mesh, const char *owner, c
                 return sg_fail(err, "%s: %s.vertices must be numbers", b->json_path, owner);
             p[a] = v->valuedouble;
         }
-        if (!check_point(b, owner, p, err))
+        if (!sg_builder_check_point(&b->core, owner, p, err))
             return false;
-        transform_point(xf, p, s->positions + 3 * (size_t)(base + i));
+        sg_transform_point(xf, p, s->positions + 3 * (size_t)(base + i));
     }
     s->vertex_count += (uint32_t)(nv / 3);
     const cJSON *t = triangles->child;
@@ -682,7 +529,7 @@ static bool load_inline_mesh(Builder *b, const cJSON *mesh, const char *owner, c
                                owner);
             idx[a] = base + (uint32_t)t->valuedouble;
         }
-        push_triangle(b, idx[0], idx[1], idx[2], material);
+        sg_builder_push_triangle(&b->core, idx[0], idx[1], idx[2], material);
     }
     return true;
 }
@@ -724,7 +571,7 @@ static bool load_meshes(Builder *b, const cJSON *root, SgError *err)
             ok = sg_fail(err, "%s: %s must be an object", b->json_path, owner);
             break;
         }
-        Transform xf;
+        SgTransform xf;
         float emission[3] = {0, 0, 0};
         const cJSON *em = cJSON_GetObjectItemCaseSensitive(mesh, "emission");
         const cJSON *mat = cJSON_GetObjectItemCaseSensitive(mesh, "material");
@@ -789,15 +636,16 @@ static bool load_lights(Builder *b, const cJSON *root, SgError *err)
         if (!cJSON_IsArray(corners) || cJSON_GetArraySize(corners) != 4)
             return sg_fail(err, "%s: %s.corners must hold 4 points", b->json_path, owner);
         SgMaterial m;
-        default_material(&m, owner);
+        sg_material_default(&m, owner);
         m.diffuse[0] = m.diffuse[1] = m.diffuse[2] = 0;
         if (!member_color(b->json_path, light, owner, "radiance", m.emission, err))
             return false;
         if (!cJSON_GetObjectItemCaseSensitive(light, "radiance"))
             return sg_fail(err, "%s: %s.radiance is missing", b->json_path, owner);
         uint32_t material;
-        if (!add_material(b, &m, &material, err) || !add_vertices(b, 4, err) ||
-            !add_triangles(b, 2, err))
+        if (!sg_builder_add_material(&b->core, &m, &material, err) ||
+            !sg_builder_add_vertices(&b->core, 4, err) ||
+            !sg_builder_add_triangles(&b->core, 2, err))
             return false;
         SgScene *s = b->scene;
         uint32_t base = s->vertex_count;
@@ -809,125 +657,13 @@ static bool load_lights(Builder *b, const cJSON *root, SgError *err)
             memcpy(s->positions + 3 * (size_t)(base + c), p, sizeof p);
         }
         s->vertex_count += 4;
-        push_triangle(b, base, base + 1, base + 2, material);
-        push_triangle(b, base, base + 2, base + 3, material);
+        sg_builder_push_triangle(&b->core, base, base + 1, base + 2, material);
+        sg_builder_push_triangle(&b->core, base, base + 2, base + 3, material);
     }
     return true;
 }
 
 /* ---- lights from emissive triangles ------------------------------------- */
-
-static uint32_t find_root(uint32_t *parent, uint32_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
-
-typedef struct LightKey {
-    uint32_t root, material, triangle;
-} LightKey;
-
-static int compare_light_keys(const void *pa, const void *pb)
-{
-    const LightKey *a = pa, *b = pb;
-    if (a->root != b->root)
-        return a->root < b->root ? -1 : 1;
-    if (a->material != b->material)
-        return a->material < b->material ? -1 : 1;
-    return (a->triangle > b->triangle) - (a->triangle < b->triangle);
-}
-
-/* Emissive triangles of one material that share vertices form one light. */
-static bool group_lights(Builder *b, SgError *err)
-{
-    SgScene *s = b->scene;
-    s->triangle_light = malloc((s->triangle_count ? s->triangle_count : 1) * sizeof(uint32_t));
-    uint32_t *parent = malloc((s->vertex_count ? s->vertex_count : 1) * sizeof(uint32_t));
-    if (!s->triangle_light || !parent) {
-        free(parent);
-        return sg_fail(err, "%s: out of memory", b->json_path);
-    }
-    for (uint32_t v = 0; v < s->vertex_count; v++)
-        parent[v] = v;
-    uint32_t emissive = 0;
-    for (uint32_t t = 0; t < s->triangle_count; t++) {
-        s->triangle_light[t] = SG_NO_LIGHT;
-        const float *e = s->materials[s->triangle_material[t]].emission;
-        if (!(e[0] > 0 || e[1] > 0 || e[2] > 0))
-            continue;
-        emissive++;
-        const uint32_t *idx = s->indices + 3 * (size_t)t;
-        for (int c = 1; c < 3; c++) {
-            uint32_t r0 = find_root(parent, idx[0]), r1 = find_root(parent, idx[c]);
-            if (r0 != r1)
-                parent[r1 > r0 ? r1 : r0] = r1 > r0 ? r0 : r1;
-        }
-    }
-    /* Sort emissive triangles by (component, material, id) so that lights
-     * come out in a deterministic order. */
-    LightKey *keys = malloc((emissive ? emissive : 1) * sizeof *keys);
-    if (!keys) {
-        free(parent);
-        return sg_fail(err, "%s: out of memory", b->json_path);
-    }
-    uint32_t n = 0;
-    for (uint32_t t = 0; t < s->triangle_count; t++) {
-        const float *e = s->materials[s->triangle_material[t]].emission;
-        if (e[0] > 0 || e[1] > 0 || e[2] > 0)
-            keys[n++] = (LightKey){find_root(parent, s->indices[3 * (size_t)t]),
-                                   s->triangle_material[t], t};
-    }
-    qsort(keys, n, sizeof *keys, compare_light_keys);
-    s->light_triangles = malloc((n ? n : 1) * sizeof(uint32_t));
-    s->lights = calloc(n ? n : 1, sizeof(SgLight));
-    if (!s->light_triangles || !s->lights) {
-        free(parent);
-        free(keys);
-        return sg_fail(err, "%s: out of memory", b->json_path);
-    }
-    uint32_t light = UINT32_MAX, prev_root = UINT32_MAX, prev_material = UINT32_MAX;
-    for (uint32_t i = 0; i < n; i++) {
-        uint32_t root = keys[i].root, t = keys[i].triangle, material = keys[i].material;
-        if (root != prev_root || material != prev_material) {
-            light = s->light_count++;
-            s->lights[light].first_triangle = i;
-            prev_root = root;
-            prev_material = material;
-        }
-        s->light_triangles[i] = t;
-        s->triangle_light[t] = light;
-        SgLight *l = &s->lights[light];
-        l->triangle_count++;
-        double nrm[3];
-        sg_scene_triangle_normal(s, t, nrm);
-        double area = 0.5 * d3_length(nrm);
-        const double *p = s->positions;
-        const uint32_t *idx = s->indices + 3 * (size_t)t;
-        for (int a = 0; a < 3; a++) {
-            double c = (p[3 * idx[0] + a] + p[3 * idx[1] + a] + p[3 * idx[2] + a]) / 3;
-            l->position[a] += area * c;
-            l->normal[a] += 0.5 * nrm[a];
-        }
-        l->area += area;
-        memcpy(l->radiance, s->materials[material].emission, sizeof l->radiance);
-    }
-    for (uint32_t k = 0; k < s->light_count; k++) {
-        SgLight *l = &s->lights[k];
-        double len = d3_length(l->normal);
-        for (int a = 0; a < 3; a++) {
-            l->position[a] /= l->area;
-            l->normal[a] = len > 0 ? l->normal[a] / len : 0;
-        }
-        double lum = 0.2126 * l->radiance[0] + 0.7152 * l->radiance[1] + 0.0722 * l->radiance[2];
-        l->power = M_PI * l->area * lum;
-    }
-    free(parent);
-    free(keys);
-    return true;
-}
 
 /* ---- camera and settings ------------------------------------------------ */
 
@@ -1011,48 +747,6 @@ static bool load_settings(Builder *b, const cJSON *root, SgError *err)
 
 /* ---- finishing ---------------------------------------------------------- */
 
-static void compute_bounds_and_hash(SgScene *s)
-{
-    for (int a = 0; a < 3; a++) {
-        s->bounds_min[a] = INFINITY;
-        s->bounds_max[a] = -INFINITY;
-    }
-    for (uint32_t t = 0; t < s->triangle_count; t++)
-        for (int c = 0; c < 3; c++) {
-            const double *p = s->positions + 3 * (size_t)s->indices[3 * (size_t)t + c];
-            for (int a = 0; a < 3; a++) {
-                s->bounds_min[a] = fmin(s->bounds_min[a], p[a]);
-                s->bounds_max[a] = fmax(s->bounds_max[a], p[a]);
-            }
-        }
-    /* Hash what the precompute sees: triangles (as coordinates, so that
-     * vertex order in files does not matter less than geometry) and lights. */
-    uint64_t h = SG_HASH_INIT;
-    h = sg_hash_bytes(h, &s->triangle_count, sizeof s->triangle_count);
-    for (uint32_t t = 0; t < s->triangle_count; t++) {
-        for (int c = 0; c < 3; c++)
-            h = sg_hash_bytes(h, s->positions + 3 * (size_t)s->indices[3 * (size_t)t + c],
-                              3 * sizeof(double));
-        uint32_t light = s->triangle_light[t];
-        h = sg_hash_bytes(h, &light, sizeof light);
-    }
-    for (uint32_t k = 0; k < s->light_count; k++)
-        h = sg_hash_bytes(h, s->lights[k].radiance, sizeof s->lights[k].radiance);
-    s->geometry_hash = h;
-}
-
-void sg_scene_triangle_normal(const SgScene *scene, uint32_t t, double n[3])
-{
-    const uint32_t *idx = scene->indices + 3 * (size_t)t;
-    const double *a = scene->positions + 3 * (size_t)idx[0];
-    const double *b = scene->positions + 3 * (size_t)idx[1];
-    const double *c = scene->positions + 3 * (size_t)idx[2];
-    double e1[3], e2[3];
-    d3_sub(b, a, e1);
-    d3_sub(c, a, e2);
-    d3_cross(e1, e2, n);
-}
-
 static char *read_text_file(const char *path, SgError *err)
 {
     FILE *f = fopen(path, "rb");
@@ -1105,7 +799,7 @@ static int line_of(const char *text, const char *where)
     return line;
 }
 
-SgScene *sg_scene_load(const char *path, SgError *err)
+static SgScene *load_json_scene(const char *path, SgError *err)
 {
     char *text = read_text_file(path, err);
     if (!text)
@@ -1123,13 +817,10 @@ SgScene *sg_scene_load(const char *path, SgError *err)
         free(text);
         return NULL;
     }
-    SgScene *s = calloc(1, sizeof *s);
-    Builder b = {.scene = s, .json_path = path};
-    bool ok = s != NULL;
-    if (!ok)
-        sg_fail(err, "%s: out of memory", path);
+    Builder b = {.json_path = path};
+    bool ok = sg_builder_begin(&b.core, path, err);
+    SgScene *s = b.scene = b.core.scene;
     if (ok) {
-        snprintf(s->path, sizeof s->path, "%s", path);
         const char *slash = strrchr(path, '/');
         snprintf(b.base_dir, sizeof b.base_dir, "%.*s", slash ? (int)(slash - path + 1) : 0, path);
         b.material_overrides = cJSON_GetObjectItemCaseSensitive(root, "materials");
@@ -1140,7 +831,7 @@ SgScene *sg_scene_load(const char *path, SgError *err)
             cJSON_ArrayForEach(m, b.material_overrides)
             {
                 SgMaterial probe;
-                default_material(&probe, m->string);
+                sg_material_default(&probe, m->string);
                 if (!apply_material_json(path, m, m->string, &probe, err)) {
                     ok = false;
                     break;
@@ -1152,12 +843,8 @@ SgScene *sg_scene_load(const char *path, SgError *err)
          load_meshes(&b, root, err) && load_lights(&b, root, err);
     if (ok && s->triangle_count == 0)
         ok = sg_fail(err, "%s: the scene has no triangles%s", path,
-                     b.dropped_degenerate ? " (all were degenerate)" : "");
-    ok = ok && group_lights(&b, err);
-    if (ok) {
-        s->degenerate_dropped = b.dropped_degenerate;
-        compute_bounds_and_hash(s);
-    }
+                     b.core.dropped_degenerate ? " (all were degenerate)" : "");
+    ok = ok && sg_builder_finish(&b.core, err);
     cJSON_Delete(root);
     free(text);
     if (!ok) {
@@ -1167,16 +854,9 @@ SgScene *sg_scene_load(const char *path, SgError *err)
     return s;
 }
 
-void sg_scene_free(SgScene *s)
+SgScene *sg_scene_load(const char *path, SgError *err)
 {
-    if (!s)
-        return;
-    free(s->positions);
-    free(s->indices);
-    free(s->triangle_material);
-    free(s->triangle_light);
-    free(s->materials);
-    free(s->lights);
-    free(s->light_triangles);
-    free(s);
+    if (has_extension(path, ".pbrt"))
+        return sg_pbrt_scene_load(path, err);
+    return load_json_scene(path, err);
 }

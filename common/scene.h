@@ -1,13 +1,14 @@
 /* The scene every program reads: triangles in world space (double precision,
  * so that a scene far from the origin keeps its detail), materials, lights
  * grouped from emissive triangles, the camera and the build settings.
- * Loaded from the JSON scene description (see README.md, "Scene format");
- * meshes go through Assimp. */
+ * Loaded from the JSON scene description (see README.md, "Scene format";
+ * meshes go through Assimp) or from a pbrt-v4 scene file (.pbrt). */
 #ifndef SG_SCENE_H
 #define SG_SCENE_H
 
 #include <stdbool.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "error.h"
 
@@ -89,11 +90,22 @@ typedef struct SgScene {
     /* Identity of what the precompute depends on: geometry, materials'
      * emission and lights; not the camera. Same scene in, same hash out. */
     uint64_t geometry_hash;
+
+    /* What the loader could not honour (pbrt statements it does not
+     * support, approximations made): one line each, no trailing newline.
+     * The loader never prints; programs call sg_scene_print_warnings. */
+    uint32_t warning_count;
+    char **warnings;
 } SgScene;
 
-/* Loads a scene description. On failure returns NULL with "file: cause". */
+/* Loads a scene description: a JSON file, or a pbrt-v4 file when the name
+ * ends in ".pbrt". On failure returns NULL with "file: cause" (pbrt:
+ * "file:line: cause"). */
 SgScene *sg_scene_load(const char *path, SgError *err);
 void sg_scene_free(SgScene *scene);
+
+/* Prints each warning as "program: warning: line" to out. */
+void sg_scene_print_warnings(const SgScene *scene, const char *program, FILE *out);
 
 /* Geometric (unnormalized) normal of triangle t: (b-a) x (c-a). */
 void sg_scene_triangle_normal(const SgScene *scene, uint32_t t, double n[3]);

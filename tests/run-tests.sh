@@ -4,6 +4,9 @@
 set -u
 passed=0 failed=0 status=0
 export LSAN_OPTIONS="suppressions=$(cd "$(dirname "$0")" && pwd)/lsan.supp:print_suppressions=0${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+# allocator_may_return_null: an impossible allocation (a corrupt size field
+# in a third-party format) must fail like it does in a release build.
+export ASAN_OPTIONS="allocator_may_return_null=1${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
 for t in "$@"; do
   echo "== $(basename "$t")"

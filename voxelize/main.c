@@ -12,8 +12,8 @@
 static void usage(FILE *out)
 {
     fprintf(out,
-            "usage: voxelize SCENE.json -o medium.vdb [--resolution N] [--threads N]\n"
-            "       voxelize SCENE.json --key [--resolution N]\n"
+            "usage: voxelize SCENE -o medium.vdb [--resolution N] [--threads N]\n"
+            "       voxelize SCENE --key [--resolution N]\n"
             "\n"
             "Voxelizes the scene's air that light can reach into an OpenVDB file: a bool\n"
             "grid named \"medium\" (active voxels = medium), with the lights, camera and\n"
@@ -88,6 +88,8 @@ int main(int argc, char **argv)
         sg_error_print("voxelize", &err);
         return 1;
     }
+    if (!key) /* make scene runs --key first: say it once */
+        sg_scene_print_warnings(scene, "voxelize", stderr);
     if (key) {
         int resolution = options.resolution > 0        ? options.resolution
                          : scene->voxel_resolution > 0 ? scene->voxel_resolution

@@ -1,0 +1,365 @@
+/* Reader of importance.cache: maps the file, validates it once (size,
+ * magic, version, checksum, every offset and index), then answers lookups
+ * in constant time straight from the mapping. Layout: importance_cache_format.h
+ * and docs/cache-format.md. */
+#include "importance_cache.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "hash.h"
+#include "importance_cache_format.h"
+
+struct SgImportanceCache {
+    const uint8_t *data;
+    size_t size;
+    bool mapped; /* data is our mmap (else memory the caller owns) */
+    SgCacheHeader header;
+    const SgCacheNode *nodes;
+    const SgCacheLight *lights;
+    const float *points;
+    const uint32_t *block_index;
+    const SgCacheBlock *blocks;
+    const uint32_t *palette;
+    const uint8_t *voxel_bits;
+    uint64_t voxel_bits_size;
+    int bx, by, bz;
+};
+
+static bool range_ok(const SgCacheRange *r, uint64_t header_size, uint64_t file_size)
+{
+    return r->offset % SG_CACHE_ALIGN == 0 && r->offset >= header_size &&
+           r->offset <= file_size && r->size <= file_size - r->offset;
+}
+
+static bool validate(SgImportanceCache *c, const char *name, SgError *err)
+{
+    static const char *const section_names[SG_CACHE_SECTION_COUNT] = {
+        "nodes", "lights", "points", "block index", "blocks", "palette", "voxel bits"};
+    if (c->size < sizeof(SgCacheHeader))
+        return sg_fail(err, "%s: truncated: %zu bytes, smaller than the cache header", name,
+                       c->size);
+    SgCacheHeader *h = &c->header;
+    memcpy(h, c->data, sizeof *h);
+    if (memcmp(h->magic, SG_CACHE_MAGIC, 8) != 0)
+        return sg_fail(err, "%s: not an importance cache (wrong magic)", name);
+    if (h->version != SG_CACHE_VERSION)
+        return sg_fail(err, "%s: cache version %u, this program reads version %u (rebuild it "
+                       "with bin/importance)", name, h->version, SG_CACHE_VERSION);
+    if (h->header_size != sizeof *h)
+        return sg_fail(err, "%s: header size %u, expected %zu", name, h->header_size,
+                       sizeof *h);
+    if (h->file_size != c->size)
+        return sg_fail(err, "%s: %s: the header says %llu bytes, the file has %zu", name,
+                       h->file_size > c->size ? "truncated" : "trailing bytes",
+                       (unsigned long long)h->file_size, c->size);
+    /* Checksum of the whole file with the checksum field read as zero. */
+    SgCacheHeader zeroed = *h;
+    zeroed.checksum = 0;
+    uint64_t sum = sg_hash_bytes(SG_HASH_INIT, &zeroed, sizeof zeroed);
+    sum = sg_hash_bytes(sum, c->data + sizeof zeroed, c->size - sizeof zeroed);
+    if (sum != h->checksum)
+        return sg_fail(err, "%s: checksum mismatch (the file is corrupted)", name);
+
+    if (h->nx <= 0 || h->ny <= 0 || h->nz <= 0 || h->nx > (1 << 20) || h->ny > (1 << 20) ||
+        h->nz > (1 << 20) || h->block_size != SG_CACHE_BLOCK)
+        return sg_fail(err, "%s: bad grid size %dx%dx%d (block %d)", name, h->nx, h->ny, h->nz,
+                       h->block_size);
+    if (!(h->voxel_size > 0) || !isfinite(h->voxel_size) || !isfinite(h->origin[0]) ||
+        !isfinite(h->origin[1]) || !isfinite(h->origin[2]))
+        return sg_fail(err, "%s: bad grid transform", name);
+    c->bx = (h->nx + 7) / 8;
+    c->by = (h->ny + 7) / 8;
+    c->bz = (h->nz + 7) / 8;
+    const uint64_t grid_blocks = (uint64_t)c->bx * c->by * c->bz;
+    if (grid_blocks > UINT32_MAX)
+        return sg_fail(err, "%s: grid too large", name);
+    if (h->medium_voxels > (uint64_t)h->nx * h->ny * h->nz)
+        return sg_fail(err, "%s: more medium voxels than voxels", name);
+
+    /* Expected section sizes; products cannot overflow 64 bits since each
+     * count is at most 32 bits and the sizes are small constants. */
+    uint64_t points = (uint64_t)h->node_count * h->light_count;
+    if (h->light_count && points / h->light_count != h->node_count)
+        return sg_fail(err, "%s: node and light counts overflow", name);
+    uint64_t expected[SG_CACHE_SECTION_COUNT] = {
+        [SG_CACHE_NODES] = (uint64_t)h->node_count * sizeof(SgCacheNode),
+        [SG_CACHE_LIGHTS] = (uint64_t)h->light_count * sizeof(SgCacheLight),
+        [SG_CACHE_POINTS] = points > UINT64_MAX / 12 ? UINT64_MAX : points * 12,
+        [SG_CACHE_BLOCK_INDEX] = grid_blocks * 4,
+        [SG_CACHE_BLOCKS] = (uint64_t)h->block_count * sizeof(SgCacheBlock),
+        [SG_CACHE_PALETTE] = h->palette_count > UINT64_MAX / 4 ? UINT64_MAX
+                                                                : h->palette_count * 4,
+        [SG_CACHE_VOXEL_BITS] = h->sections[SG_CACHE_VOXEL_BITS].size,
+    };
+    for (int s = 0; s < SG_CACHE_SECTION_COUNT; s++) {
+        if (!range_ok(&h->sections[s], sizeof *h, c->size))
+            return sg_fail(err, "%s: %s section out of range (offset %llu, size %llu, file %zu)",
+                           name, section_names[s], (unsigned long long)h->sections[s].offset,
+                           (unsigned long long)h->sections[s].size, c->size);
+        if (h->sections[s].size != expected[s])
+            return sg_fail(err, "%s: %s section has %llu bytes, expected %llu", name,
+                           section_names[s], (unsigned long long)h->sections[s].size,
+                           (unsigned long long)expected[s]);
+    }
+    if (h->node_count == 0)
+        return sg_fail(err, "%s: no skeleton nodes", name);
+    c->nodes = (const SgCacheNode *)(c->data + h->sections[SG_CACHE_NODES].offset);
+    c->lights = (const SgCacheLight *)(c->data + h->sections[SG_CACHE_LIGHTS].offset);
+    c->points = (const float *)(c->data + h->sections[SG_CACHE_POINTS].offset);
+    c->block_index = (const uint32_t *)(c->data + h->sections[SG_CACHE_BLOCK_INDEX].offset);
+    c->blocks = (const SgCacheBlock *)(c->data + h->sections[SG_CACHE_BLOCKS].offset);
+    c->palette = (const uint32_t *)(c->data + h->sections[SG_CACHE_PALETTE].offset);
+    c->voxel_bits = c->data + h->sections[SG_CACHE_VOXEL_BITS].offset;
+    c->voxel_bits_size = h->sections[SG_CACHE_VOXEL_BITS].size;
+
+    /* Contents: every index that a lookup follows is checked here once. */
+    for (uint32_t n = 0; n < h->node_count; n++) {
+        const SgCacheNode *v = &c->nodes[n];
+        if (v->component >= h->component_count || !isfinite(v->position[0]) ||
+            !isfinite(v->position[1]) || !isfinite(v->position[2]))
+            return sg_fail(err, "%s: node %u is invalid", name, n);
+    }
+    for (uint32_t k = 0; k < h->light_count; k++) {
+        const SgCacheLight *l = &c->lights[k];
+        bool none = l->component == SG_CACHE_NONE;
+        if ((none != (l->node == SG_CACHE_NONE)) ||
+            (!none && (l->node >= h->node_count || l->component >= h->component_count ||
+                       c->nodes[l->node].component != l->component)) ||
+            !isfinite(l->position[0]) || !isfinite(l->position[1]) || !isfinite(l->position[2]))
+            return sg_fail(err, "%s: light %u is invalid", name, k);
+    }
+    for (uint64_t i = 0; i < points * 3; i++)
+        if (!isfinite(c->points[i]))
+            return sg_fail(err, "%s: importance point %llu is not finite", name,
+                           (unsigned long long)(i / 3));
+    for (uint64_t b = 0; b < grid_blocks; b++)
+        if (c->block_index[b] != SG_CACHE_NONE && c->block_index[b] >= h->block_count)
+            return sg_fail(err, "%s: block index entry %llu out of range", name,
+                           (unsigned long long)b);
+    for (uint32_t b = 0; b < h->block_count; b++) {
+        const SgCacheBlock *r = &c->blocks[b];
+        unsigned bits = r->bits;
+        uint64_t capacity = bits == 0 ? 1 : bits >= 9 ? 512 : (1u << bits);
+        if ((bits != 0 && bits != 1 && bits != 2 && bits != 4 && bits != 8 && bits != 16) ||
+            r->palette_size == 0 || r->palette_size > capacity ||
+            (uint64_t)r->palette_offset + r->palette_size > h->palette_count ||
+            (uint64_t)r->data_offset + 64u * bits > c->voxel_bits_size)
+            return sg_fail(err, "%s: block record %u is invalid", name, b);
+    }
+    for (uint64_t p = 0; p < h->palette_count; p++)
+        if (c->palette[p] != SG_CACHE_NONE && c->palette[p] >= h->node_count)
+            return sg_fail(err, "%s: palette entry %llu names a missing node", name,
+                           (unsigned long long)p);
+    return true;
+}
+
+SgImportanceCache *sg_cache_open_memory(const void *data, size_t size, const char *name,
+                                        SgError *err)
+{
+    SgImportanceCache *c = calloc(1, sizeof *c);
+    if (!c) {
+        sg_fail(err, "%s: out of memory", name);
+        return NULL;
+    }
+    c->data = data;
+    c->size = size;
+    if (((uintptr_t)data % SG_CACHE_ALIGN) != 0) {
+        sg_fail(err, "%s: cache memory is not %d-byte aligned", name, SG_CACHE_ALIGN);
+        free(c);
+        return NULL;
+    }
+    if (!validate(c, name, err)) {
+        free(c);
+        return NULL;
+    }
+    return c;
+}
+
+SgImportanceCache *sg_cache_open(const char *path, SgError *err)
+{
+    int fd = open(path, O_RDONLY);
+    if (fd < 0) {
+        sg_fail(err, "%s: cannot open: %s", path, strerror(errno));
+        return NULL;
+    }
+    struct stat st;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        sg_fail(err, "%s: not a regular file", path);
+        close(fd);
+        return NULL;
+    }
+    size_t size = (size_t)st.st_size;
+    if (size < sizeof(SgCacheHeader)) {
+        sg_fail(err, "%s: truncated: %zu bytes, smaller than the cache header", path, size);
+        close(fd);
+        return NULL;
+    }
+    void *map = mmap(NULL, size, PROT_READ, MAP_PRIVATE, fd, 0);
+    int e = errno;
+    close(fd);
+    if (map == MAP_FAILED) {
+        sg_fail(err, "%s: cannot map: %s", path, strerror(e));
+        return NULL;
+    }
+    SgImportanceCache *c = sg_cache_open_memory(map, size, path, err);
+    if (!c) {
+        munmap(map, size);
+        return NULL;
+    }
+    c->mapped = true;
+    return c;
+}
+
+void sg_cache_close(SgImportanceCache *cache)
+{
+    if (!cache)
+        return;
+    if (cache->mapped)
+        munmap((void *)cache->data, cache->size);
+    free(cache);
+}
+
+uint64_t sg_cache_geometry_hash(const SgImportanceCache *c) { return c->header.geometry_hash; }
+uint64_t sg_cache_skeleton_hash(const SgImportanceCache *c) { return c->header.skeleton_hash; }
+uint64_t sg_cache_medium_hash(const SgImportanceCache *c) { return c->header.medium_hash; }
+uint32_t sg_cache_light_count(const SgImportanceCache *c) { return c->header.light_count; }
+uint32_t sg_cache_node_count(const SgImportanceCache *c) { return c->header.node_count; }
+uint32_t sg_cache_component_count(const SgImportanceCache *c) { return c->header.component_count; }
+uint64_t sg_cache_medium_voxels(const SgImportanceCache *c) { return c->header.medium_voxels; }
+uint64_t sg_cache_bytes(const SgImportanceCache *c) { return c->size; }
+double sg_cache_voxel_size(const SgImportanceCache *c) { return c->header.voxel_size; }
+
+void sg_cache_grid(const SgImportanceCache *c, int dims[3], double origin[3])
+{
+    dims[0] = c->header.nx;
+    dims[1] = c->header.ny;
+    dims[2] = c->header.nz;
+    memcpy(origin, c->header.origin, sizeof c->header.origin);
+}
+
+bool sg_cache_light_has_paths(const SgImportanceCache *c, uint32_t light)
+{
+    return light < c->header.light_count && c->lights[light].component != SG_CACHE_NONE;
+}
+
+bool sg_cache_node_position(const SgImportanceCache *c, uint32_t node, double p[3])
+{
+    if (node >= c->header.node_count)
+        return false;
+    for (int a = 0; a < 3; a++)
+        p[a] = c->nodes[node].position[a];
+    return true;
+}
+
+/* Nearest node of voxel (i,j,k), SG_CACHE_NONE if not medium. */
+static uint32_t voxel_node(const SgImportanceCache *c, int i, int j, int k)
+{
+    if (i < 0 || j < 0 || k < 0 || i >= c->header.nx || j >= c->header.ny || k >= c->header.nz)
+        return SG_CACHE_NONE;
+    size_t b = (size_t)(i >> 3) + (size_t)c->bx * ((size_t)(j >> 3) + (size_t)c->by * (size_t)(k >> 3));
+    uint32_t record = c->block_index[b];
+    if (record == SG_CACHE_NONE)
+        return SG_CACHE_NONE;
+    const SgCacheBlock *r = &c->blocks[record];
+    unsigned local = (unsigned)((i & 7) | (j & 7) << 3 | (k & 7) << 6);
+    unsigned index = 0;
+    const uint8_t *data = c->voxel_bits + r->data_offset;
+    if (r->bits == 16) {
+        index = data[2 * local] | (unsigned)data[2 * local + 1] << 8;
+    } else if (r->bits) {
+        unsigned bit = local * r->bits;
+        index = (data[bit >> 3] >> (bit & 7)) & ((1u << r->bits) - 1);
+    }
+    if (index >= r->palette_size) /* validated blocks keep this in range; cheap insurance */
+        return SG_CACHE_NONE;
+    return c->palette[r->palette_offset + index];
+}
+
+bool sg_cache_nearest_node(const SgImportanceCache *c, const double p[3], uint32_t *node)
+{
+    double v[3];
+    int ijk[3];
+    for (int a = 0; a < 3; a++) {
+        if (!isfinite(p[a]))
+            return false;
+        v[a] = (p[a] - c->header.origin[a]) / c->header.voxel_size;
+        if (!(v[a] > -2.0 && v[a] < (double)(1 << 21)))
+            return false;
+        ijk[a] = (int)floor(v[a]);
+    }
+    uint32_t n = voxel_node(c, ijk[0], ijk[1], ijk[2]);
+    if (n == SG_CACHE_NONE) {
+        /* A surface point lies in a solid voxel (conservative voxelization):
+         * take the medium voxel among the 26 neighbours whose centre is
+         * nearest to p, so that the point's own side of a wall wins. */
+        double best = INFINITY;
+        for (int dz = -1; dz <= 1; dz++)
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++) {
+                    int q[3] = {ijk[0] + dx, ijk[1] + dy, ijk[2] + dz};
+                    uint32_t m = voxel_node(c, q[0], q[1], q[2]);
+                    if (m == SG_CACHE_NONE)
+                        continue;
+                    double d2 = 0;
+                    for (int a = 0; a < 3; a++) {
+                        double t = v[a] - (q[a] + 0.5);
+                        d2 += t * t;
+                    }
+                    if (d2 < best) {
+                        best = d2;
+                        n = m;
+                    }
+                }
+    }
+    if (n == SG_CACHE_NONE)
+        return false;
+    *node = n;
+    return true;
+}
+
+bool sg_cache_importance_point(const SgImportanceCache *c, const double p[3], uint32_t light,
+                               double point[3])
+{
+    uint32_t n;
+    if (light >= c->header.light_count || !sg_cache_nearest_node(c, p, &n))
+        return false;
+    uint32_t comp = c->lights[light].component;
+    if (comp == SG_CACHE_NONE || c->nodes[n].component != comp)
+        return false;
+    const float *q = c->points + ((size_t)n * c->header.light_count + light) * 3;
+    point[0] = q[0];
+    point[1] = q[1];
+    point[2] = q[2];
+    return true;
+}
+
+bool sg_cache_light_reaches(const SgImportanceCache *c, uint32_t light, const double p[3])
+{
+    uint32_t n;
+    if (light >= c->header.light_count || !sg_cache_nearest_node(c, p, &n))
+        return false;
+    uint32_t comp = c->lights[light].component;
+    return comp != SG_CACHE_NONE && c->nodes[n].component == comp;
+}
+
+bool sg_cache_node_importance_point(const SgImportanceCache *c, uint32_t node, uint32_t light,
+                                    double point[3])
+{
+    if (node >= c->header.node_count || light >= c->header.light_count)
+        return false;
+    uint32_t comp = c->lights[light].component;
+    if (comp == SG_CACHE_NONE || c->nodes[node].component != comp)
+        return false;
+    const float *q = c->points + ((size_t)node * c->header.light_count + light) * 3;
+    point[0] = q[0];
+    point[1] = q[1];
+    point[2] = q[2];
+    return true;
+}

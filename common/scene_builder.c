@@ -1,0 +1,389 @@
+/* The scene builder shared by the JSON and pbrt front ends: growable flat
+ * arrays, degenerate triangles dropped, lights grouped from emissive
+ * triangles, bounds and geometry hash. */
+#include "scene_builder.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "hash.h"
+#include "vecmath.h"
+
+static bool grow(void **array, uint32_t *capacity, uint32_t needed, size_t item,
+                 SgError *err, const char *path)
+{
+    if (needed <= *capacity)
+        return true;
+    uint64_t cap = *capacity ? *capacity : 1024;
+    while (cap < needed)
+        cap *= 2;
+    if (cap > UINT32_MAX)
+        return sg_fail(err, "%s: scene too large (more than 4 billion elements)", path);
+    void *p = realloc(*array, (size_t)cap * item);
+    if (!p)
+        return sg_fail(err, "%s: out of memory", path);
+    *array = p;
+    *capacity = (uint32_t)cap;
+    return true;
+}
+
+bool sg_builder_add_vertices(SgSceneBuilder *b, uint32_t count, SgError *err)
+{
+    SgScene *s = b->scene;
+    if ((uint64_t)s->vertex_count + count > UINT32_MAX)
+        return sg_fail(err, "%s: too many vertices", b->path);
+    return grow((void **)&s->positions, &b->vertex_capacity, s->vertex_count + count,
+                3 * sizeof(double), err, b->path);
+}
+
+bool sg_builder_add_triangles(SgSceneBuilder *b, uint32_t count, SgError *err)
+{
+    SgScene *s = b->scene;
+    if ((uint64_t)s->triangle_count + count > UINT32_MAX)
+        return sg_fail(err, "%s: too many triangles", b->path);
+    uint32_t cap = b->triangle_capacity;
+    if (!grow((void **)&s->indices, &cap, s->triangle_count + count, 3 * sizeof(uint32_t), err,
+              b->path))
+        return false;
+    uint32_t cap2 = b->triangle_capacity;
+    if (!grow((void **)&s->triangle_material, &cap2, s->triangle_count + count,
+              sizeof(uint32_t), err, b->path))
+        return false;
+    b->triangle_capacity = cap;
+    return true;
+}
+
+void sg_material_default(SgMaterial *m, const char *name)
+{
+    memset(m, 0, sizeof *m);
+    snprintf(m->name, sizeof m->name, "%.63s", name);
+    m->type = SG_MATERIAL_DIFFUSE;
+    m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0.5f;
+    m->exponent = 1;
+    m->ior = 1.5f;
+}
+
+bool sg_builder_add_material(SgSceneBuilder *b, const SgMaterial *m, uint32_t *id, SgError *err)
+{
+    SgScene *s = b->scene;
+    if (!grow((void **)&s->materials, &b->material_capacity, s->material_count + 1,
+              sizeof(SgMaterial), err, b->path))
+        return false;
+    s->materials[s->material_count] = *m;
+    *id = s->material_count++;
+    return true;
+}
+
+void sg_transform_identity(SgTransform *t)
+{
+    memset(t, 0, sizeof *t);
+    t->m[0][0] = t->m[1][1] = t->m[2][2] = 1;
+}
+
+void sg_transform_point(const SgTransform *t, const double p[3], double out[3])
+{
+    for (int r = 0; r < 3; r++)
+        out[r] = t->m[r][0] * p[0] + t->m[r][1] * p[1] + t->m[r][2] * p[2] + t->m[r][3];
+}
+
+/* out = a * b (apply b first). */
+void sg_transform_compose(const SgTransform *a, const SgTransform *b, SgTransform *out)
+{
+    SgTransform r;
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 4; j++) {
+            double v = (j == 3) ? a->m[i][3] : 0;
+            for (int k = 0; k < 3; k++)
+                v += a->m[i][k] * b->m[k][j];
+            r.m[i][j] = v;
+        }
+    }
+    *out = r;
+}
+
+double sg_transform_determinant(const SgTransform *t)
+{
+    const double(*a)[4] = t->m;
+    return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+           a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+           a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+}
+
+static bool is_degenerate(const double *a, const double *b, const double *c)
+{
+    double e1[3], e2[3], e3[3], n[3];
+    d3_sub(b, a, e1);
+    d3_sub(c, a, e2);
+    d3_sub(c, b, e3);
+    d3_cross(e1, e2, n);
+    double longest = fmax(d3_dot(e1, e1), fmax(d3_dot(e2, e2), d3_dot(e3, e3)));
+    /* Relative test: independent of the scene's unit. */
+    return !(d3_length(n) > 1e-12 * longest);
+}
+
+/* Appends one triangle whose vertices are already in the vertex array. */
+void sg_builder_push_triangle(SgSceneBuilder *b, uint32_t i0, uint32_t i1, uint32_t i2,
+                              uint32_t material)
+{
+    SgScene *s = b->scene;
+    const double *p = s->positions;
+    if (is_degenerate(p + 3 * i0, p + 3 * i1, p + 3 * i2)) {
+        b->dropped_degenerate++;
+        return;
+    }
+    uint32_t t = s->triangle_count++;
+    s->indices[3 * t + 0] = i0;
+    s->indices[3 * t + 1] = i1;
+    s->indices[3 * t + 2] = i2;
+    s->triangle_material[t] = material;
+}
+
+bool sg_builder_check_point(SgSceneBuilder *b, const char *what, const double p[3], SgError *err)
+{
+    for (int a = 0; a < 3; a++)
+        if (!isfinite(p[a]))
+            return sg_fail(err, "%s: %s has a non-finite vertex coordinate", b->path, what);
+    return true;
+}
+
+/* Appends a mesh given as flat positions and triangle indices (already
+ * bounds-checked) with one material. */
+bool sg_builder_append_mesh(SgSceneBuilder *b, const char *file, const double *positions,
+                        uint32_t vertex_count, const uint32_t *indices, uint32_t triangle_count,
+                        const SgTransform *xf, uint32_t material, SgError *err)
+{
+    SgScene *s = b->scene;
+    uint32_t base = s->vertex_count;
+    if (!sg_builder_add_vertices(b, vertex_count, err) ||
+        !sg_builder_add_triangles(b, triangle_count, err))
+        return false;
+    for (uint32_t v = 0; v < vertex_count; v++) {
+        if (!sg_builder_check_point(b, file, positions + 3 * (size_t)v, err))
+            return false;
+        sg_transform_point(xf, positions + 3 * (size_t)v, s->positions + 3 * (size_t)(base + v));
+    }
+    s->vertex_count += vertex_count;
+    for (uint32_t t = 0; t < triangle_count; t++)
+        sg_builder_push_triangle(b, base + indices[3 * (size_t)t],
+                                 base + indices[3 * (size_t)t + 1],
+                                 base + indices[3 * (size_t)t + 2], material);
+    return true;
+}
+
+static uint32_t find_root(uint32_t *parent, uint32_t x)
+{
+    while (parent[x] != x) {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    return x;
+}
+
+typedef struct LightKey {
+    uint32_t root, material, triangle;
+} LightKey;
+
+static int compare_light_keys(const void *pa, const void *pb)
+{
+    const LightKey *a = pa, *b = pb;
+    if (a->root != b->root)
+        return a->root < b->root ? -1 : 1;
+    if (a->material != b->material)
+        return a->material < b->material ? -1 : 1;
+    return (a->triangle > b->triangle) - (a->triangle < b->triangle);
+}
+
+/* Emissive triangles of one material that share vertices form one light. */
+static bool group_lights(SgSceneBuilder *b, SgError *err)
+{
+    SgScene *s = b->scene;
+    s->triangle_light = malloc((s->triangle_count ? s->triangle_count : 1) * sizeof(uint32_t));
+    uint32_t *parent = malloc((s->vertex_count ? s->vertex_count : 1) * sizeof(uint32_t));
+    if (!s->triangle_light || !parent) {
+        free(parent);
+        return sg_fail(err, "%s: out of memory", b->path);
+    }
+    for (uint32_t v = 0; v < s->vertex_count; v++)
+        parent[v] = v;
+    uint32_t emissive = 0;
+    for (uint32_t t = 0; t < s->triangle_count; t++) {
+        s->triangle_light[t] = SG_NO_LIGHT;
+        const float *e = s->materials[s->triangle_material[t]].emission;
+        if (!(e[0] > 0 || e[1] > 0 || e[2] > 0))
+            continue;
+        emissive++;
+        const uint32_t *idx = s->indices + 3 * (size_t)t;
+        for (int c = 1; c < 3; c++) {
+            uint32_t r0 = find_root(parent, idx[0]), r1 = find_root(parent, idx[c]);
+            if (r0 != r1)
+                parent[r1 > r0 ? r1 : r0] = r1 > r0 ? r0 : r1;
+        }
+    }
+    /* Sort emissive triangles by (component, material, id) so that lights
+     * come out in a deterministic order. */
+    LightKey *keys = malloc((emissive ? emissive : 1) * sizeof *keys);
+    if (!keys) {
+        free(parent);
+        return sg_fail(err, "%s: out of memory", b->path);
+    }
+    uint32_t n = 0;
+    for (uint32_t t = 0; t < s->triangle_count; t++) {
+        const float *e = s->materials[s->triangle_material[t]].emission;
+        if (e[0] > 0 || e[1] > 0 || e[2] > 0)
+            keys[n++] = (LightKey){find_root(parent, s->indices[3 * (size_t)t]),
+                                   s->triangle_material[t], t};
+    }
+    qsort(keys, n, sizeof *keys, compare_light_keys);
+    s->light_triangles = malloc((n ? n : 1) * sizeof(uint32_t));
+    s->lights = calloc(n ? n : 1, sizeof(SgLight));
+    if (!s->light_triangles || !s->lights) {
+        free(parent);
+        free(keys);
+        return sg_fail(err, "%s: out of memory", b->path);
+    }
+    uint32_t light = UINT32_MAX, prev_root = UINT32_MAX, prev_material = UINT32_MAX;
+    for (uint32_t i = 0; i < n; i++) {
+        uint32_t root = keys[i].root, t = keys[i].triangle, material = keys[i].material;
+        if (root != prev_root || material != prev_material) {
+            light = s->light_count++;
+            s->lights[light].first_triangle = i;
+            prev_root = root;
+            prev_material = material;
+        }
+        s->light_triangles[i] = t;
+        s->triangle_light[t] = light;
+        SgLight *l = &s->lights[light];
+        l->triangle_count++;
+        double nrm[3];
+        sg_scene_triangle_normal(s, t, nrm);
+        double area = 0.5 * d3_length(nrm);
+        const double *p = s->positions;
+        const uint32_t *idx = s->indices + 3 * (size_t)t;
+        for (int a = 0; a < 3; a++) {
+            double c = (p[3 * idx[0] + a] + p[3 * idx[1] + a] + p[3 * idx[2] + a]) / 3;
+            l->position[a] += area * c;
+            l->normal[a] += 0.5 * nrm[a];
+        }
+        l->area += area;
+        memcpy(l->radiance, s->materials[material].emission, sizeof l->radiance);
+    }
+    for (uint32_t k = 0; k < s->light_count; k++) {
+        SgLight *l = &s->lights[k];
+        double len = d3_length(l->normal);
+        for (int a = 0; a < 3; a++) {
+            l->position[a] /= l->area;
+            l->normal[a] = len > 0 ? l->normal[a] / len : 0;
+        }
+        double lum = 0.2126 * l->radiance[0] + 0.7152 * l->radiance[1] + 0.0722 * l->radiance[2];
+        l->power = M_PI * l->area * lum;
+    }
+    free(parent);
+    free(keys);
+    return true;
+}
+
+static void compute_bounds_and_hash(SgScene *s)
+{
+    for (int a = 0; a < 3; a++) {
+        s->bounds_min[a] = INFINITY;
+        s->bounds_max[a] = -INFINITY;
+    }
+    for (uint32_t t = 0; t < s->triangle_count; t++)
+        for (int c = 0; c < 3; c++) {
+            const double *p = s->positions + 3 * (size_t)s->indices[3 * (size_t)t + c];
+            for (int a = 0; a < 3; a++) {
+                s->bounds_min[a] = fmin(s->bounds_min[a], p[a]);
+                s->bounds_max[a] = fmax(s->bounds_max[a], p[a]);
+            }
+        }
+    /* Hash what the precompute sees: triangles (as coordinates, so that
+     * vertex order in files does not matter less than geometry) and lights. */
+    uint64_t h = SG_HASH_INIT;
+    h = sg_hash_bytes(h, &s->triangle_count, sizeof s->triangle_count);
+    for (uint32_t t = 0; t < s->triangle_count; t++) {
+        for (int c = 0; c < 3; c++)
+            h = sg_hash_bytes(h, s->positions + 3 * (size_t)s->indices[3 * (size_t)t + c],
+                              3 * sizeof(double));
+        uint32_t light = s->triangle_light[t];
+        h = sg_hash_bytes(h, &light, sizeof light);
+    }
+    for (uint32_t k = 0; k < s->light_count; k++)
+        h = sg_hash_bytes(h, s->lights[k].radiance, sizeof s->lights[k].radiance);
+    s->geometry_hash = h;
+}
+
+void sg_scene_triangle_normal(const SgScene *scene, uint32_t t, double n[3])
+{
+    const uint32_t *idx = scene->indices + 3 * (size_t)t;
+    const double *a = scene->positions + 3 * (size_t)idx[0];
+    const double *b = scene->positions + 3 * (size_t)idx[1];
+    const double *c = scene->positions + 3 * (size_t)idx[2];
+    double e1[3], e2[3];
+    d3_sub(b, a, e1);
+    d3_sub(c, a, e2);
+    d3_cross(e1, e2, n);
+}
+
+void sg_scene_free(SgScene *s)
+{
+    if (!s)
+        return;
+    free(s->positions);
+    free(s->indices);
+    free(s->triangle_material);
+    free(s->triangle_light);
+    free(s->materials);
+    free(s->lights);
+    free(s->light_triangles);
+    for (uint32_t i = 0; i < s->warning_count; i++)
+        free(s->warnings[i]);
+    free(s->warnings);
+    free(s);
+}
+
+bool sg_builder_begin(SgSceneBuilder *b, const char *path, SgError *err)
+{
+    memset(b, 0, sizeof *b);
+    b->path = path;
+    b->scene = calloc(1, sizeof *b->scene);
+    if (!b->scene)
+        return sg_fail(err, "%s: out of memory", path);
+    snprintf(b->scene->path, sizeof b->scene->path, "%s", path);
+    return true;
+}
+
+bool sg_builder_finish(SgSceneBuilder *b, SgError *err)
+{
+    if (!group_lights(b, err))
+        return false;
+    b->scene->degenerate_dropped = b->dropped_degenerate;
+    compute_bounds_and_hash(b->scene);
+    return true;
+}
+
+void sg_scene_add_warning(SgScene *s, const char *fmt, ...)
+{
+    char line[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    for (char *c = line; *c; c++)
+        if (*c == '\n' || *c == '\r')
+            *c = ' ';
+    char **grown = realloc(s->warnings, (s->warning_count + 1) * sizeof *grown);
+    if (!grown)
+        return;
+    s->warnings = grown;
+    if ((grown[s->warning_count] = strdup(line)))
+        s->warning_count++;
+}
+
+void sg_scene_print_warnings(const SgScene *s, const char *program, FILE *out)
+{
+    for (uint32_t i = 0; s && i < s->warning_count; i++)
+        fprintf(out, "%s: warning: %s\n", program, s->warnings[i]);
+}

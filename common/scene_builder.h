@@ -1,0 +1,65 @@
+/* What the scene front ends (JSON: scene.c, pbrt: pbrt_scene.c) share: the
+ * flat world-space arrays of an SgScene grown as meshes arrive, degenerate
+ * triangles dropped, and the finishing pass that groups emissive triangles
+ * into lights and computes the bounds and the geometry hash. */
+#ifndef SG_SCENE_BUILDER_H
+#define SG_SCENE_BUILDER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "error.h"
+#include "scene.h"
+
+/* Row-major affine transform. */
+typedef struct SgTransform {
+    double m[3][4];
+} SgTransform;
+
+void sg_transform_identity(SgTransform *t);
+void sg_transform_point(const SgTransform *t, const double p[3], double out[3]);
+/* out = a * b (b is applied first); out may alias a or b. */
+void sg_transform_compose(const SgTransform *a, const SgTransform *b, SgTransform *out);
+/* Determinant of the linear part: negative when the transform mirrors. */
+double sg_transform_determinant(const SgTransform *t);
+
+typedef struct SgSceneBuilder {
+    SgScene *scene;
+    const char *path; /* the scene file, for messages */
+    uint32_t vertex_capacity, triangle_capacity, material_capacity;
+    uint32_t dropped_degenerate;
+} SgSceneBuilder;
+
+/* Allocates the scene; on failure returns false and b->scene is NULL. */
+bool sg_builder_begin(SgSceneBuilder *b, const char *path, SgError *err);
+
+/* Diffuse grey 0.5, ior 1.5, no emission. */
+void sg_material_default(SgMaterial *m, const char *name);
+bool sg_builder_add_material(SgSceneBuilder *b, const SgMaterial *m, uint32_t *id, SgError *err);
+
+/* Reserve room for count more vertices / triangles (does not add them). */
+bool sg_builder_add_vertices(SgSceneBuilder *b, uint32_t count, SgError *err);
+bool sg_builder_add_triangles(SgSceneBuilder *b, uint32_t count, SgError *err);
+/* Appends one triangle whose vertices are in the vertex array (room
+ * reserved); a zero-area triangle is dropped and counted. */
+void sg_builder_push_triangle(SgSceneBuilder *b, uint32_t i0, uint32_t i1, uint32_t i2,
+                              uint32_t material);
+/* Fails with "what has a non-finite vertex coordinate". */
+bool sg_builder_check_point(SgSceneBuilder *b, const char *what, const double p[3], SgError *err);
+/* Appends a mesh (indices already bounds-checked) transformed by xf with
+ * one material; file names it in messages. */
+bool sg_builder_append_mesh(SgSceneBuilder *b, const char *file, const double *positions,
+                            uint32_t vertex_count, const uint32_t *indices,
+                            uint32_t triangle_count, const SgTransform *xf, uint32_t material,
+                            SgError *err);
+
+/* Groups lights, computes bounds and hash, records the degenerate count.
+ * The caller has checked that there are triangles. */
+bool sg_builder_finish(SgSceneBuilder *b, SgError *err);
+
+/* Appends one warning line to the scene (kept short; never fails: a
+ * warning lost to a full memory is not worth an error). */
+void sg_scene_add_warning(SgScene *scene, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+#endif

@@ -1,0 +1,395 @@
+/* bin/render: path traces a scene, optionally guided by an importance cache. */
+#include <errno.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "error.h"
+#include "image_io.h"
+#include "importance_cache.h"
+#include "output_file.h"
+#include "progress.h"
+#include "renderer.h"
+#include "scene.h"
+
+static const char *usage =
+    "usage: render SCENE.json [--cache importance.cache] [--sampling bsdf|skeleton|guided]\n"
+    "              [--spp N | --time SECONDS] [--seed N] [--threads N] -o image.exr\n"
+    "              [--png image.png] [--exposure STOPS] [--reference ref.exr --log curve.csv]\n"
+    "              [--max-depth N] [--exponent P] [--alpha A] [--size WxH] [--quiet]\n"
+    "\n"
+    "Path traces SCENE.json (Embree 3) with next-event estimation and MIS.\n"
+    "  --cache FILE      importance cache from bin/importance for this scene's geometry\n"
+    "  --sampling MODE   bsdf: BSDF sampling (default without a cache);\n"
+    "                    guided: unbiased mixture of BSDF and a lobe toward the skeleton's\n"
+    "                            importance point (default with a cache);\n"
+    "                    skeleton: the paper's rule as written (biased; for reproduction)\n"
+    "  --spp N           samples per pixel (default: the scene's render.spp, else 16)\n"
+    "  --time SECONDS    render progressive passes until this much time has passed\n"
+    "  --seed N          random seed (default 0); the image depends only on the seed\n"
+    "  --threads N       worker threads (default: every core)\n"
+    "  -o FILE.exr       linear float RGB with spp, seconds, sampling, seed as metadata\n"
+    "  --png FILE.png    8-bit sRGB image of the render times 2^exposure\n"
+    "  --exposure STOPS  PNG exposure (default: the scene's render.exposure, else 0)\n"
+    "  --reference REF --log CSV  after every pass append seconds,spp,mse,relmse against\n"
+    "                    REF (measuring time is not counted)\n"
+    "  --max-depth N     maximum path length (default: the scene's render.max_depth, else 8)\n"
+    "  --exponent P      cosine-power exponent of the guiding lobe (default 4)\n"
+    "  --alpha A         guided: probability of BSDF sampling in the mixture, (0, 1] (default 0.5)\n"
+    "  --size WxH        image size (default: the scene's image size, else 320x240)\n"
+    "  --quiet           no summary line\n";
+
+typedef struct Args {
+    const char *scene, *cache, *output, *png, *reference, *log;
+    const char *sampling;
+    long spp;
+    double time;
+    uint64_t seed;
+    long threads, max_depth, width, height;
+    double exposure, exponent, alpha;
+    bool has_exposure, has_exponent, has_alpha, quiet;
+} Args;
+
+static bool parse_long(const char *s, long lo, long hi, long *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (errno || end == s || *end || v < lo || v > hi)
+        return false;
+    *out = v;
+    return true;
+}
+
+static bool parse_double(const char *s, double lo, double hi, double *out)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(s, &end);
+    if (errno || end == s || *end || !isfinite(v) || v < lo || v > hi)
+        return false;
+    *out = v;
+    return true;
+}
+
+static bool parse_args(int argc, char **argv, Args *a, SgError *err)
+{
+    memset(a, 0, sizeof *a);
+    a->spp = -1;
+    a->time = -1;
+    a->threads = 0;
+    for (int i = 1; i < argc; i++) {
+        const char *s = argv[i];
+        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
+#define NEED_VALUE()                                                 \
+    do {                                                             \
+        if (!v)                                                      \
+            return sg_fail(err, "%s: needs a value (see --help)", s); \
+        i++;                                                         \
+    } while (0)
+        if (!strcmp(s, "--cache")) { NEED_VALUE(); a->cache = v; }
+        else if (!strcmp(s, "--sampling")) { NEED_VALUE(); a->sampling = v; }
+        else if (!strcmp(s, "-o") || !strcmp(s, "--output")) { NEED_VALUE(); a->output = v; }
+        else if (!strcmp(s, "--png")) { NEED_VALUE(); a->png = v; }
+        else if (!strcmp(s, "--reference")) { NEED_VALUE(); a->reference = v; }
+        else if (!strcmp(s, "--log")) { NEED_VALUE(); a->log = v; }
+        else if (!strcmp(s, "--spp")) {
+            NEED_VALUE();
+            if (!parse_long(v, 1, 1L << 30, &a->spp))
+                return sg_fail(err, "--spp: '%s' is not a positive integer", v);
+        } else if (!strcmp(s, "--time")) {
+            NEED_VALUE();
+            if (!parse_double(v, 1e-6, 1e9, &a->time))
+                return sg_fail(err, "--time: '%s' is not a positive number of seconds", v);
+        } else if (!strcmp(s, "--seed")) {
+            NEED_VALUE();
+            char *end;
+            errno = 0;
+            unsigned long long x = strtoull(v, &end, 10);
+            if (errno || end == v || *end || v[0] == '-')
+                return sg_fail(err, "--seed: '%s' is not a non-negative integer", v);
+            a->seed = x;
+        } else if (!strcmp(s, "--threads")) {
+            NEED_VALUE();
+            if (!parse_long(v, 1, 4096, &a->threads))
+                return sg_fail(err, "--threads: '%s' is not a positive integer", v);
+        } else if (!strcmp(s, "--max-depth")) {
+            NEED_VALUE();
+            if (!parse_long(v, 1, 100000, &a->max_depth))
+                return sg_fail(err, "--max-depth: '%s' is not a positive integer", v);
+        } else if (!strcmp(s, "--exposure")) {
+            NEED_VALUE();
+            if (!parse_double(v, -100, 100, &a->exposure))
+                return sg_fail(err, "--exposure: '%s' is not a number of stops", v);
+            a->has_exposure = true;
+        } else if (!strcmp(s, "--exponent")) {
+            NEED_VALUE();
+            if (!parse_double(v, 0, 1e5, &a->exponent))
+                return sg_fail(err, "--exponent: '%s' is not in [0, 1e5]", v);
+            a->has_exponent = true;
+        } else if (!strcmp(s, "--alpha")) {
+            NEED_VALUE();
+            if (!parse_double(v, 0, 1, &a->alpha) || a->alpha <= 0)
+                return sg_fail(err, "--alpha: '%s' is not in (0, 1]", v);
+            a->has_alpha = true;
+        } else if (!strcmp(s, "--size")) {
+            NEED_VALUE();
+            char *end;
+            long w = strtol(v, &end, 10);
+            long h = *end == 'x' ? strtol(end + 1, &end, 10) : 0;
+            if (*end || w <= 0 || h <= 0 || w > 65536 || h > 65536)
+                return sg_fail(err, "--size: '%s' is not WxH", v);
+            a->width = w;
+            a->height = h;
+        } else if (!strcmp(s, "--quiet")) {
+            a->quiet = true;
+        } else if (s[0] == '-' && s[1]) {
+            return sg_fail(err, "%s: unknown option (see --help)", s);
+        } else if (!a->scene) {
+            a->scene = s;
+        } else {
+            return sg_fail(err, "%s: only one scene file, please", s);
+        }
+#undef NEED_VALUE
+    }
+    if (!a->scene)
+        return sg_fail(err, "no scene file given (see --help)");
+    if (!a->output)
+        return sg_fail(err, "no output given: -o image.exr (see --help)");
+    if (a->spp > 0 && a->time > 0)
+        return sg_fail(err, "--spp and --time: give one or the other");
+    if (!a->reference != !a->log)
+        return sg_fail(err, "--reference and --log go together");
+    return true;
+}
+
+/* The cache as the renderer's guide. */
+static bool cache_guide(void *ctx, const double p[3], uint32_t light, double point[3])
+{
+    return sg_cache_importance_point(ctx, p, light, point);
+}
+
+typedef struct ErrorLog {
+    SgOutputFile out;
+    float *reference;
+    float *image;
+    size_t values;
+} ErrorLog;
+
+static void error_metrics(const float *x, const float *ref, size_t n, double *mse, double *relmse)
+{
+    double s = 0.0, rs = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double d = (double)x[i] - ref[i];
+        s += d * d;
+        rs += d * d / ((double)ref[i] * ref[i] + 0.01);
+    }
+    *mse = s / n;
+    *relmse = rs / n;
+}
+
+static void format_u64(char *buf, size_t size, uint64_t v) { snprintf(buf, size, "%" PRIu64, v); }
+
+int main(int argc, char **argv)
+{
+    for (int i = 1; i < argc; i++)
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            fputs(usage, stdout);
+            return 0;
+        }
+    SgError err = {0};
+    Args a;
+    if (!parse_args(argc, argv, &a, &err)) {
+        sg_error_print("render", &err);
+        return 1;
+    }
+    int status = 1;
+    SgScene *scene = NULL;
+    SgImportanceCache *cache = NULL;
+    SgRenderer *r = NULL;
+    double *follow = NULL;
+    float *image = NULL;
+    ErrorLog log = {0};
+    bool log_open = false;
+
+    scene = sg_scene_load(a.scene, &err);
+    if (!scene)
+        goto done;
+    if (!scene->has_camera) {
+        sg_fail(&err, "%s: no camera in the scene", a.scene);
+        goto done;
+    }
+
+    SgRenderOptions o;
+    sg_render_options_default(&o, scene);
+    if (a.width) {
+        o.width = (int)a.width;
+        o.height = (int)a.height;
+    }
+    if (a.max_depth)
+        o.max_depth = (int)a.max_depth;
+    o.seed = a.seed;
+    o.threads = (int)a.threads;
+    if (a.has_exponent)
+        o.lobe_exponent = (float)a.exponent;
+    if (a.has_alpha)
+        o.alpha = (float)a.alpha;
+    o.sampling = a.cache ? SG_SAMPLING_GUIDED : SG_SAMPLING_BSDF;
+    if (a.sampling && !sg_sampling_parse(a.sampling, &o.sampling)) {
+        sg_fail(&err, "--sampling: '%s' is not bsdf, skeleton or guided", a.sampling);
+        goto done;
+    }
+    if (o.sampling != SG_SAMPLING_BSDF && !a.cache) {
+        sg_fail(&err, "--sampling %s needs --cache importance.cache", sg_sampling_name(o.sampling));
+        goto done;
+    }
+
+    if (a.cache && o.sampling != SG_SAMPLING_BSDF) {
+        cache = sg_cache_open(a.cache, &err);
+        if (!cache)
+            goto done;
+        if (sg_cache_geometry_hash(cache) != scene->geometry_hash) {
+            sg_fail(&err,
+                    "%s: built for other geometry (hash %016" PRIx64 ", %s has %016" PRIx64
+                    "): rebuild it with bin/importance",
+                    a.cache, sg_cache_geometry_hash(cache), a.scene, scene->geometry_hash);
+            goto done;
+        }
+        if (sg_cache_light_count(cache) != scene->light_count) {
+            sg_fail(&err, "%s: has %u lights, %s has %u: rebuild it with bin/importance", a.cache,
+                    sg_cache_light_count(cache), a.scene, scene->light_count);
+            goto done;
+        }
+        /* Follow each light in proportion to its power, but never a light
+         * that cannot reach the camera (the paper's litmus test). */
+        follow = calloc(scene->light_count ? scene->light_count : 1, sizeof *follow);
+        if (!follow) {
+            sg_fail(&err, "%s: out of memory", a.scene);
+            goto done;
+        }
+        uint32_t dropped = 0;
+        for (uint32_t l = 0; l < scene->light_count; l++) {
+            if (sg_cache_light_reaches(cache, l, scene->camera.position))
+                follow[l] = scene->lights[l].power;
+            else
+                dropped++;
+        }
+        if (dropped)
+            fprintf(stderr, "render: %u of %u lights cannot reach the camera: the guide does not follow them%s\n",
+                    dropped, scene->light_count,
+                    dropped == scene->light_count ? " (so it samples the BSDF only)" : "");
+        o.guide.importance_point = cache_guide;
+        o.guide.ctx = cache;
+        o.guide.light_weight = follow;
+        /* 1.5 voxels: a wall on a voxel boundary makes both voxels beside it solid */
+        o.guide.query_offset = 1.5 * sg_cache_voxel_size(cache);
+    }
+
+    int spp_target = a.spp > 0 ? (int)a.spp : scene->render.spp > 0 ? scene->render.spp : 16;
+    double exposure = a.has_exposure ? a.exposure : scene->render.exposure;
+
+    r = sg_renderer_create(scene, &o, &err);
+    if (!r)
+        goto done;
+    size_t values = (size_t)o.width * o.height * 3;
+    image = malloc(values * sizeof *image);
+    if (!image) {
+        sg_fail(&err, "%s: out of memory for the image", a.scene);
+        goto done;
+    }
+    if (a.reference) {
+        int rw, rh;
+        if (!sg_image_read(a.reference, &rw, &rh, &log.reference, &err))
+            goto done;
+        if (rw != o.width || rh != o.height) {
+            sg_fail(&err, "%s: is %dx%d, the render is %dx%d", a.reference, rw, rh, o.width, o.height);
+            goto done;
+        }
+        if (!sg_output_open(&log.out, a.log, &err))
+            goto done;
+        log_open = true;
+        fprintf(log.out.file, "seconds,spp,mse,relmse\n");
+    }
+
+    SgProgress progress;
+    sg_progress_begin(&progress, "render", a.time > 0 ? 0 : (uint64_t)spp_target);
+    double render_seconds = 0.0;
+    for (;;) {
+        double t0 = sg_seconds();
+        sg_renderer_pass(r);
+        render_seconds += sg_seconds() - t0;
+        int spp = sg_renderer_spp(r);
+        if (spp == 1 && sg_renderer_backface_fraction(r) > 0.9)
+            fprintf(stderr, "render: %s: the camera seems to be inside a solid (%.0f%% of its rays hit back faces)\n",
+                    a.scene, 100.0 * sg_renderer_backface_fraction(r));
+        if (log_open) {
+            double mse, relmse;
+            sg_renderer_image(r, image);
+            error_metrics(image, log.reference, values, &mse, &relmse);
+            fprintf(log.out.file, "%.6f,%d,%.9g,%.9g\n", render_seconds, spp, mse, relmse);
+        }
+        sg_progress_update(&progress, (uint64_t)spp);
+        if (a.time > 0 ? render_seconds >= a.time : spp >= spp_target)
+            break;
+    }
+    sg_progress_end(&progress);
+
+    sg_renderer_image(r, image);
+    char spp_s[32], sec_s[32], seed_s[32], nonfinite_s[32], depth_s[32], exp_s[32], alpha_s[32];
+    snprintf(spp_s, sizeof spp_s, "%d", sg_renderer_spp(r));
+    snprintf(sec_s, sizeof sec_s, "%.3f", render_seconds);
+    format_u64(seed_s, sizeof seed_s, a.seed);
+    format_u64(nonfinite_s, sizeof nonfinite_s, sg_renderer_nonfinite(r));
+    snprintf(depth_s, sizeof depth_s, "%d", o.max_depth);
+    snprintf(exp_s, sizeof exp_s, "%g", o.lobe_exponent);
+    snprintf(alpha_s, sizeof alpha_s, "%g", o.alpha);
+    SgImageAttribute attrs[] = {
+        {"spp", spp_s},
+        {"seconds", sec_s},
+        {"sampling", sg_sampling_name(o.sampling)},
+        {"seed", seed_s},
+        {"sg:max_depth", depth_s},
+        {"sg:lobe_exponent", exp_s},
+        {"sg:alpha", alpha_s},
+        {"sg:nonfinite_samples", nonfinite_s},
+        {"sg:clamping", "none"},
+        {"sg:scene", a.scene},
+        {"sg:cache", a.cache && cache ? a.cache : ""},
+    };
+    if (!sg_image_write_exr(a.output, o.width, o.height, image, attrs,
+                            (int)(sizeof attrs / sizeof attrs[0]), &err))
+        goto done;
+    if (a.png && !sg_image_write_png(a.png, o.width, o.height, image, exposure, &err))
+        goto done;
+    if (log_open) {
+        log_open = false;
+        if (!sg_output_commit(&log.out, &err))
+            goto done;
+    }
+    if (!a.quiet) {
+        double paths = (double)o.width * o.height * sg_renderer_spp(r);
+        fprintf(stderr,
+                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s, seed %s, %s NaN/inf samples\n",
+                o.width, o.height, sg_renderer_spp(r), render_seconds, paths / render_seconds * 1e-6,
+                (double)sg_renderer_rays(r) / render_seconds * 1e-6, sg_sampling_name(o.sampling),
+                seed_s, nonfinite_s);
+    }
+    status = 0;
+
+done:
+    if (status != 0)
+        sg_error_print("render", &err);
+    if (log_open)
+        sg_output_abort(&log.out);
+    free(log.reference);
+    free(image);
+    free(follow);
+    sg_renderer_free(r);
+    if (cache)
+        sg_cache_close(cache);
+    if (scene)
+        sg_scene_free(scene);
+    return status;
+}

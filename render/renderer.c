@@ -1,0 +1,827 @@
+#include "renderer.h"
+
+#include <embree3/rtcore.h>
+#include <math.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rng.h"
+#include "sampling.h"
+#include "threads.h"
+#include "vecmath.h"
+
+#define TILE 16
+
+typedef struct LightTable {
+    double pick_pdf;      /* probability that NEE picks this light */
+    float inv_area;       /* 1 / area, in local (float) coordinates */
+    uint32_t first, count; /* its triangles in r->light_tris / r->light_tri_cdf */
+} LightTable;
+
+typedef struct TriInfo {
+    Vec3 normal;       /* unit geometric normal (winding order) */
+    uint32_t material;
+    uint32_t light;    /* SG_NO_LIGHT if not emissive */
+} TriInfo;
+
+typedef struct Material {
+    SgMaterialType type;
+    Vec3 kd, ks, emission;
+    float exponent, ior;
+    float diffuse_weight; /* probability of sampling the diffuse part */
+    bool emissive;
+    bool black;           /* no scattering at all */
+} Material;
+
+struct SgRenderer {
+    SgRenderOptions opt;
+    double centre[3];     /* world = local + centre */
+    float scale;          /* scene extent, for scale-free ray offsets */
+
+    RTCDevice device;
+    RTCScene rtc_scene;
+
+    uint32_t triangle_count;
+    Vec3 *vertices;       /* local coordinates */
+    uint32_t *indices;
+    TriInfo *tris;        /* per triangle, packed: one cache line per hit */
+
+    uint32_t material_count;
+    Material *materials;
+
+    uint32_t light_count;
+    LightTable *lights;
+    double *light_cdf;      /* light_count: by power */
+    uint32_t *light_tris;   /* triangle ids grouped by light */
+    double *light_tri_cdf;  /* per light, cumulative area fractions */
+    double *follow_cdf;     /* guide: cumulative follow probability per light */
+    double *light_centre;   /* 3 per light, local coordinates (SgLight.position) */
+
+    /* camera in local coordinates */
+    Vec3 cam_pos, cam_forward, cam_right, cam_up;
+    float tan_half_fov, aspect;
+
+    int spp;
+    double *sum;           /* width * height * 3 */
+    float *last;           /* width * height * 3 */
+    _Atomic uint64_t nonfinite;
+    _Atomic uint64_t rays;
+    _Atomic uint64_t backface_hits;
+    uint64_t first_pass_rays;
+};
+
+const char *sg_sampling_name(SgSampling s)
+{
+    switch (s) {
+    case SG_SAMPLING_BSDF: return "bsdf";
+    case SG_SAMPLING_SKELETON: return "skeleton";
+    case SG_SAMPLING_GUIDED: return "guided";
+    }
+    return "?";
+}
+
+bool sg_sampling_parse(const char *name, SgSampling *s)
+{
+    for (int i = 0; i <= SG_SAMPLING_GUIDED; i++)
+        if (strcmp(name, sg_sampling_name((SgSampling)i)) == 0) {
+            *s = (SgSampling)i;
+            return true;
+        }
+    return false;
+}
+
+void sg_render_options_default(SgRenderOptions *o, const SgScene *scene)
+{
+    memset(o, 0, sizeof *o);
+    o->width = scene && scene->has_camera && scene->camera.width > 0 ? scene->camera.width : 320;
+    o->height = scene && scene->has_camera && scene->camera.height > 0 ? scene->camera.height : 240;
+    o->max_depth = scene && scene->render.max_depth > 0 ? scene->render.max_depth : 8;
+    o->sampling = SG_SAMPLING_BSDF;
+    o->lobe_exponent = 4.0f;
+    o->alpha = 0.5f;
+}
+
+static float luminance(Vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+
+/* ---- setup ---------------------------------------------------------------- */
+
+static void setup_material(Material *m, const SgMaterial *src)
+{
+    memset(m, 0, sizeof *m);
+    m->type = src->type;
+    m->kd = v3(fmaxf(0, src->diffuse[0]), fmaxf(0, src->diffuse[1]), fmaxf(0, src->diffuse[2]));
+    m->ks = v3(fmaxf(0, src->specular[0]), fmaxf(0, src->specular[1]), fmaxf(0, src->specular[2]));
+    m->emission = v3(fmaxf(0, src->emission[0]), fmaxf(0, src->emission[1]),
+                     fmaxf(0, src->emission[2]));
+    m->emissive = v3_max_component(m->emission) > 0.0f;
+    m->exponent = src->exponent > 0 ? fminf(src->exponent, 1e5f) : 1.0f;
+    m->ior = src->ior > 1.0f ? src->ior : 1.5f;
+    if (m->type == SG_MATERIAL_DIFFUSE)
+        m->ks = v3(0, 0, 0);
+    if (m->type == SG_MATERIAL_DIFFUSE || m->type == SG_MATERIAL_GLOSSY) {
+        /* energy conservation: kd + ks <= 1 per channel */
+        float worst = v3_max_component(v3_add(m->kd, m->ks));
+        if (worst > 1.0f) {
+            m->kd = v3_scale(m->kd, 1.0f / worst);
+            m->ks = v3_scale(m->ks, 1.0f / worst);
+        }
+        float ld = luminance(m->kd), ls = luminance(m->ks);
+        m->black = ld + ls <= 0.0f;
+        m->diffuse_weight = m->black ? 1.0f : ld / (ld + ls);
+        if (ls <= 0.0f)
+            m->type = SG_MATERIAL_DIFFUSE;
+    } else if (m->type == SG_MATERIAL_MIRROR) {
+        if (v3_max_component(m->ks) <= 0.0f)
+            m->ks = v3(1, 1, 1); /* a mirror given without Ks reflects fully */
+        m->ks = v3(fminf(m->ks.x, 1), fminf(m->ks.y, 1), fminf(m->ks.z, 1));
+    }
+}
+
+static bool setup_lights(SgRenderer *r, const SgScene *s, SgError *err)
+{
+    r->light_count = s->light_count;
+    if (!r->light_count)
+        return true;
+    r->lights = calloc(r->light_count, sizeof *r->lights);
+    r->light_cdf = calloc(r->light_count, sizeof *r->light_cdf);
+    r->follow_cdf = calloc(r->light_count, sizeof *r->follow_cdf);
+    r->light_centre = calloc(3 * r->light_count, sizeof *r->light_centre);
+    if (!r->light_centre)
+        return sg_fail(err, "%s: out of memory for the light table", s->path);
+    for (uint32_t l = 0; l < s->light_count; l++) {
+        for (int i = 0; i < 3; i++)
+            r->light_centre[3 * l + i] = s->lights[l].position[i] - r->centre[i];
+    }
+    uint32_t total_tris = 0;
+    for (uint32_t l = 0; l < s->light_count; l++)
+        total_tris += s->lights[l].triangle_count;
+    r->light_tris = calloc(total_tris ? total_tris : 1, sizeof *r->light_tris);
+    r->light_tri_cdf = calloc(total_tris ? total_tris : 1, sizeof *r->light_tri_cdf);
+    if (!r->lights || !r->light_cdf || !r->follow_cdf || !r->light_tris || !r->light_tri_cdf)
+        return sg_fail(err, "%s: out of memory for the light table", s->path);
+    double total_power = 0.0;
+    double *power = calloc(r->light_count, sizeof *power);
+    if (!power)
+        return sg_fail(err, "%s: out of memory", s->path);
+    uint32_t k = 0;
+    for (uint32_t l = 0; l < s->light_count; l++) {
+        const SgLight *L = &s->lights[l];
+        LightTable *lt = &r->lights[l];
+        lt->first = k;
+        double area = 0.0;
+        for (uint32_t i = 0; i < L->triangle_count; i++) {
+            uint32_t t = s->light_triangles[L->first_triangle + i];
+            if (t >= r->triangle_count) {
+                free(power);
+                return sg_fail(err, "%s: light %u names triangle %u of %u", s->path, l, t,
+                               r->triangle_count);
+            }
+            const Vec3 *v = r->vertices;
+            const uint32_t *id = r->indices + 3 * t;
+            float a = 0.5f * v3_length(v3_cross(v3_sub(v[id[1]], v[id[0]]), v3_sub(v[id[2]], v[id[0]])));
+            area += a;
+            r->light_tris[k] = t;
+            r->light_tri_cdf[k] = area;
+            k++;
+        }
+        lt->count = k - lt->first;
+        for (uint32_t i = lt->first; i < k; i++)
+            r->light_tri_cdf[i] = area > 0 ? r->light_tri_cdf[i] / area : (double)(i - lt->first + 1) / lt->count;
+        lt->inv_area = area > 0 ? (float)(1.0 / area) : 0.0f;
+        /* power from what the renderer will emit: the material's emission */
+        Vec3 e = v3(0, 0, 0);
+        if (L->triangle_count) {
+            uint32_t t0 = s->light_triangles[L->first_triangle];
+            e = r->materials[r->tris[t0].material].emission;
+        }
+        power[l] = area > 0 ? area * luminance(e) : 0.0;
+        total_power += power[l];
+    }
+    double acc = 0.0;
+    for (uint32_t l = 0; l < r->light_count; l++) {
+        r->lights[l].pick_pdf = total_power > 0 ? power[l] / total_power : 0.0;
+        acc += r->lights[l].pick_pdf;
+        r->light_cdf[l] = acc;
+    }
+    /* guide: which light to follow */
+    const double *w = r->opt.guide.light_weight ? r->opt.guide.light_weight : power;
+    double wsum = 0.0;
+    for (uint32_t l = 0; l < r->light_count; l++)
+        wsum += w[l] > 0 ? w[l] : 0.0;
+    acc = 0.0;
+    for (uint32_t l = 0; l < r->light_count; l++) {
+        acc += wsum > 0 && w[l] > 0 ? w[l] / wsum : 0.0;
+        r->follow_cdf[l] = acc;
+    }
+    free(power);
+    return true;
+}
+
+static void setup_camera(SgRenderer *r, const SgScene *s)
+{
+    const SgCamera *c = &s->camera;
+    double pos[3], at[3];
+    for (int i = 0; i < 3; i++) {
+        pos[i] = c->position[i] - r->centre[i];
+        at[i] = c->look_at[i] - r->centre[i];
+    }
+    r->cam_pos = v3((float)pos[0], (float)pos[1], (float)pos[2]);
+    double f[3] = {at[0] - pos[0], at[1] - pos[1], at[2] - pos[2]};
+    double fl = d3_length(f);
+    Vec3 forward = fl > 0 ? v3((float)(f[0] / fl), (float)(f[1] / fl), (float)(f[2] / fl)) : v3(0, 0, -1);
+    Vec3 up = v3_normalize(v3((float)c->up[0], (float)c->up[1], (float)c->up[2]));
+    Vec3 right = v3_cross(forward, up);
+    if (v3_length(right) < 1e-6f) { /* up parallel to the view: pick any */
+        Vec3 t, b;
+        v3_basis(forward, &t, &b);
+        right = t;
+    }
+    right = v3_normalize(right);
+    r->cam_forward = forward;
+    r->cam_right = right;
+    r->cam_up = v3_cross(right, forward);
+    double fov = c->fov_deg > 0 && c->fov_deg < 180 ? c->fov_deg : 60.0;
+    r->tan_half_fov = (float)tan(fov * M_PI / 360.0);
+    r->aspect = (float)r->opt.width / (float)r->opt.height;
+}
+
+SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgError *err)
+{
+    const char *path = s->path[0] ? s->path : "scene";
+    if (!s->triangle_count || !s->positions || !s->indices)
+        return sg_fail(err, "%s: no triangles to render", path), NULL;
+    if (!s->has_camera)
+        return sg_fail(err, "%s: no camera", path), NULL;
+    if (o->width <= 0 || o->height <= 0 || o->width > 65536 || o->height > 65536)
+        return sg_fail(err, "%s: bad image size %dx%d", path, o->width, o->height), NULL;
+    if (o->max_depth < 1)
+        return sg_fail(err, "%s: max depth must be at least 1", path), NULL;
+    if (o->sampling != SG_SAMPLING_BSDF && !o->guide.importance_point)
+        return sg_fail(err, "%s: %s sampling needs an importance cache", path,
+                       sg_sampling_name(o->sampling)), NULL;
+    if (o->sampling == SG_SAMPLING_GUIDED && !(o->alpha > 0.0f && o->alpha <= 1.0f))
+        return sg_fail(err, "%s: the mixture weight alpha must be in (0, 1] to stay unbiased", path), NULL;
+    if (!(o->lobe_exponent >= 0.0f && o->lobe_exponent <= 1e5f))
+        return sg_fail(err, "%s: lobe exponent must be in [0, 1e5]", path), NULL;
+
+    SgRenderer *r = calloc(1, sizeof *r);
+    if (!r)
+        return sg_fail(err, "%s: out of memory", path), NULL;
+    r->opt = *o;
+    double extent = 0.0;
+    for (int i = 0; i < 3; i++) {
+        r->centre[i] = 0.5 * (s->bounds_min[i] + s->bounds_max[i]);
+        extent = fmax(extent, s->bounds_max[i] - s->bounds_min[i]);
+    }
+    /* bounds may be unset by a hand-made scene: compute them if empty */
+    if (!(extent > 0.0)) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (uint32_t v = 0; v < s->vertex_count; v++)
+            for (int i = 0; i < 3; i++) {
+                lo[i] = fmin(lo[i], s->positions[3 * v + i]);
+                hi[i] = fmax(hi[i], s->positions[3 * v + i]);
+            }
+        for (int i = 0; i < 3; i++) {
+            r->centre[i] = 0.5 * (lo[i] + hi[i]);
+            extent = fmax(extent, hi[i] - lo[i]);
+        }
+    }
+    if (!isfinite(extent) || !(extent > 0.0)) {
+        sg_renderer_free(r);
+        return sg_fail(err, "%s: degenerate or non-finite scene bounds", path), NULL;
+    }
+    r->scale = (float)extent;
+
+    r->triangle_count = s->triangle_count;
+    r->vertices = malloc(sizeof(Vec3) * s->vertex_count + 16);
+    r->indices = malloc(sizeof(uint32_t) * 3 * s->triangle_count);
+    r->tris = malloc(sizeof(TriInfo) * s->triangle_count);
+    r->material_count = s->material_count;
+    r->materials = calloc(s->material_count ? s->material_count : 1, sizeof *r->materials);
+    size_t pixels = (size_t)o->width * o->height;
+    r->sum = calloc(pixels * 3, sizeof *r->sum);
+    r->last = calloc(pixels * 3, sizeof *r->last);
+    if (!r->vertices || !r->indices || !r->tris ||
+        !r->materials || !r->sum || !r->last) {
+        sg_renderer_free(r);
+        return sg_fail(err, "%s: out of memory", path), NULL;
+    }
+    for (uint32_t v = 0; v < s->vertex_count; v++)
+        r->vertices[v] = v3((float)(s->positions[3 * v] - r->centre[0]),
+                            (float)(s->positions[3 * v + 1] - r->centre[1]),
+                            (float)(s->positions[3 * v + 2] - r->centre[2]));
+    if (!s->material_count) {
+        sg_renderer_free(r);
+        return sg_fail(err, "%s: no materials", path), NULL;
+    }
+    for (uint32_t m = 0; m < s->material_count; m++)
+        setup_material(&r->materials[m], &s->materials[m]);
+    for (uint32_t t = 0; t < s->triangle_count; t++) {
+        const uint32_t *id = s->indices + 3 * t;
+        if (id[0] >= s->vertex_count || id[1] >= s->vertex_count || id[2] >= s->vertex_count ||
+            s->triangle_material[t] >= s->material_count) {
+            sg_renderer_free(r);
+            return sg_fail(err, "%s: triangle %u has a bad vertex or material index", path, t), NULL;
+        }
+        memcpy(r->indices + 3 * t, id, 3 * sizeof *id);
+        r->tris[t].material = s->triangle_material[t];
+        r->tris[t].light = s->triangle_light ? s->triangle_light[t] : SG_NO_LIGHT;
+        if (r->tris[t].light != SG_NO_LIGHT && r->tris[t].light >= s->light_count)
+            r->tris[t].light = SG_NO_LIGHT;
+        /* normal in double from the world positions: exact direction */
+        double n[3], e1[3], e2[3];
+        const double *p = s->positions;
+        d3_sub(p + 3 * id[1], p + 3 * id[0], e1);
+        d3_sub(p + 3 * id[2], p + 3 * id[0], e2);
+        d3_cross(e1, e2, n);
+        double nl = d3_length(n);
+        r->tris[t].normal = nl > 0 ? v3((float)(n[0] / nl), (float)(n[1] / nl), (float)(n[2] / nl)) : v3(0, 0, 1);
+    }
+    if (!setup_lights(r, s, err)) {
+        sg_renderer_free(r);
+        return NULL;
+    }
+    setup_camera(r, s);
+
+    r->device = rtcNewDevice(NULL);
+    if (!r->device) {
+        sg_renderer_free(r);
+        return sg_fail(err, "%s: Embree device: %d", path, (int)rtcGetDeviceError(NULL)), NULL;
+    }
+    r->rtc_scene = rtcNewScene(r->device);
+    rtcSetSceneBuildQuality(r->rtc_scene, RTC_BUILD_QUALITY_HIGH);
+    /* not RTC_SCENE_FLAG_ROBUST: 25% slower traversal on Sponza; the
+     * furnace tests (closed boxes) show no leaks without it */
+    RTCGeometry g = rtcNewGeometry(r->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, r->vertices, 0,
+                               sizeof(Vec3), s->vertex_count);
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, r->indices, 0,
+                               3 * sizeof(uint32_t), s->triangle_count);
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(r->rtc_scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(r->rtc_scene);
+    enum RTCError e = rtcGetDeviceError(r->device);
+    if (e != RTC_ERROR_NONE) {
+        sg_renderer_free(r);
+        return sg_fail(err, "%s: Embree scene build failed (error %d)", path, (int)e), NULL;
+    }
+    return r;
+}
+
+void sg_renderer_free(SgRenderer *r)
+{
+    if (!r)
+        return;
+    if (r->rtc_scene)
+        rtcReleaseScene(r->rtc_scene);
+    if (r->device)
+        rtcReleaseDevice(r->device);
+    free(r->vertices);
+    free(r->indices);
+    free(r->tris);
+    free(r->materials);
+    free(r->lights);
+    free(r->light_cdf);
+    free(r->light_tris);
+    free(r->light_tri_cdf);
+    free(r->follow_cdf);
+    free(r->light_centre);
+    free(r->sum);
+    free(r->last);
+    free(r);
+}
+
+/* ---- tracing -------------------------------------------------------------- */
+
+static inline float int_as_float(int32_t i) { float f; memcpy(&f, &i, 4); return f; }
+static inline int32_t float_as_int(float f) { int32_t i; memcpy(&i, &f, 4); return i; }
+
+/* Self-intersection: move p off the surface along n (toward the side the
+ * new ray leaves by) by a few ULPs of p's coordinates; near zero, where ULPs
+ * vanish, by a small fraction of the scene's size (Waechter & Binder 2019,
+ * made scale-free). */
+static Vec3 offset_origin(const SgRenderer *r, Vec3 p, Vec3 n)
+{
+    const float int_scale = 256.0f;
+    const float near_zero = r->scale * (1.0f / 32.0f);
+    const float float_scale = r->scale * (1.0f / 65536.0f);
+    float pc[3] = {p.x, p.y, p.z}, nc[3] = {n.x, n.y, n.z}, out[3];
+    for (int i = 0; i < 3; i++) {
+        int32_t of = (int32_t)(int_scale * nc[i]);
+        float pi = int_as_float(float_as_int(pc[i]) + (pc[i] < 0 ? -of : of));
+        out[i] = fabsf(pc[i]) < near_zero ? pc[i] + float_scale * nc[i] : pi;
+    }
+    return v3(out[0], out[1], out[2]);
+}
+
+typedef struct Hit {
+    bool found;
+    uint32_t tri;
+    float t;
+    Vec3 p;
+} Hit;
+
+static Hit intersect(const SgRenderer *r, Vec3 o, Vec3 d, float tfar)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRayHit rh;
+    rh.ray.org_x = o.x; rh.ray.org_y = o.y; rh.ray.org_z = o.z;
+    rh.ray.dir_x = d.x; rh.ray.dir_y = d.y; rh.ray.dir_z = d.z;
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = tfar;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.flags = 0;
+    rh.ray.time = 0.0f;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(r->rtc_scene, &ctx, &rh);
+    Hit h = {0};
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+        return h;
+    h.found = true;
+    h.tri = rh.hit.primID;
+    h.t = rh.ray.tfar;
+    /* the hit point from the barycentrics (more accurate than o + t d) */
+    const uint32_t *id = r->indices + 3 * h.tri;
+    Vec3 a = r->vertices[id[0]], b = r->vertices[id[1]], c = r->vertices[id[2]];
+    float u = rh.hit.u, v = rh.hit.v;
+    h.p = v3_add(v3_add(v3_scale(a, 1.0f - u - v), v3_scale(b, u)), v3_scale(c, v));
+    return h;
+}
+
+static bool occluded(const SgRenderer *r, Vec3 o, Vec3 d, float tfar)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRay ray;
+    ray.org_x = o.x; ray.org_y = o.y; ray.org_z = o.z;
+    ray.dir_x = d.x; ray.dir_y = d.y; ray.dir_z = d.z;
+    ray.tnear = 0.0f;
+    ray.tfar = tfar;
+    ray.mask = 0xFFFFFFFFu;
+    ray.flags = 0;
+    ray.time = 0.0f;
+    rtcOccluded1(r->rtc_scene, &ctx, &ray);
+    return ray.tfar < 0.0f;
+}
+
+static uint32_t pick_cdf(const double *cdf, uint32_t n, double u)
+{
+    uint32_t lo = 0, hi = n - 1;
+    while (lo < hi) {
+        uint32_t mid = (lo + hi) / 2;
+        if (u < cdf[mid])
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return lo;
+}
+
+/* BSDF value (times nothing) of a diffuse/glossy material, wi above the surface. */
+static Vec3 eval_bsdf(const Material *m, const SgGlossyLobe *lobe, Vec3 wi)
+{
+    Vec3 f = v3_scale(m->kd, SG_INV_PI);
+    if (m->type == SG_MATERIAL_GLOSSY) {
+        float c = v3_dot(wi, lobe->r);
+        if (c > 0.0f) {
+            float s = (m->exponent + 2.0f) * (0.5f * SG_INV_PI) * powf(fminf(c, 1.0f), m->exponent);
+            f = v3_add(f, v3_scale(m->ks, s));
+        }
+    }
+    return f;
+}
+
+static inline float power_heuristic(float a, float b)
+{
+    float a2 = a * a, b2 = b * b;
+    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
+
+/* The light's solid-angle pdf of reaching point y on triangle tri from x. */
+static float light_pdf(const SgRenderer *r, uint32_t tri, float dist2, float cos_light)
+{
+    uint32_t l = r->tris[tri].light;
+    if (l == SG_NO_LIGHT || cos_light <= 0.0f)
+        return 0.0f;
+    return (float)r->lights[l].pick_pdf * r->lights[l].inv_area * dist2 / cos_light;
+}
+
+/* Which way does the bounce sample at a diffuse/glossy vertex go. */
+typedef struct BounceSampler {
+    int kind;          /* 0 bsdf, 1 lobe only (skeleton), 2 mixture (guided) */
+    SgMixture mix;     /* mix.bsdf is the material's lobe */
+} BounceSampler;
+
+static float bounce_pdf(const BounceSampler *b, Vec3 w)
+{
+    switch (b->kind) {
+    case 1: return sg_pdf_cosine_power(b->mix.axis, b->mix.lobe_exponent, w);
+    case 2: return sg_pdf_mixture(&b->mix, w);
+    default: return sg_pdf_glossy(&b->mix.bsdf, w);
+    }
+}
+
+static Vec3 bounce_sample(const BounceSampler *b, float u0, float u1, float u2)
+{
+    switch (b->kind) {
+    case 1: return sg_sample_cosine_power(b->mix.axis, b->mix.lobe_exponent, u1, u2);
+    case 2: return sg_sample_mixture(&b->mix, u0, u1, u2);
+    default: return sg_sample_glossy(&b->mix.bsdf, u0, u1, u2);
+    }
+}
+
+typedef struct PathStats {
+    uint64_t rays;
+    uint64_t backface;
+} PathStats;
+
+/* Direction toward the guide's importance point, or false. */
+
+static bool guide_axis(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, Vec3 *axis, bool *at_light)
+{
+    float u = sg_rng_float(rng); /* drawn always: keeps the streams aligned */
+    if (!r->light_count || r->follow_cdf[r->light_count - 1] <= 0.0)
+        return false;
+    uint32_t l = pick_cdf(r->follow_cdf, r->light_count, u * r->follow_cdf[r->light_count - 1]);
+    double off = r->opt.guide.query_offset;
+    double world[3] = {p.x + r->centre[0] + off * n.x, p.y + r->centre[1] + off * n.y,
+                       p.z + r->centre[2] + off * n.z};
+    double q[3];
+    if (!r->opt.guide.importance_point(r->opt.guide.ctx, world, l, q))
+        return false;
+    /* the importance point of a node that sees the light is the light's
+     * position (stored as float by the cache) */
+    double to_light[3] = {q[0] - (r->light_centre[3 * l] + r->centre[0]),
+                          q[1] - (r->light_centre[3 * l + 1] + r->centre[1]),
+                          q[2] - (r->light_centre[3 * l + 2] + r->centre[2])};
+    *at_light = d3_length(to_light) < 1e-4 * r->scale;
+    double d[3] = {q[0] - (p.x + r->centre[0]), q[1] - (p.y + r->centre[1]), q[2] - (p.z + r->centre[2])};
+    double len = d3_length(d);
+    if (!(len > 1e-6 * r->scale))
+        return false;
+    Vec3 a = v3((float)(d[0] / len), (float)(d[1] / len), (float)(d[2] / len));
+    if (v3_dot(a, n) <= 0.0f)
+        return false; /* below the surface: back to BSDF sampling */
+    *axis = a;
+    return true;
+}
+
+static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st, bool first_pass)
+{
+    Vec3 radiance = v3(0, 0, 0);
+    Vec3 beta = v3(1, 1, 1);
+    /* What beta would be under BSDF sampling (the product of albedos):
+     * Russian roulette follows it, not beta, so that a guided path is not
+     * killed for carrying a small weight where its pdf was large. Any
+     * survival probability is unbiased once divided out. */
+    Vec3 rr_beta = v3(1, 1, 1);
+    bool specular_bounce = true; /* the camera ray counts as one */
+    float prev_pdf = 0.0f;
+    Vec3 prev_p = o;
+    const SgSampling mode = r->opt.sampling;
+
+    for (int depth = 0;; depth++) {
+        Hit h = intersect(r, o, d, INFINITY);
+        st->rays++;
+        if (!h.found)
+            break;
+        Vec3 ng = r->tris[h.tri].normal;
+        float cos_o = v3_dot(d, ng);
+        if (depth == 0 && first_pass && cos_o > 0.0f)
+            st->backface++;
+        const Material *m = &r->materials[r->tris[h.tri].material];
+
+        /* emission (one-sided, toward the winding normal) */
+        if (m->emissive && cos_o < 0.0f) {
+            float w = 1.0f;
+            if (!specular_bounce) {
+                Vec3 dp = v3_sub(h.p, prev_p);
+                float pl = light_pdf(r, h.tri, v3_dot(dp, dp), -cos_o);
+                w = power_heuristic(prev_pdf, pl);
+            }
+            radiance = v3_add(radiance, v3_scale(v3_mul(beta, m->emission), w));
+        }
+        if (depth + 1 >= r->opt.max_depth)
+            break;
+
+        Vec3 wo = v3_scale(d, -1.0f);
+        Vec3 n = cos_o < 0.0f ? ng : v3_scale(ng, -1.0f); /* facing wo */
+
+        if (m->type == SG_MATERIAL_MIRROR) {
+            d = v3_normalize(sg_reflect(wo, n));
+            beta = v3_mul(beta, m->ks);
+            rr_beta = v3_mul(rr_beta, m->ks);
+            o = offset_origin(r, h.p, n);
+            specular_bounce = true;
+        } else if (m->type == SG_MATERIAL_DIELECTRIC) {
+            bool entering = cos_o < 0.0f;
+            float eta = entering ? 1.0f / m->ior : m->ior; /* eta_i / eta_t */
+            float cos_i = v3_dot(wo, n);
+            float sin2_t = eta * eta * fmaxf(0.0f, 1.0f - cos_i * cos_i);
+            float fresnel = 1.0f, cos_t = 0.0f;
+            if (sin2_t < 1.0f) {
+                cos_t = sqrtf(1.0f - sin2_t);
+                float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+                float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+                fresnel = 0.5f * (rs * rs + rp * rp);
+            }
+            if (sg_rng_float(rng) < fresnel) {
+                d = v3_normalize(sg_reflect(wo, n));
+                o = offset_origin(r, h.p, n);
+            } else {
+                d = v3_normalize(v3_add(v3_scale(wo, -eta), v3_scale(n, eta * cos_i - cos_t)));
+                o = offset_origin(r, h.p, v3_scale(n, -1.0f));
+                beta = v3_scale(beta, eta * eta); /* radiance is compressed entering glass */
+            }
+            specular_bounce = true;
+        } else {
+            if (m->black)
+                break;
+            SgGlossyLobe lobe = sg_glossy_lobe(n, wo, m->type == SG_MATERIAL_GLOSSY ? m->exponent : 0.0f,
+                                               m->diffuse_weight);
+            BounceSampler bs = {0, {lobe, n, r->opt.lobe_exponent, 1.0f}};
+            Vec3 axis;
+            bool at_light = false;
+            bool guided = mode != SG_SAMPLING_BSDF && guide_axis(r, h.p, n, rng, &axis, &at_light);
+            /* Where the importance point is the light itself the light is in
+             * view and next-event estimation already samples it: the guided
+             * mode keeps to the BSDF there (a rule on the position alone,
+             * so it stays unbiased). The paper's rule has its own test. */
+            if (mode == SG_SAMPLING_GUIDED && at_light)
+                guided = false;
+            Vec3 origin = offset_origin(r, h.p, n);
+
+            /* next-event estimation */
+            Vec3 nee = v3(0, 0, 0);
+            Vec3 nee_dir = v3(0, 0, 0);
+            float nee_pdf = 0.0f;
+            bool lit = false;
+            float ul = sg_rng_float(rng), ut = sg_rng_float(rng);
+            float ua = sg_rng_float(rng), ub = sg_rng_float(rng);
+            if (r->light_count && r->light_cdf[r->light_count - 1] > 0.0) {
+                uint32_t l = pick_cdf(r->light_cdf, r->light_count, ul * r->light_cdf[r->light_count - 1]);
+                const LightTable *lt = &r->lights[l];
+                uint32_t k = lt->first + pick_cdf(r->light_tri_cdf + lt->first, lt->count, ut);
+                uint32_t t = r->light_tris[k];
+                const uint32_t *id = r->indices + 3 * t;
+                float su = sqrtf(ua);
+                float b0 = 1.0f - su, b1 = ub * su;
+                Vec3 y = v3_add(v3_add(v3_scale(r->vertices[id[0]], b0), v3_scale(r->vertices[id[1]], b1)),
+                                v3_scale(r->vertices[id[2]], 1.0f - b0 - b1));
+                Vec3 to = v3_sub(y, origin);
+                float dist2 = v3_dot(to, to);
+                float dist = sqrtf(dist2);
+                Vec3 wi = v3_scale(to, 1.0f / dist);
+                float cos_l = -v3_dot(wi, r->tris[t].normal);
+                float cos_x = v3_dot(wi, n);
+                const Material *lm = &r->materials[r->tris[t].material];
+                /* The skeleton rule asks whether the point is directly lit:
+                 * the light sample is visible (even where the point's own
+                 * cosine is zero), so it traces the shadow ray then too. */
+                bool wanted = cos_x > 0.0f || mode == SG_SAMPLING_SKELETON;
+                if (dist > 0.0f && cos_l > 0.0f && wanted) {
+                    st->rays++;
+                    if (!occluded(r, origin, wi, dist * (1.0f - 1e-4f))) {
+                        lit = true;
+                        if (cos_x > 0.0f) {
+                            float pl = light_pdf(r, t, dist2, cos_l);
+                            Vec3 f = eval_bsdf(m, &lobe, wi);
+                            nee = v3_scale(v3_mul(f, lm->emission), cos_x / pl);
+                            nee_dir = wi;
+                            nee_pdf = pl;
+                        }
+                    }
+                }
+            }
+
+            if (guided) {
+                if (mode == SG_SAMPLING_SKELETON) {
+                    if (!lit) /* the paper: lobe only where not directly lit */
+                        bs = (BounceSampler){1, {lobe, axis, r->opt.lobe_exponent, 0.0f}};
+                } else {
+                    bs = (BounceSampler){2, {lobe, axis, r->opt.lobe_exponent, r->opt.alpha}};
+                }
+            }
+            if (nee_pdf > 0.0f) {
+                float w = power_heuristic(nee_pdf, bounce_pdf(&bs, nee_dir));
+                radiance = v3_add(radiance, v3_mul(beta, v3_scale(nee, w)));
+            }
+
+            float u0 = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
+            Vec3 wi = bounce_sample(&bs, u0, u1, u2);
+            float cos_x = v3_dot(wi, n);
+            float pdf = bounce_pdf(&bs, wi);
+            if (!(cos_x > 0.0f) || !(pdf > 0.0f))
+                break; /* below the surface: f = 0, the path ends */
+            Vec3 f = eval_bsdf(m, &lobe, wi);
+            beta = v3_mul(beta, v3_scale(f, cos_x / pdf));
+            rr_beta = v3_mul(rr_beta, v3_add(m->kd, m->ks));
+            d = wi;
+            o = origin;
+            prev_pdf = pdf;
+            prev_p = h.p;
+            specular_bounce = false;
+        }
+
+        /* Russian roulette after a few bounces: unbiased (divide by survival) */
+        if (depth >= 2) {
+            float q = fminf(0.95f, v3_max_component(rr_beta));
+            if (!(sg_rng_float(rng) < q))
+                break;
+            beta = v3_scale(beta, 1.0f / q);
+            rr_beta = v3_scale(rr_beta, 1.0f / q);
+        }
+        if (!(v3_max_component(beta) > 0.0f))
+            break;
+    }
+    return radiance;
+}
+
+typedef struct PassCtx {
+    SgRenderer *r;
+    int tiles_x;
+    uint64_t pass_key;
+    bool first_pass;
+} PassCtx;
+
+static uint64_t mix64(uint64_t x)
+{
+    x ^= x >> 30;
+    x *= 0xbf58476d1ce4e5b9ULL;
+    x ^= x >> 27;
+    x *= 0x94d049bb133111ebULL;
+    x ^= x >> 31;
+    return x;
+}
+
+static void render_tile(void *vctx, uint64_t index, int thread)
+{
+    (void)thread;
+    PassCtx *pc = vctx;
+    SgRenderer *r = pc->r;
+    const int w = r->opt.width, hgt = r->opt.height;
+    int tx = (int)(index % (uint64_t)pc->tiles_x), ty = (int)(index / (uint64_t)pc->tiles_x);
+    PathStats st = {0};
+    uint64_t nonfinite = 0;
+    for (int y = ty * TILE; y < (ty + 1) * TILE && y < hgt; y++)
+        for (int x = tx * TILE; x < (tx + 1) * TILE && x < w; x++) {
+            size_t pix = (size_t)y * w + x;
+            SgRng rng;
+            sg_rng_seed(&rng, pc->pass_key, pix);
+            float jx = sg_rng_float(&rng), jy = sg_rng_float(&rng);
+            float sx = (2.0f * ((float)x + jx) / (float)w - 1.0f) * r->tan_half_fov * r->aspect;
+            float sy = (1.0f - 2.0f * ((float)y + jy) / (float)hgt) * r->tan_half_fov;
+            Vec3 dir = v3_normalize(v3_add(r->cam_forward,
+                                           v3_add(v3_scale(r->cam_right, sx), v3_scale(r->cam_up, sy))));
+            Vec3 L = trace_path(r, r->cam_pos, dir, &rng, &st, pc->first_pass);
+            if (!isfinite(L.x) || !isfinite(L.y) || !isfinite(L.z)) {
+                nonfinite++;
+                L = v3(0, 0, 0);
+            }
+            r->last[3 * pix] = L.x;
+            r->last[3 * pix + 1] = L.y;
+            r->last[3 * pix + 2] = L.z;
+            r->sum[3 * pix] += L.x;
+            r->sum[3 * pix + 1] += L.y;
+            r->sum[3 * pix + 2] += L.z;
+        }
+    atomic_fetch_add(&r->rays, st.rays);
+    if (st.backface)
+        atomic_fetch_add(&r->backface_hits, st.backface);
+    if (nonfinite)
+        atomic_fetch_add(&r->nonfinite, nonfinite);
+}
+
+void sg_renderer_pass(SgRenderer *r)
+{
+    PassCtx pc = {r, (r->opt.width + TILE - 1) / TILE,
+                  mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1), r->spp == 0};
+    int tiles_y = (r->opt.height + TILE - 1) / TILE;
+    sg_parallel_for((uint64_t)pc.tiles_x * tiles_y, r->opt.threads, render_tile, &pc);
+    r->spp++;
+}
+
+int sg_renderer_spp(const SgRenderer *r) { return r->spp; }
+
+void sg_renderer_image(const SgRenderer *r, float *rgb)
+{
+    size_t n = (size_t)r->opt.width * r->opt.height * 3;
+    double inv = r->spp > 0 ? 1.0 / r->spp : 0.0;
+    for (size_t i = 0; i < n; i++)
+        rgb[i] = (float)(r->sum[i] * inv);
+}
+
+const float *sg_renderer_last_pass(const SgRenderer *r) { return r->last; }
+uint64_t sg_renderer_nonfinite(const SgRenderer *r) { return atomic_load(&((SgRenderer *)r)->nonfinite); }
+uint64_t sg_renderer_rays(const SgRenderer *r) { return atomic_load(&((SgRenderer *)r)->rays); }
+
+double sg_renderer_backface_fraction(const SgRenderer *r)
+{
+    double n = (double)r->opt.width * r->opt.height;
+    return r->spp > 0 ? (double)atomic_load(&((SgRenderer *)r)->backface_hits) / n : 0.0;
+}

@@ -1,0 +1,84 @@
+/* The path tracer (Embree 3): an SgScene in, progressive passes out.
+ * Every pass adds one sample to every pixel; a pixel's random numbers come
+ * from a stream keyed by (seed, pixel, pass), so the image is the same for
+ * any thread count. */
+#ifndef SG_RENDERER_H
+#define SG_RENDERER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "error.h"
+#include "scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum SgSampling {
+    SG_SAMPLING_BSDF,     /* BSDF sampling + next-event estimation with MIS */
+    SG_SAMPLING_SKELETON, /* the paper's rule (section 3.4), biased */
+    SG_SAMPLING_GUIDED,   /* one-sample mixture of BSDF and lobe, unbiased */
+} SgSampling;
+
+const char *sg_sampling_name(SgSampling s);
+bool sg_sampling_parse(const char *name, SgSampling *s);
+
+/* Where the guide comes from: the importance cache in bin/render, an
+ * analytic stand-in in tests. Returns false when it has no importance point
+ * for world position p and light `light` (p outside the medium...). */
+typedef bool (*SgImportanceFn)(void *ctx, const double p[3], uint32_t light, double point[3]);
+
+typedef struct SgGuide {
+    SgImportanceFn importance_point; /* NULL: no guide (bsdf only) */
+    void *ctx;
+    /* Probability weight of following each light (scene light order);
+     * NULL: the lights' power. A zero weight never follows that light. */
+    const double *light_weight;
+    /* The guide is asked at the hit point moved this far (world units) along
+     * the normal facing the incoming ray: a cache's voxel size, so that the
+     * query lands in the free space on the point's own side of the wall. */
+    double query_offset;
+} SgGuide;
+
+typedef struct SgRenderOptions {
+    int width, height;
+    int max_depth;        /* maximum path length in segments from the camera */
+    SgSampling sampling;
+    uint64_t seed;
+    int threads;          /* <= 0: every core */
+    float lobe_exponent;  /* p_skel of the cosine-power lobe toward the importance point */
+    float alpha;          /* guided: probability of BSDF sampling in the mixture, (0, 1] */
+    SgGuide guide;
+} SgRenderOptions;
+
+/* Defaults: image size and depth from the scene (320x240, 8 when not
+ * given), bsdf sampling, seed 0, every core, p_skel 4, alpha 0.5. */
+void sg_render_options_default(SgRenderOptions *o, const SgScene *scene);
+
+typedef struct SgRenderer SgRenderer;
+
+/* Fails on a scene without triangles or camera, a bad option, a guide
+ * missing for a guided mode, or an Embree error. */
+SgRenderer *sg_renderer_create(const SgScene *scene, const SgRenderOptions *o, SgError *err);
+void sg_renderer_free(SgRenderer *r);
+
+/* One more sample in every pixel. */
+void sg_renderer_pass(SgRenderer *r);
+int sg_renderer_spp(const SgRenderer *r);
+/* Mean radiance per pixel, linear RGB, width * height * 3 floats. */
+void sg_renderer_image(const SgRenderer *r, float *rgb);
+/* The samples of the last pass alone (for variance estimates in tests). */
+const float *sg_renderer_last_pass(const SgRenderer *r);
+/* Samples that came out NaN or infinite (they count as zero, never reach the image). */
+uint64_t sg_renderer_nonfinite(const SgRenderer *r);
+/* Fraction of the first pass's camera rays that hit the back of a surface:
+ * near 1 means the camera is inside a solid. */
+double sg_renderer_backface_fraction(const SgRenderer *r);
+/* Rays traced so far (camera, bounce and shadow rays). */
+uint64_t sg_renderer_rays(const SgRenderer *r);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,80 @@
+/* Direction sampling routines of the renderer, each with its pdf (solid
+ * angle measure, over the whole sphere). Vectors are unit length. Every
+ * sample routine draws from the density its pdf function returns: the
+ * chi-square tests in tests/test_render_sampling.c hold them to it. */
+#ifndef SG_RENDER_SAMPLING_H
+#define SG_RENDER_SAMPLING_H
+
+#include <stdbool.h>
+
+#include "vecmath.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SG_PI 3.14159265358979323846f
+#define SG_INV_PI 0.31830988618379067154f
+
+/* Maps a local direction (z = axis) into the frame around unit `axis`. */
+Vec3 sg_to_world(Vec3 local, Vec3 axis);
+
+/* Cosine-weighted hemisphere around unit n: pdf = max(0, w.n) / pi. */
+Vec3 sg_sample_cosine_hemisphere(Vec3 n, float u1, float u2);
+float sg_pdf_cosine_hemisphere(Vec3 n, Vec3 w);
+
+/* Cosine-power lobe around unit axis a, exponent p >= 0 (0 = uniform
+ * hemisphere): pdf = (p + 1) / (2 pi) max(0, w.a)^p. Accurate up to p = 1e4
+ * and beyond (sin theta is computed without cancellation). */
+Vec3 sg_sample_cosine_power(Vec3 a, float p, float u1, float u2);
+float sg_pdf_cosine_power(Vec3 a, float p, Vec3 w);
+
+/* The cosine-power lobe folded onto the hemisphere of n: a lobe sample
+ * below the surface is mirrored across it, so that no sample is wasted
+ * where a reflective BSDF is zero. pdf(w) = lobe(a, w) + lobe(a', w) for
+ * w.n > 0 (a' = a mirrored across the surface), 0 below. */
+Vec3 sg_sample_folded_lobe(Vec3 a, Vec3 n, float p, float u1, float u2);
+float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w);
+
+/* The non-delta BSDF of the renderer's diffuse and glossy materials:
+ *   f(wo, wi) = kd / pi + ks (p + 2) / (2 pi) max(0, wi.r)^p,  r = reflect(wo, n),
+ * for wi above the surface (n faces wo), zero below. kd + ks <= 1 per channel
+ * conserves energy (normalized Phong; Lafortune & Willems 1994).
+ * Sampling: the diffuse part with probability `diffuse_weight`, the Phong
+ * lobe around r otherwise; a lobe sample below the surface is a valid
+ * direction with f = 0 (so the pdf below is a density on the whole sphere). */
+typedef struct SgGlossyLobe {
+    Vec3 n;               /* shading normal, on wo's side */
+    Vec3 r;               /* mirror direction of wo about n */
+    float exponent;       /* Phong exponent (0 if no glossy part) */
+    float diffuse_weight; /* probability of sampling the diffuse part, in [0, 1] */
+} SgGlossyLobe;
+
+SgGlossyLobe sg_glossy_lobe(Vec3 n, Vec3 wo, float exponent, float diffuse_weight);
+Vec3 sg_sample_glossy(const SgGlossyLobe *lobe, float u0, float u1, float u2);
+float sg_pdf_glossy(const SgGlossyLobe *lobe, Vec3 w);
+
+/* One-sample mixture (defensive importance sampling): the glossy BSDF
+ * sampler with probability alpha, the cosine-power lobe around `axis`
+ * folded onto the hemisphere of bsdf.n otherwise;
+ * pdf = alpha p_bsdf + (1 - alpha) p_folded_lobe. */
+typedef struct SgMixture {
+    SgGlossyLobe bsdf;
+    Vec3 axis;
+    float lobe_exponent;
+    float alpha;
+} SgMixture;
+
+Vec3 sg_sample_mixture(const SgMixture *m, float u0, float u1, float u2);
+float sg_pdf_mixture(const SgMixture *m, Vec3 w);
+
+/* Reflection of wo (pointing away from the surface) about n. */
+static inline Vec3 sg_reflect(Vec3 wo, Vec3 n)
+{
+    return v3_sub(v3_scale(n, 2.0f * v3_dot(wo, n)), wo);
+}
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,135 @@
+#include "support_importance.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "hash.h"
+#include "importance_cache_format.h"
+
+void sgt_medium_init(SgMedium *m, int nx, int ny, int nz)
+{
+    memset(m, 0, sizeof *m);
+    double origin[3] = {0, 0, 0};
+    SgError err = {0};
+    if (!sg_grid_init(&m->grid, nx, ny, nz, origin, 1.0, &err))
+        abort();
+    m->geometry_hash = 0x1234abcd5678ef00ULL;
+    m->resolution = nx > ny ? (nx > nz ? nx : nz) : (ny > nz ? ny : nz);
+}
+
+void sgt_box(SgMedium *m, int i0, int j0, int k0, int i1, int j1, int k1, uint8_t value)
+{
+    for (int k = k0; k <= k1; k++)
+        for (int j = j0; j <= j1; j++)
+            for (int i = i0; i <= i1; i++)
+                if (sg_grid_inside(&m->grid, i, j, k))
+                    m->grid.voxels[sg_grid_index(&m->grid, i, j, k)] = value;
+}
+
+uint32_t sgt_add_light(SgMedium *m, const double p[3], const int seed[3])
+{
+    m->lights = realloc(m->lights, (m->light_count + 1) * sizeof *m->lights);
+    SgMediumLight *l = &m->lights[m->light_count];
+    memset(l, 0, sizeof *l);
+    memcpy(l->position, p, sizeof l->position);
+    l->normal[1] = -1;
+    l->power = 1;
+    l->radiance[0] = l->radiance[1] = l->radiance[2] = 1;
+    for (int a = 0; a < 3; a++)
+        l->seed[a] = seed ? seed[a] : -1;
+    return m->light_count++;
+}
+
+void sgt_medium_free(SgMedium *m)
+{
+    sg_grid_release(&m->grid);
+    free(m->lights);
+    memset(m, 0, sizeof *m);
+}
+
+uint32_t sgt_node(SgSkeleton *s, int i, int j, int k, SgNodeKind kind, int light)
+{
+    s->nodes = realloc(s->nodes, (s->node_count + 1) * sizeof *s->nodes);
+    SgSkeletonNode *n = &s->nodes[s->node_count];
+    memset(n, 0, sizeof *n);
+    n->voxel[0] = i;
+    n->voxel[1] = j;
+    n->voxel[2] = k;
+    n->position[0] = (float)i + 0.5f;
+    n->position[1] = (float)j + 0.5f;
+    n->position[2] = (float)k + 0.5f;
+    n->kind = (uint8_t)kind;
+    n->light = kind == SG_NODE_LIGHT ? light : -1;
+    n->radius = 1;
+    return s->node_count++;
+}
+
+void sgt_edge(SgSkeleton *s, uint32_t a, uint32_t b)
+{
+    s->edges = realloc(s->edges, (s->edge_count + 1) * sizeof *s->edges);
+    s->edges[s->edge_count][0] = a;
+    s->edges[s->edge_count][1] = b;
+    s->edge_count++;
+}
+
+uint32_t sgt_line(SgSkeleton *s, uint32_t from, const int a[3], const int b[3])
+{
+    int d[3], steps = 0;
+    for (int x = 0; x < 3; x++) {
+        d[x] = b[x] - a[x];
+        int ad = abs(d[x]);
+        if (ad > steps)
+            steps = ad;
+    }
+    uint32_t last = from;
+    for (int t = 0; t <= steps; t++) {
+        int v[3];
+        for (int x = 0; x < 3; x++)
+            v[x] = a[x] + (steps ? (int)((double)d[x] * t / steps + (d[x] >= 0 ? 0.5 : -0.5)) : 0);
+        if (last != SG_CACHE_NONE && s->nodes[last].voxel[0] == v[0] &&
+            s->nodes[last].voxel[1] == v[1] && s->nodes[last].voxel[2] == v[2])
+            continue;
+        uint32_t n = sgt_node(s, v[0], v[1], v[2], SG_NODE_PLAIN, -1);
+        if (last != SG_CACHE_NONE)
+            sgt_edge(s, last, n);
+        last = n;
+    }
+    return last;
+}
+
+void sgt_cache_fix_checksum(uint8_t *data, size_t size)
+{
+    SgCacheHeader h;
+    if (size < sizeof h)
+        return;
+    memcpy(&h, data, sizeof h);
+    h.checksum = 0;
+    memcpy(data, &h, sizeof h);
+    h.checksum = sg_hash_bytes(SG_HASH_INIT, data, size);
+    memcpy(data, &h, sizeof h);
+}
+
+uint8_t *sgt_read_file(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    uint8_t *data = aligned_alloc(16, ((size_t)n + 16) & ~(size_t)15);
+    if (fread(data, 1, (size_t)n, f) != (size_t)n) {
+        free(data);
+        data = NULL;
+    }
+    fclose(f);
+    *size = (size_t)n;
+    return data;
+}
+
+void sgt_temp_path(char *out, size_t cap, const char *tag)
+{
+    snprintf(out, cap, "/tmp/sg_test_imp_%s_%ld", tag, (long)getpid());
+}

@@ -1,0 +1,168 @@
+#include "support_render.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+SgScene *sgt_scene_new(void)
+{
+    SgScene *s = calloc(1, sizeof *s);
+    strcpy(s->path, "test-scene");
+    return s;
+}
+
+void sgt_scene_free(SgScene *s)
+{
+    if (!s)
+        return;
+    free(s->positions);
+    free(s->indices);
+    free(s->triangle_material);
+    free(s->triangle_light);
+    free(s->materials);
+    free(s->lights);
+    free(s->light_triangles);
+    free(s);
+}
+
+uint32_t sgt_add_material(SgScene *s, SgMaterialType type, const float albedo[3],
+                          const float emission[3])
+{
+    s->materials = realloc(s->materials, (s->material_count + 1) * sizeof *s->materials);
+    SgMaterial *m = &s->materials[s->material_count];
+    memset(m, 0, sizeof *m);
+    m->type = type;
+    m->exponent = 1;
+    m->ior = 1.5f;
+    for (int i = 0; i < 3; i++) {
+        m->diffuse[i] = albedo ? albedo[i] : 0;
+        m->emission[i] = emission ? emission[i] : 0;
+    }
+    return s->material_count++;
+}
+
+SgMaterial *sgt_material(SgScene *s, uint32_t m) { return &s->materials[m]; }
+
+void sgt_add_quad(SgScene *s, const double c[4][3], uint32_t material)
+{
+    uint32_t v0 = s->vertex_count;
+    s->positions = realloc(s->positions, (s->vertex_count + 4) * 3 * sizeof(double));
+    for (int k = 0; k < 4; k++)
+        for (int i = 0; i < 3; i++)
+            s->positions[3 * (v0 + k) + i] = c[k][i];
+    s->vertex_count += 4;
+    uint32_t t0 = s->triangle_count;
+    s->indices = realloc(s->indices, (t0 + 2) * 3 * sizeof(uint32_t));
+    s->triangle_material = realloc(s->triangle_material, (t0 + 2) * sizeof(uint32_t));
+    s->triangle_light = realloc(s->triangle_light, (t0 + 2) * sizeof(uint32_t));
+    uint32_t tri[6] = {v0, v0 + 1, v0 + 2, v0, v0 + 2, v0 + 3};
+    memcpy(s->indices + 3 * t0, tri, sizeof tri);
+    s->triangle_material[t0] = s->triangle_material[t0 + 1] = material;
+    s->triangle_light[t0] = s->triangle_light[t0 + 1] = SG_NO_LIGHT;
+    s->triangle_count += 2;
+}
+
+void sgt_add_box_inside(SgScene *s, const double lo[3], const double hi[3], uint32_t material)
+{
+    double x0 = lo[0], y0 = lo[1], z0 = lo[2], x1 = hi[0], y1 = hi[1], z1 = hi[2];
+    /* each face wound so that (c1-c0)x(c2-c0) points into the box */
+    const double faces[6][4][3] = {
+        {{x0, y0, z0}, {x1, y0, z0}, {x1, y0, z1}, {x0, y0, z1}}, /* floor, +y */
+        {{x0, y1, z0}, {x0, y1, z1}, {x1, y1, z1}, {x1, y1, z0}}, /* ceiling, -y */
+        {{x0, y0, z0}, {x0, y0, z1}, {x0, y1, z1}, {x0, y1, z0}}, /* x0 wall, +x */
+        {{x1, y0, z0}, {x1, y1, z0}, {x1, y1, z1}, {x1, y0, z1}}, /* x1 wall, -x */
+        {{x0, y0, z0}, {x0, y1, z0}, {x1, y1, z0}, {x1, y0, z0}}, /* z0 wall, +z */
+        {{x0, y0, z1}, {x1, y0, z1}, {x1, y1, z1}, {x0, y1, z1}}, /* z1 wall, -z */
+    };
+    for (int f = 0; f < 6; f++) {
+        /* listed counter-clockwise seen from outside: reverse them */
+        const double q[4][3] = {{faces[f][0][0], faces[f][0][1], faces[f][0][2]},
+                                {faces[f][3][0], faces[f][3][1], faces[f][3][2]},
+                                {faces[f][2][0], faces[f][2][1], faces[f][2][2]},
+                                {faces[f][1][0], faces[f][1][1], faces[f][1][2]}};
+        sgt_add_quad(s, q, material);
+    }
+}
+
+void sgt_set_camera(SgScene *s, const double pos[3], const double at[3], const double up[3],
+                    double fov, int width, int height)
+{
+    s->has_camera = true;
+    memcpy(s->camera.position, pos, sizeof s->camera.position);
+    memcpy(s->camera.look_at, at, sizeof s->camera.look_at);
+    memcpy(s->camera.up, up, sizeof s->camera.up);
+    s->camera.fov_deg = fov;
+    s->camera.width = width;
+    s->camera.height = height;
+}
+
+void sgt_finish(SgScene *s)
+{
+    for (int i = 0; i < 3; i++) {
+        s->bounds_min[i] = INFINITY;
+        s->bounds_max[i] = -INFINITY;
+    }
+    for (uint32_t v = 0; v < s->vertex_count; v++)
+        for (int i = 0; i < 3; i++) {
+            s->bounds_min[i] = fmin(s->bounds_min[i], s->positions[3 * v + i]);
+            s->bounds_max[i] = fmax(s->bounds_max[i], s->positions[3 * v + i]);
+        }
+    /* one light per emissive quad (triangle pairs) */
+    free(s->lights);
+    free(s->light_triangles);
+    s->lights = calloc(s->triangle_count / 2 + 1, sizeof *s->lights);
+    s->light_triangles = calloc(s->triangle_count + 1, sizeof *s->light_triangles);
+    s->light_count = 0;
+    uint32_t k = 0;
+    for (uint32_t t = 0; t + 1 < s->triangle_count; t += 2) {
+        const SgMaterial *m = &s->materials[s->triangle_material[t]];
+        if (m->emission[0] + m->emission[1] + m->emission[2] <= 0)
+            continue;
+        SgLight *L = &s->lights[s->light_count];
+        L->first_triangle = k;
+        L->triangle_count = 2;
+        double area = 0, n[3] = {0, 0, 0}, c[3] = {0, 0, 0};
+        for (uint32_t j = t; j < t + 2; j++) {
+            double tn[3], e1[3], e2[3];
+            const double *p = s->positions;
+            const uint32_t *id = s->indices + 3 * j;
+            for (int i = 0; i < 3; i++) {
+                e1[i] = p[3 * id[1] + i] - p[3 * id[0] + i];
+                e2[i] = p[3 * id[2] + i] - p[3 * id[0] + i];
+            }
+            tn[0] = e1[1] * e2[2] - e1[2] * e2[1];
+            tn[1] = e1[2] * e2[0] - e1[0] * e2[2];
+            tn[2] = e1[0] * e2[1] - e1[1] * e2[0];
+            double a = 0.5 * sqrt(tn[0] * tn[0] + tn[1] * tn[1] + tn[2] * tn[2]);
+            area += a;
+            for (int i = 0; i < 3; i++) {
+                n[i] += tn[i];
+                for (int v = 0; v < 3; v++)
+                    c[i] += a / 3.0 * s->positions[3 * s->indices[3 * j + v] + i];
+            }
+            s->light_triangles[k++] = j;
+            s->triangle_light[j] = s->light_count;
+        }
+        double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int i = 0; i < 3; i++) {
+            L->normal[i] = n[i] / nl;
+            L->position[i] = c[i] / area;
+            L->radiance[i] = m->emission[i];
+        }
+        L->area = area;
+        L->power = M_PI * area *
+                   (0.2126 * m->emission[0] + 0.7152 * m->emission[1] + 0.0722 * m->emission[2]);
+        s->light_count++;
+    }
+}
+
+void sgt_scale_offset(SgScene *s, double scale, const double offset[3])
+{
+    for (uint32_t v = 0; v < s->vertex_count; v++)
+        for (int i = 0; i < 3; i++)
+            s->positions[3 * v + i] = s->positions[3 * v + i] * scale + offset[i];
+    for (int i = 0; i < 3; i++) {
+        s->camera.position[i] = s->camera.position[i] * scale + offset[i];
+        s->camera.look_at[i] = s->camera.look_at[i] * scale + offset[i];
+    }
+}

@@ -1,0 +1,27 @@
+/* Test support for the renderer: analytic scenes built in memory. */
+#ifndef SG_SUPPORT_RENDER_H
+#define SG_SUPPORT_RENDER_H
+
+#include <stdbool.h>
+
+#include "scene.h"
+
+SgScene *sgt_scene_new(void);
+/* Frees a scene made here (not one from sg_scene_load). */
+void sgt_scene_free(SgScene *s);
+uint32_t sgt_add_material(SgScene *s, SgMaterialType type, const float albedo[3],
+                          const float emission[3]);
+SgMaterial *sgt_material(SgScene *s, uint32_t m);
+/* Quad c0 c1 c2 c3 (two triangles), normal (c1 - c0) x (c2 - c0); an
+ * emissive material makes it one light. */
+void sgt_add_quad(SgScene *s, const double c[4][3], uint32_t material);
+/* Axis-aligned box with normals pointing inward, each face one quad. */
+void sgt_add_box_inside(SgScene *s, const double lo[3], const double hi[3], uint32_t material);
+void sgt_set_camera(SgScene *s, const double pos[3], const double at[3], const double up[3],
+                    double fov, int width, int height);
+/* Bounds and lights (one per emissive quad); call once when done. */
+void sgt_finish(SgScene *s);
+/* Transforms every position by p * scale + offset (camera too). */
+void sgt_scale_offset(SgScene *s, double scale, const double offset[3]);
+
+#endif

@@ -1,0 +1,117 @@
+/* The OpenImageIO wrapper: EXR round trip with metadata, PNG exposure and
+ * sRGB encoding, errors that name the file, no partial outputs. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "image_io.h"
+
+static char *read_all(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *buf = malloc((size_t)n + 1);
+    *size = fread(buf, 1, (size_t)n, f);
+    fclose(f);
+    return buf;
+}
+
+static bool contains(const char *buf, size_t n, const char *needle)
+{
+    size_t k = strlen(needle);
+    for (size_t i = 0; i + k <= n; i++)
+        if (memcmp(buf + i, needle, k) == 0)
+            return true;
+    return false;
+}
+
+Test(image_io, exr_round_trip_is_exact_with_metadata)
+{
+    const int w = 7, h = 5;
+    float rgb[7 * 5 * 3];
+    for (int i = 0; i < w * h * 3; i++)
+        rgb[i] = (float)(i * 0.37 - 3.0) * (i % 4 == 0 ? 1e4f : 1.0f);
+    SgImageAttribute attrs[] = {{"spp", "64"}, {"sampling", "guided"}};
+    const char *path = "build/test_image_io.exr";
+    SgError err = {0};
+    cr_assert(sg_image_write_exr(path, w, h, rgb, attrs, 2, &err), "%s", err.message);
+    int rw = 0, rh = 0;
+    float *back = NULL;
+    cr_assert(sg_image_read(path, &rw, &rh, &back, &err), "%s", err.message);
+    cr_assert_eq(rw, w);
+    cr_assert_eq(rh, h);
+    cr_assert(memcmp(back, rgb, sizeof rgb) == 0, "EXR pixels changed on the way");
+    free(back);
+    /* string attributes sit in the EXR header as name, type "string", value */
+    size_t n;
+    char *bytes = read_all(path, &n);
+    cr_assert(contains(bytes, n, "spp") && contains(bytes, n, "64"));
+    cr_assert(contains(bytes, n, "sampling") && contains(bytes, n, "guided"));
+    free(bytes);
+    unlink(path);
+}
+
+Test(image_io, png_applies_exposure_and_srgb)
+{
+    const int w = 4, h = 1;
+    /* 0.5 linear -> sRGB 0.7354 -> 188; 0.5 at +1 stop -> 1.0 -> 255;
+     * 0.001 -> 12.92 * 0.001 -> 3; negative and NaN -> 0 */
+    float rgb[4 * 3] = {0.5f, 0.5f, 0.5f, 0.001f, 0.001f, 0.001f, -1, -1, -1, NAN, NAN, NAN};
+    const char *path = "build/test_image_io.png";
+    SgError err = {0};
+    cr_assert(sg_image_write_png(path, w, h, rgb, 0.0, &err), "%s", err.message);
+    int rw, rh;
+    float *back = NULL;
+    cr_assert(sg_image_read(path, &rw, &rh, &back, &err), "%s", err.message);
+    cr_assert_float_eq(back[0] * 255.0f, 188.0f, 1e-3);
+    cr_assert_float_eq(back[3] * 255.0f, 3.0f, 1e-3);
+    cr_assert_float_eq(back[6], 0.0f, 1e-6);
+    cr_assert_float_eq(back[9], 0.0f, 1e-6);
+    free(back);
+    cr_assert(sg_image_write_png(path, w, h, rgb, 1.0, &err), "%s", err.message);
+    cr_assert(sg_image_read(path, &rw, &rh, &back, &err), "%s", err.message);
+    cr_assert_float_eq(back[0] * 255.0f, 255.0f, 1e-3);
+    free(back);
+    unlink(path);
+}
+
+Test(image_io, errors_name_the_file_and_leave_no_partial_output)
+{
+    SgError err = {0};
+    int w, h;
+    float *rgb = NULL;
+    cr_assert_not(sg_image_read("build/no-such-image.exr", &w, &h, &rgb, &err));
+    cr_assert(strstr(err.message, "build/no-such-image.exr") != NULL, "%s", err.message);
+    cr_assert_null(rgb);
+
+    /* a file that is not an image */
+    const char *junk = "build/test_image_io_junk.exr";
+    FILE *f = fopen(junk, "wb");
+    fputs("not an image at all", f);
+    fclose(f);
+    err = (SgError){0};
+    cr_assert_not(sg_image_read(junk, &w, &h, &rgb, &err));
+    cr_assert(strstr(err.message, junk) != NULL, "%s", err.message);
+
+    /* a failed write does not touch the existing file */
+    err = (SgError){0};
+    float px[3] = {1, 2, 3};
+    cr_assert_not(sg_image_write_exr(junk, 0, 1, px, NULL, 0, &err));
+    size_t n;
+    char *bytes = read_all(junk, &n);
+    cr_assert(n == strlen("not an image at all") && memcmp(bytes, "not an image at all", n) == 0);
+    free(bytes);
+    unlink(junk);
+
+    err = (SgError){0};
+    cr_assert_not(sg_image_write_exr("build/no/such/dir/x.exr", 1, 1, px, NULL, 0, &err));
+    cr_assert(strstr(err.message, "build/no/such/dir/x.exr") != NULL, "%s", err.message);
+    cr_assert(access("build/no/such/dir/x.exr", F_OK) != 0);
+}

@@ -1,0 +1,708 @@
+/* Step 3 on synthetic media with hand-made skeletons: geodesic labels,
+ * visibility, importance points (L corridor, two rooms and a door, two
+ * sealed rooms), the cache lookups, determinism. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "../importance/graph.h"
+#include "../importance/importance.h"
+#include "importance_cache.h"
+#include "importance_cache_format.h"
+#include "rng.h"
+#include "support_importance.h"
+
+/* ---- scenes --------------------------------------------------------------- */
+
+/* L corridor: leg A along x (y 1..4), leg B along y (x 37..40), z 1..3; the
+ * light at the far end of leg B. Skeleton: the centre line of A, then of B,
+ * ending on the light's node. */
+typedef struct LScene {
+    SgMedium medium;
+    SgSkeleton skeleton;
+    uint32_t corner; /* node at the corner (38,2,2) */
+} LScene;
+
+static void l_scene(LScene *s)
+{
+    memset(s, 0, sizeof *s);
+    sgt_medium_init(&s->medium, 48, 48, 5);
+    sgt_box(&s->medium, 1, 1, 1, 40, 4, 3, 1);
+    sgt_box(&s->medium, 37, 1, 1, 40, 46, 3, 1);
+    double light[3] = {38.5, 47.0, 2.5};
+    int seed[3] = {38, 46, 2};
+    sgt_add_light(&s->medium, light, seed);
+    int a0[3] = {2, 2, 2}, a1[3] = {38, 2, 2}, b0[3] = {38, 3, 2}, b1[3] = {38, 46, 2};
+    s->corner = sgt_line(&s->skeleton, SG_CACHE_NONE, a0, a1);
+    uint32_t last = sgt_line(&s->skeleton, s->corner, b0, b1);
+    s->skeleton.nodes[last].kind = SG_NODE_LIGHT;
+    s->skeleton.nodes[last].light = 0;
+}
+
+static void l_scene_free(LScene *s)
+{
+    sgt_medium_free(&s->medium);
+    sg_skeleton_release(&s->skeleton);
+}
+
+static SgImportanceCache *build_and_open(const SgMedium *m, const SgSkeleton *sk,
+                                         const char *tag, int threads, char *path, size_t cap)
+{
+    sgt_temp_path(path, cap, tag);
+    SgImportanceOptions opt = {.threads = threads, .quiet = true};
+    SgError err = {0};
+    SgImportanceStats stats;
+    cr_assert(sg_importance_build(m, sk, &opt, path, &stats, &err), "%s", err.message);
+    SgImportanceCache *c = sg_cache_open(path, &err);
+    cr_assert_not_null(c, "%s", err.message);
+    return c;
+}
+
+static void node_point(const SgImportanceCache *c, uint32_t n, uint32_t light, double point[3])
+{
+    cr_assert(sg_cache_node_importance_point(c, n, light, point), "node %u light %u", n, light);
+}
+
+/* The segment from node n's voxel to the voxel of p stays in the medium
+ * (p pulled a quarter voxel toward the node: a light sits on a wall). */
+static bool segment_in_medium(const SgMedium *m, const SgSkeleton *s, uint32_t n,
+                              const double p[3])
+{
+    int v[3];
+    double d[3], q[3], len = 0;
+    for (int a = 0; a < 3; a++) {
+        d[a] = s->nodes[n].position[a] - p[a];
+        len += d[a] * d[a];
+    }
+    len = sqrt(len);
+    for (int a = 0; a < 3; a++)
+        q[a] = p[a] + (len > 0.25 ? d[a] * 0.25 / len : 0);
+    sg_grid_world_to_voxel(&m->grid, q, v);
+    return sg_importance_visible(&m->grid, s->nodes[n].voxel, v);
+}
+
+/* ---- labels --------------------------------------------------------------- */
+
+Test(importance_labels, geodesic_not_euclidean)
+{
+    /* A partition wall at x = 15 open only at the far end (y 17..18): the
+     * voxel just left of the wall is 3 voxels from Q (right of the wall)
+     * and 4 from P, but Q is far around the wall: it belongs to P. */
+    SgMedium m;
+    sgt_medium_init(&m, 30, 20, 5);
+    sgt_box(&m, 1, 1, 1, 28, 18, 3, 1);
+    sgt_box(&m, 15, 1, 1, 15, 16, 3, 0);
+    SgSkeleton s = {0};
+    uint32_t p = sgt_node(&s, 10, 2, 2, SG_NODE_PLAIN, -1);
+    uint32_t q = sgt_node(&s, 17, 2, 2, SG_NODE_PLAIN, -1);
+    sgt_edge(&s, p, q);
+    uint32_t *labels = malloc(sg_grid_count(&m.grid) * sizeof *labels);
+    SgError err = {0};
+    cr_assert(sg_importance_label_voxels(&m.grid, &s, 2, labels, &err), "%s", err.message);
+    cr_assert_eq(labels[sg_grid_index(&m.grid, 14, 2, 2)], p);
+    cr_assert_eq(labels[sg_grid_index(&m.grid, 16, 2, 2)], q);
+    cr_assert_eq(labels[sg_grid_index(&m.grid, 14, 8, 3)], p);
+    cr_assert_eq(labels[sg_grid_index(&m.grid, 15, 2, 2)], SG_CACHE_NONE); /* the wall */
+    cr_assert_eq(labels[sg_grid_index(&m.grid, 0, 0, 0)], SG_CACHE_NONE);
+    /* Every medium voxel is labelled (one connected medium). */
+    for (size_t v = 0; v < sg_grid_count(&m.grid); v++)
+        cr_assert_eq(m.grid.voxels[v] != 0, labels[v] != SG_CACHE_NONE, "voxel %zu", v);
+    free(labels);
+    sg_skeleton_release(&s);
+    sgt_medium_free(&m);
+}
+
+Test(importance_labels, open_box_follows_euclidean_bisector)
+{
+    /* In open space the 26-neighbour metric is within ~8% of Euclidean:
+     * voxels clearly closer to one node get that node. */
+    SgMedium m;
+    sgt_medium_init(&m, 31, 31, 31);
+    sgt_box(&m, 0, 0, 0, 30, 30, 30, 1);
+    SgSkeleton s = {0};
+    int c[2][3] = {{6, 15, 15}, {24, 9, 20}};
+    sgt_node(&s, c[0][0], c[0][1], c[0][2], SG_NODE_PLAIN, -1);
+    sgt_node(&s, c[1][0], c[1][1], c[1][2], SG_NODE_PLAIN, -1);
+    uint32_t *labels = malloc(sg_grid_count(&m.grid) * sizeof *labels);
+    SgError err = {0};
+    cr_assert(sg_importance_label_voxels(&m.grid, &s, 2, labels, &err), "%s", err.message);
+    int checked = 0;
+    for (int k = 0; k < 31; k++)
+        for (int j = 0; j < 31; j++)
+            for (int i = 0; i < 31; i++) {
+                double d[2];
+                for (int n = 0; n < 2; n++)
+                    d[n] = sqrt((double)(i - c[n][0]) * (i - c[n][0]) +
+                                (double)(j - c[n][1]) * (j - c[n][1]) +
+                                (double)(k - c[n][2]) * (k - c[n][2]));
+                uint32_t want = d[0] < d[1] ? 0 : 1;
+                if (fabs(d[0] - d[1]) < 0.1 * fmin(d[0], d[1]) + 1)
+                    continue; /* near the bisector: either is fine */
+                cr_assert_eq(labels[sg_grid_index(&m.grid, i, j, k)], want, "voxel %d %d %d", i,
+                             j, k);
+                checked++;
+            }
+    cr_assert_gt(checked, 20000);
+    free(labels);
+    sg_skeleton_release(&s);
+    sgt_medium_free(&m);
+}
+
+/* Reference: plain Dijkstra with a binary heap on (distance, node) keys,
+ * same quantized steps (29, 41, 50), no bounds tricks. */
+static void reference_labels(const SgGrid *g, const SgSkeleton *s, uint32_t *label)
+{
+    size_t n = sg_grid_count(g);
+    uint64_t *key = malloc(n * sizeof *key);
+    uint64_t *heap = malloc((27 * n + s->node_count + 1) * sizeof *heap * 2);
+    size_t size = 0;
+    for (size_t v = 0; v < n; v++)
+        key[v] = UINT64_MAX;
+#define HEAP_PUSH(kk, vv)                                                                  \
+    do {                                                                                   \
+        size_t i_ = size++;                                                                \
+        uint64_t k_ = (kk), v_ = (vv);                                                     \
+        while (i_ > 0 && (heap[2 * ((i_ - 1) / 2)] > k_ ||                                 \
+                          (heap[2 * ((i_ - 1) / 2)] == k_ && heap[2 * ((i_ - 1) / 2) + 1] > v_))) { \
+            heap[2 * i_] = heap[2 * ((i_ - 1) / 2)];                                       \
+            heap[2 * i_ + 1] = heap[2 * ((i_ - 1) / 2) + 1];                               \
+            i_ = (i_ - 1) / 2;                                                             \
+        }                                                                                  \
+        heap[2 * i_] = k_;                                                                 \
+        heap[2 * i_ + 1] = v_;                                                             \
+    } while (0)
+    for (uint32_t i = 0; i < s->node_count; i++) {
+        const int *c = s->nodes[i].voxel;
+        if (!sg_grid_get(g, c[0], c[1], c[2]))
+            continue;
+        size_t v = sg_grid_index(g, c[0], c[1], c[2]);
+        if (key[v] > i) {
+            key[v] = i;
+            HEAP_PUSH(key[v], v);
+        }
+    }
+    while (size > 0) {
+        uint64_t k = heap[0], v = heap[1];
+        size--;
+        uint64_t lk = heap[2 * size], lv = heap[2 * size + 1];
+        size_t i = 0;
+        for (;;) {
+            size_t c = 2 * i + 1;
+            if (c >= size)
+                break;
+            if (c + 1 < size && (heap[2 * (c + 1)] < heap[2 * c] ||
+                                 (heap[2 * (c + 1)] == heap[2 * c] && heap[2 * (c + 1) + 1] < heap[2 * c + 1])))
+                c++;
+            if (heap[2 * c] > lk || (heap[2 * c] == lk && heap[2 * c + 1] >= lv))
+                break;
+            heap[2 * i] = heap[2 * c];
+            heap[2 * i + 1] = heap[2 * c + 1];
+            i = c;
+        }
+        heap[2 * i] = lk;
+        heap[2 * i + 1] = lv;
+        if (key[v] != k)
+            continue;
+        int x = (int)(v % (size_t)g->nx), y = (int)(v / (size_t)g->nx % (size_t)g->ny),
+            z = (int)(v / ((size_t)g->nx * (size_t)g->ny));
+        for (int dz = -1; dz <= 1; dz++)
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++) {
+                    int axes = (dx != 0) + (dy != 0) + (dz != 0);
+                    if (!axes || !sg_grid_get(g, x + dx, y + dy, z + dz))
+                        continue;
+                    uint64_t w = axes == 1 ? 29 : axes == 2 ? 41 : 50;
+                    uint64_t want = ((k >> 32) + w) << 32 | (uint32_t)k;
+                    size_t u = sg_grid_index(g, x + dx, y + dy, z + dz);
+                    if (want < key[u]) {
+                        key[u] = want;
+                        HEAP_PUSH(want, u);
+                    }
+                }
+    }
+#undef HEAP_PUSH
+    for (size_t v = 0; v < n; v++)
+        label[v] = key[v] == UINT64_MAX ? SG_CACHE_NONE : (uint32_t)key[v];
+    free(heap);
+    free(key);
+}
+
+Test(importance_labels, slabs_match_plain_dijkstra_for_any_thread_count)
+{
+    /* A serpentine: z-running corridors joined alternately at y = 0 and
+     * y = 39, so that geodesics cross the slab boundaries many times; a
+     * few nodes, some in one slab and nearest to voxels of another. */
+    SgMedium m;
+    sgt_medium_init(&m, 24, 40, 48);
+    for (int k = 1; k < 47; k += 4) {
+        sgt_box(&m, 1, 1, k, 22, 38, k + 1, 1);
+        int j = (k / 4) % 2 ? 1 : 36;
+        sgt_box(&m, 1, j, k + 2, 22, j + 2, k + 3, 1);
+    }
+    sgt_box(&m, 5, 5, 1, 8, 30, 46, 1); /* a shaft through everything */
+    sgt_box(&m, 6, 6, 2, 7, 29, 45, 0); /* hollow: the shaft is a tube */
+    SgSkeleton s = {0};
+    int nodes[][3] = {{3, 20, 1}, {20, 3, 45}, {12, 30, 21}, {12, 30, 22}, {2, 37, 3}, {5, 10, 30}};
+    for (size_t i = 0; i < sizeof nodes / sizeof nodes[0]; i++)
+        sgt_node(&s, nodes[i][0], nodes[i][1], nodes[i][2], SG_NODE_PLAIN, -1);
+    sgt_node(&s, 3, 20, 1, SG_NODE_PLAIN, -1); /* same voxel as node 0: never a source */
+    size_t n = sg_grid_count(&m.grid);
+    uint32_t *want = malloc(n * sizeof *want), *got = malloc(n * sizeof *got);
+    reference_labels(&m.grid, &s, want);
+    size_t labelled = 0;
+    for (size_t v = 0; v < n; v++)
+        labelled += want[v] != SG_CACHE_NONE;
+    cr_assert_gt(labelled, 10000);
+    for (int threads = 1; threads <= 5; threads++) {
+        SgError err = {0};
+        cr_assert(sg_importance_label_voxels(&m.grid, &s, threads, got, &err), "%s", err.message);
+        for (size_t v = 0; v < n; v++)
+            cr_assert_eq(got[v], want[v], "threads %d voxel %zu: %u, reference %u", threads, v,
+                         got[v], want[v]);
+    }
+    free(want);
+    free(got);
+    sg_skeleton_release(&s);
+    sgt_medium_free(&m);
+}
+
+Test(importance_labels, ties_across_slabs_match_plain_dijkstra)
+{
+    /* Many nodes on a coarse lattice in open space: distances tie along
+     * every bisector, and many bisectors cross slab boundaries, where a
+     * later round changes the node of voxels at an unchanged distance. */
+    SgMedium m;
+    sgt_medium_init(&m, 16, 16, 96);
+    sgt_box(&m, 0, 0, 0, 15, 15, 95, 1);
+    sgt_box(&m, 0, 7, 30, 11, 8, 33, 0);
+    sgt_box(&m, 4, 0, 60, 15, 11, 61, 0);
+    SgSkeleton s = {0};
+    for (int k = 3; k < 96; k += 12)
+        for (int j = 2; j < 16; j += 6)
+            for (int i = 1 + (k / 12) % 3; i < 16; i += 7)
+                sgt_node(&s, i, j, k, SG_NODE_PLAIN, -1);
+    size_t n = sg_grid_count(&m.grid);
+    uint32_t *want = malloc(n * sizeof *want), *got = malloc(n * sizeof *got);
+    reference_labels(&m.grid, &s, want);
+    for (int threads = 1; threads <= 12; threads += (threads < 4 ? 1 : 4)) {
+        SgError err = {0};
+        cr_assert(sg_importance_label_voxels(&m.grid, &s, threads, got, &err), "%s", err.message);
+        size_t wrong = 0;
+        for (size_t v = 0; v < n; v++)
+            wrong += got[v] != want[v];
+        cr_assert_eq(wrong, 0, "threads %d: %zu voxels differ from the reference", threads, wrong);
+    }
+    free(want);
+    free(got);
+    sg_skeleton_release(&s);
+    sgt_medium_free(&m);
+}
+
+/* ---- visibility ------------------------------------------------------------ */
+
+Test(importance_visibility, blocked_by_one_voxel_and_symmetric)
+{
+    SgMedium m;
+    sgt_medium_init(&m, 20, 20, 20);
+    sgt_box(&m, 0, 0, 0, 19, 19, 19, 1);
+    int a[3] = {1, 1, 1}, b[3] = {18, 12, 5};
+    cr_assert(sg_importance_visible(&m.grid, a, b));
+    sgt_box(&m, 10, 7, 3, 10, 7, 3, 0); /* on the segment: x=10 -> y = 1+11*9.5/17 */
+    int hits = 0;
+    /* The voxel the segment passes at x = 10: find it by sampling. */
+    sgt_box(&m, 10, 7, 3, 10, 7, 3, 1);
+    for (double t = 0; t <= 1; t += 1e-4) {
+        double p[3] = {1.5 + 17 * t, 1.5 + 11 * t, 1.5 + 4 * t};
+        if ((int)p[0] == 10) {
+            sgt_box(&m, 10, (int)p[1], (int)p[2], 10, (int)p[1], (int)p[2], 0);
+            hits++;
+            break;
+        }
+    }
+    cr_assert_eq(hits, 1);
+    cr_assert_not(sg_importance_visible(&m.grid, a, b));
+    cr_assert_not(sg_importance_visible(&m.grid, b, a));
+    /* Axis-aligned: a wall across the x axis blocks, the side stays clear. */
+    sgt_box(&m, 0, 0, 0, 19, 19, 19, 1);
+    sgt_box(&m, 5, 0, 0, 5, 19, 10, 0);
+    int c[3] = {2, 4, 4}, d[3] = {9, 4, 4}, e[3] = {2, 4, 12}, f[3] = {9, 4, 12};
+    cr_assert_not(sg_importance_visible(&m.grid, c, d));
+    cr_assert(sg_importance_visible(&m.grid, e, f));
+    sgt_medium_free(&m);
+}
+
+Test(importance_visibility, agrees_with_dense_sampling)
+{
+    SgMedium m;
+    sgt_medium_init(&m, 24, 24, 24);
+    SgRng rng;
+    sg_rng_seed(&rng, 7, 1);
+    for (size_t v = 0; v < sg_grid_count(&m.grid); v++)
+        m.grid.voxels[v] = sg_rng_float(&rng) < 0.97f;
+    int agree = 0, total = 400, unsafe = 0;
+    for (int t = 0; t < total; t++) {
+        int a[3], b[3];
+        for (int x = 0; x < 3; x++) {
+            a[x] = (int)(sg_rng_float(&rng) * 24);
+            b[x] = (int)(sg_rng_float(&rng) * 24);
+        }
+        m.grid.voxels[sg_grid_index(&m.grid, a[0], a[1], a[2])] = 1;
+        m.grid.voxels[sg_grid_index(&m.grid, b[0], b[1], b[2])] = 1;
+        bool sampled = true;
+        /* Irrational-ish sample offsets: samples exactly on a voxel edge
+         * (which the segment only grazes) would be floored to either side. */
+        for (int s = 0; s < 20000 && sampled; s++) {
+            double u = (s + 0.3183099) / 20000.0;
+            int v[3];
+            for (int x = 0; x < 3; x++)
+                v[x] = (int)floor(a[x] + 0.5 + (b[x] - a[x]) * u);
+            sampled = sg_grid_get(&m.grid, v[0], v[1], v[2]) != 0;
+        }
+        bool dda = sg_importance_visible(&m.grid, a, b);
+        cr_assert_eq(dda, sg_importance_visible(&m.grid, b, a), "not symmetric");
+        agree += dda == sampled;
+        unsafe += dda && !sampled;
+    }
+    /* Disagreement only where the segment grazes a voxel corner. */
+    cr_assert_geq(agree, total * 97 / 100, "agree %d of %d", agree, total);
+    cr_assert_leq(unsafe, total / 100, "DDA sees through %d solid samples", unsafe);
+    sgt_medium_free(&m);
+}
+
+Test(importance_visibility, brick_jumps_agree_with_plain_walk)
+{
+    /* Open rooms with scattered solid voxels and slabs: the accelerated walk
+     * (jumps through all-medium 4x4x4 bricks) answers like the plain one. */
+    SgMedium m;
+    sgt_medium_init(&m, 61, 45, 38);
+    sgt_box(&m, 0, 0, 0, 60, 44, 37, 1);
+    SgRng rng;
+    sg_rng_seed(&rng, 11, 2);
+    for (int i = 0; i < 60; i++) {
+        int x = (int)(sg_rng_float(&rng) * 61), y = (int)(sg_rng_float(&rng) * 45),
+            z = (int)(sg_rng_float(&rng) * 38);
+        int w = (int)(sg_rng_float(&rng) * 4);
+        sgt_box(&m, x, y, z, x + w, y + (i % 3 == 0 ? 12 : 0), z, 0);
+    }
+    SgVisibility fast;
+    SgError err = {0};
+    cr_assert(sg_visibility_init(&fast, &m.grid, &err));
+    int visible = 0, total = 20000;
+    for (int t = 0; t < total; t++) {
+        int a[3], b[3];
+        for (int x = 0; x < 3; x++) {
+            int n = x == 0 ? 61 : x == 1 ? 45 : 38;
+            a[x] = (int)(sg_rng_float(&rng) * n);
+            b[x] = t % 4 == 0 ? a[x] + (int)(sg_rng_float(&rng) * 9) - 4
+                              : (int)(sg_rng_float(&rng) * n);
+            if (b[x] < 0) b[x] = 0;
+            if (b[x] >= n) b[x] = n - 1;
+        }
+        if (t % 7 == 0)
+            b[t % 3] = a[t % 3]; /* axis-parallel and diagonal-in-a-plane cases */
+        bool plain = sg_importance_visible(&m.grid, a, b);
+        cr_assert_eq(sg_visibility_test(&fast, a, b), plain, "(%d %d %d)-(%d %d %d)", a[0],
+                     a[1], a[2], b[0], b[1], b[2]);
+        visible += plain;
+    }
+    cr_assert(visible > total / 10 && visible < total * 9 / 10, "visible %d", visible);
+    sg_visibility_release(&fast);
+    sgt_medium_free(&m);
+}
+
+/* ---- importance points ----------------------------------------------------- */
+
+Test(importance_points, l_corridor_points_to_the_corner_never_through_the_wall)
+{
+    LScene s;
+    l_scene(&s);
+    char path[256];
+    SgImportanceCache *c = build_and_open(&s.medium, &s.skeleton, "l", 2, path, sizeof path);
+    cr_assert_eq(sg_cache_node_count(c), s.skeleton.node_count);
+    cr_assert_eq(sg_cache_light_count(c), 1);
+    int far_nodes = 0;
+    for (uint32_t n = 0; n < s.skeleton.node_count; n++) {
+        const SgSkeletonNode *v = &s.skeleton.nodes[n];
+        double q[3];
+        node_point(c, n, 0, q);
+        cr_assert(segment_in_medium(&s.medium, &s.skeleton, n, q),
+                  "node %u (%d,%d,%d) -> (%g,%g,%g) crosses a wall", n, v->voxel[0], v->voxel[1],
+                  v->voxel[2], q[0], q[1], q[2]);
+        if (v->voxel[1] == 2 && v->voxel[0] <= 20) {
+            /* Far end of leg A: down the corridor toward the corner, inside leg A. */
+            cr_assert(q[1] >= 1 && q[1] < 5, "node %u point y %g leaves leg A", n, q[1]);
+            cr_assert_gt(q[0], v->position[0] + 5, "node %u point x %g", n, q[0]);
+            double dx = q[0] - v->position[0], dy = q[1] - v->position[1];
+            cr_assert_lt(fabs(atan2(dy, dx)), 10 * M_PI / 180, "node %u", n);
+            far_nodes++;
+        }
+        if (v->voxel[0] == 38 && v->voxel[1] >= 2) {
+            /* Leg B and the corner see the light: the point is the light. */
+            cr_assert_float_eq(q[0], 38.5, 1e-4, "node %u", n);
+            cr_assert_float_eq(q[1], 47.0, 1e-4, "node %u", n);
+            cr_assert_float_eq(q[2], 2.5, 1e-4, "node %u", n);
+        }
+    }
+    cr_assert_eq(far_nodes, 19);
+    sg_cache_close(c);
+    unlink(path);
+    l_scene_free(&s);
+}
+
+Test(importance_points, two_rooms_point_at_the_door)
+{
+    /* Room A (x 1..19) and room B (x 22..42) behind a 2-voxel wall with a
+     * door at y 2..4; the light on B's far wall. The skeleton runs from A's
+     * centre down to the door, through it, up to B's centre and the light. */
+    SgMedium m;
+    sgt_medium_init(&m, 44, 24, 5);
+    sgt_box(&m, 1, 1, 1, 19, 22, 3, 1);
+    sgt_box(&m, 22, 1, 1, 42, 22, 3, 1);
+    sgt_box(&m, 20, 2, 1, 21, 4, 3, 1);
+    double lp[3] = {43.0, 12.5, 2.5};
+    int seed[3] = {42, 12, 2};
+    sgt_add_light(&m, lp, seed);
+    SgSkeleton s = {0};
+    int p0[3] = {10, 12, 2}, p1[3] = {16, 3, 2}, p2[3] = {25, 3, 2}, p3[3] = {32, 12, 2},
+        p4[3] = {42, 12, 2};
+    uint32_t n = sgt_line(&s, SG_CACHE_NONE, p0, p1);
+    n = sgt_line(&s, n, p1, p2);
+    n = sgt_line(&s, n, p2, p3);
+    n = sgt_line(&s, n, p3, p4);
+    s.nodes[n].kind = SG_NODE_LIGHT;
+    s.nodes[n].light = 0;
+    char path[256];
+    SgImportanceCache *c = build_and_open(&m, &s, "door", 2, path, sizeof path);
+    const double door[3] = {21.0, 3.5, 2.5};
+    int in_room_a = 0;
+    for (uint32_t v = 0; v < s.node_count; v++) {
+        double q[3];
+        node_point(c, v, 0, q);
+        cr_assert(segment_in_medium(&m, &s, v, q), "node %u crosses a wall", v);
+        const float *x = s.nodes[v].position;
+        if (s.nodes[v].voxel[0] > 14)
+            continue;
+        /* Room A: the importance point is in room A or the door, and
+         * the direction is the door's. */
+        cr_assert_lt(q[0], 22, "node %u point beyond the wall", v);
+        double a = atan2(q[1] - x[1], q[0] - x[0]), b = atan2(door[1] - x[1], door[0] - x[0]);
+        cr_assert_lt(fabs(a - b), 25 * M_PI / 180, "node %u: %g deg off the door", v,
+                     (a - b) * 180 / M_PI);
+        in_room_a++;
+    }
+    cr_assert_geq(in_room_a, 5);
+    /* A point in room A, near the door wall, looks up the same way. */
+    double p[3] = {12.2, 15.7, 2.5}, q[3];
+    cr_assert(sg_cache_importance_point(c, p, 0, q));
+    cr_assert_lt(q[0], 22);
+    sg_cache_close(c);
+    unlink(path);
+    sg_skeleton_release(&s);
+    sgt_medium_free(&m);
+}
+
+Test(importance_points, sealed_rooms_light_unreachable_from_camera)
+{
+    /* Two rooms with no opening (wall x 14..16), a light and a skeleton in each; a third
+     * light is sealed inside the wall (no seed, no node). */
+    SgMedium m;
+    sgt_medium_init(&m, 30, 12, 5);
+    sgt_box(&m, 1, 1, 1, 13, 10, 3, 1);
+    sgt_box(&m, 17, 1, 1, 28, 10, 3, 1);
+    double l0[3] = {14.0, 6.5, 2.5}, l1[3] = {29.0, 6.5, 2.5}, l2[3] = {15.0, 6.0, 2.0};
+    int s0[3] = {13, 6, 2}, s1[3] = {28, 6, 2};
+    sgt_add_light(&m, l0, s0);
+    sgt_add_light(&m, l1, s1);
+    sgt_add_light(&m, l2, NULL);
+    SgSkeleton s = {0};
+    int a0[3] = {2, 6, 2}, a1[3] = {13, 6, 2}, b0[3] = {17, 6, 2}, b1[3] = {28, 6, 2};
+    uint32_t e0 = sgt_line(&s, SG_CACHE_NONE, a0, a1);
+    uint32_t e1 = sgt_line(&s, SG_CACHE_NONE, b0, b1);
+    s.nodes[e0].kind = SG_NODE_LIGHT;
+    s.nodes[e0].light = 0;
+    s.nodes[e1].kind = SG_NODE_LIGHT;
+    s.nodes[e1].light = 1;
+    char path[256];
+    SgImportanceCache *c = build_and_open(&m, &s, "sealed", 1, path, sizeof path);
+    cr_assert_eq(sg_cache_component_count(c), 2);
+    double camera[3] = {5.5, 6.5, 2.5};
+    cr_assert(sg_cache_light_reaches(c, 0, camera));
+    cr_assert_not(sg_cache_light_reaches(c, 1, camera));
+    cr_assert_not(sg_cache_light_reaches(c, 2, camera));
+    cr_assert(sg_cache_light_has_paths(c, 0));
+    cr_assert(sg_cache_light_has_paths(c, 1));
+    cr_assert_not(sg_cache_light_has_paths(c, 2));
+    uint32_t reachable = 0;
+    for (uint32_t k = 0; k < sg_cache_light_count(c); k++)
+        reachable += sg_cache_light_reaches(c, k, camera);
+    cr_assert_eq(reachable, 1);
+    double q[3];
+    cr_assert(sg_cache_importance_point(c, camera, 0, q));
+    cr_assert_not(sg_cache_importance_point(c, camera, 1, q));
+    cr_assert_not(sg_cache_importance_point(c, camera, 2, q));
+    double in_b[3] = {20.5, 5.5, 1.5};
+    cr_assert(sg_cache_importance_point(c, in_b, 1, q));
+    cr_assert_float_eq(q[0], 29.0, 1e-5); /* room B's nodes all see their light */
+    cr_assert_not(sg_cache_light_reaches(c, 0, in_b));
+    /* In the middle of the 3-voxel wall between the rooms: nothing. */
+    double wall[3] = {15.5, 6.5, 2.5};
+    uint32_t node;
+    cr_assert_not(sg_cache_nearest_node(c, wall, &node));
+    sg_cache_close(c);
+    unlink(path);
+    sg_skeleton_release(&s);
+    sgt_medium_free(&m);
+}
+
+/* ---- lookups --------------------------------------------------------------- */
+
+Test(importance_cache, every_medium_position_finds_a_node_on_its_side)
+{
+    LScene s;
+    l_scene(&s);
+    char path[256];
+    SgImportanceCache *c = build_and_open(&s.medium, &s.skeleton, "lookup", 2, path, sizeof path);
+    const SgGrid *g = &s.medium.grid;
+    cr_assert_eq(sg_cache_medium_voxels(c), sg_grid_count_nonzero(g));
+    SgRng rng;
+    sg_rng_seed(&rng, 3, 9);
+    int checked = 0;
+    for (int k = 0; k < g->nz; k++)
+        for (int j = 0; j < g->ny; j++)
+            for (int i = 0; i < g->nx; i++) {
+                if (!sg_grid_get(g, i, j, k))
+                    continue;
+                for (int t = 0; t < 4; t++) {
+                    double p[3] = {i + sg_rng_float(&rng), j + sg_rng_float(&rng),
+                                   k + sg_rng_float(&rng)};
+                    uint32_t n;
+                    cr_assert(sg_cache_nearest_node(c, p, &n), "voxel %d %d %d", i, j, k);
+                    cr_assert_lt(n, s.skeleton.node_count);
+                    const int *nv = s.skeleton.nodes[n].voxel;
+                    /* Geodesically nearest on this skeleton = the centre-line node
+                     * beside the voxel. */
+                    if (i <= 33)
+                        cr_assert(nv[1] == 2 && abs(nv[0] - i) <= 2, "voxel %d %d %d", i, j, k);
+                    if (j >= 8)
+                        cr_assert(nv[0] == 38 && abs(nv[1] - j) <= 2, "voxel %d %d %d", i, j, k);
+                    double q[3];
+                    cr_assert(sg_cache_importance_point(c, p, 0, q));
+                    checked++;
+                }
+            }
+    cr_assert_eq(checked, 4 * (int)sg_grid_count_nonzero(g));
+    /* A point on a wall surface (in a solid voxel next to the corridor)
+     * uses the corridor voxel beside it; far outside: nothing. */
+    double wall[3] = {10.3, 5.02, 2.5}, far[3] = {10.5, 20.5, 2.5}, out[3] = {-5, 2, 2};
+    uint32_t n;
+    cr_assert(sg_cache_nearest_node(c, wall, &n));
+    cr_assert_eq(s.skeleton.nodes[n].voxel[1], 2);
+    cr_assert_not(sg_cache_nearest_node(c, far, &n));
+    cr_assert_not(sg_cache_nearest_node(c, out, &n));
+    double nan3[3] = {NAN, 1, 1};
+    cr_assert_not(sg_cache_nearest_node(c, nan3, &n));
+    cr_assert_eq(sg_cache_geometry_hash(c), s.medium.geometry_hash);
+    cr_assert_eq(sg_cache_skeleton_hash(c), sg_importance_skeleton_hash(&s.skeleton));
+    sg_cache_close(c);
+    unlink(path);
+    l_scene_free(&s);
+}
+
+Test(importance_cache, build_is_deterministic_across_thread_counts)
+{
+    LScene s;
+    l_scene(&s);
+    char p1[256], p2[256];
+    SgImportanceCache *c1 = build_and_open(&s.medium, &s.skeleton, "det1", 1, p1, sizeof p1);
+    SgImportanceCache *c2 = build_and_open(&s.medium, &s.skeleton, "det2", 2, p2, sizeof p2);
+    size_t n1, n2;
+    uint8_t *a = sgt_read_file(p1, &n1), *b = sgt_read_file(p2, &n2);
+    cr_assert_eq(n1, n2);
+    cr_assert(memcmp(a, b, n1) == 0);
+    free(a);
+    free(b);
+    sg_cache_close(c1);
+    sg_cache_close(c2);
+    unlink(p1);
+    unlink(p2);
+    l_scene_free(&s);
+}
+
+Test(importance_cache, vectors_ply_has_one_edge_per_node_and_light)
+{
+    LScene s;
+    l_scene(&s);
+    char path[256], vec[256];
+    sgt_temp_path(path, sizeof path, "vcache");
+    sgt_temp_path(vec, sizeof vec, "vectors.ply");
+    SgImportanceOptions opt = {.threads = 2, .vectors_path = vec, .quiet = true};
+    SgError err = {0};
+    cr_assert(sg_importance_build(&s.medium, &s.skeleton, &opt, path, NULL, &err), "%s",
+              err.message);
+    size_t size;
+    uint8_t *data = sgt_read_file(vec, &size);
+    cr_assert_not_null(data);
+    char want[64];
+    snprintf(want, sizeof want, "element edge %u\n", s.skeleton.node_count);
+    data[size - 1] = 0;
+    cr_assert(strstr((char *)data, want) != NULL);
+    free(data);
+    unlink(path);
+    unlink(vec);
+    l_scene_free(&s);
+}
+
+Test(importance_cache, refuses_mismatched_inputs)
+{
+    LScene s;
+    l_scene(&s);
+    s.skeleton.nodes[3].kind = SG_NODE_LIGHT;
+    s.skeleton.nodes[3].light = 5; /* the medium has one light */
+    char path[256];
+    sgt_temp_path(path, sizeof path, "mismatch");
+    unlink(path);
+    SgError err = {0};
+    cr_assert_not(sg_importance_build(&s.medium, &s.skeleton, NULL, path, NULL, &err));
+    cr_assert(strstr(err.message, "light 5") != NULL, "%s", err.message);
+    cr_assert_neq(access(path, F_OK), 0, "a failed build left a file");
+    l_scene_free(&s);
+}
+
+Test(importance_cache, light_found_by_its_seed_and_no_lights_at_all)
+{
+    /* A skeleton read from a PLY without the `light` property has no light
+     * nodes: each light then hangs on the nearest node of its seed voxel. */
+    LScene s;
+    l_scene(&s);
+    for (uint32_t n = 0; n < s.skeleton.node_count; n++) {
+        s.skeleton.nodes[n].kind = SG_NODE_PLAIN;
+        s.skeleton.nodes[n].light = -1;
+    }
+    char path[256];
+    SgImportanceCache *c = build_and_open(&s.medium, &s.skeleton, "seed", 2, path, sizeof path);
+    cr_assert(sg_cache_light_has_paths(c, 0));
+    double q[3], p[3] = {10.5, 2.5, 2.5};
+    cr_assert(sg_cache_importance_point(c, p, 0, q));
+    cr_assert_gt(q[0], 15);
+    uint32_t last = s.skeleton.node_count - 1; /* the seed's own node sees the light */
+    cr_assert(sg_cache_node_importance_point(c, last, 0, q));
+    cr_assert_float_eq(q[1], 47.0, 1e-4);
+    sg_cache_close(c);
+    unlink(path);
+
+    /* No lights: a valid cache whose lookups find nodes but no points. */
+    s.medium.light_count = 0;
+    c = build_and_open(&s.medium, &s.skeleton, "nolight", 1, path, sizeof path);
+    cr_assert_eq(sg_cache_light_count(c), 0);
+    uint32_t node;
+    cr_assert(sg_cache_nearest_node(c, p, &node));
+    cr_assert_not(sg_cache_importance_point(c, p, 0, q));
+    cr_assert_not(sg_cache_light_reaches(c, 0, p));
+    sg_cache_close(c);
+    unlink(path);
+    s.medium.light_count = 1;
+    l_scene_free(&s);
+}

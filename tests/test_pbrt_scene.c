@@ -1,0 +1,730 @@
+/* pbrt-v4 scene files: every statement of the supported subset on small
+ * hand-written files, the cameras and lights of the shared staircase and
+ * bathroom, malformed input, and a render of the staircase against a
+ * committed mean brightness. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "scene.h"
+#include "support_files.h"
+
+#define STAIRCASE "../shared/scenes/staircase/staircase.pbrt"
+#define BATHROOM "../shared/scenes/bathroom/bathroom.pbrt"
+
+/* A camera and film every hand-written scene starts with (three lines;
+ * Scale -1 1 1 makes pbrt's default camera agree with our image's sides). */
+#define HEADER                                                                                   \
+    "Scale -1 1 1 Film \"rgb\" \"integer xresolution\" [ 64 ] \"integer yresolution\" [ 48 ]\n"               \
+    "Camera \"perspective\" \"float fov\" [ 45 ]\n"                                              \
+    "WorldBegin\n"
+
+/* One triangle (0,0,0) (1,0,0) (0,1,0): its winding faces +z. */
+#define TRIANGLE "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ] \"integer indices\" [ 0 1 2 ]\n"
+
+static const char *scene_dir;
+
+/* Writes scene_dir/name; the path stays valid until the next call. */
+static const char *write_scene(const char *name, const char *text)
+{
+    static char path[4200];
+    if (!scene_dir)
+        scene_dir = sg_test_tmpdir();
+    snprintf(path, sizeof path, "%s/%s", scene_dir, name);
+    FILE *f = fopen(path, "wb");
+    cr_assert(f, "cannot write %s", path);
+    cr_assert(fputs(text, f) >= 0 && fclose(f) == 0, "cannot write %s", path);
+    return path;
+}
+
+static SgScene *load_text(const char *text, SgError *err)
+{
+    memset(err, 0, sizeof *err);
+    return sg_scene_load(write_scene("scene.pbrt", text), err);
+}
+
+static SgScene *load_ok(const char *text)
+{
+    SgError err;
+    SgScene *s = load_text(text, &err);
+    cr_assert(s, "load failed: %s", err.message);
+    return s;
+}
+
+/* The error of a malformed file: asserts it fails with one line that
+ * starts with "FILE:LINE: " and contains what. */
+static void expect_error(const char *text, int line, const char *what)
+{
+    SgError err;
+    SgScene *s = load_text(text, &err);
+    cr_assert_null(s, "loaded a malformed file (expected line %d: %s)", line, what);
+    sg_scene_free(s);
+    char prefix[4200];
+    snprintf(prefix, sizeof prefix, "%s/scene.pbrt:%d: ", scene_dir, line);
+    cr_expect(!strncmp(err.message, prefix, strlen(prefix)), "expected \"%s...\", got \"%s\"",
+              prefix, err.message);
+    cr_expect(strstr(err.message, what), "expected \"%s\" in \"%s\"", what, err.message);
+    cr_expect(!strchr(err.message, '\n'), "message is not one line");
+}
+
+static const double *vertex(const SgScene *s, uint32_t t, int c)
+{
+    return s->positions + 3 * (size_t)s->indices[3 * (size_t)t + c];
+}
+
+static void expect_point(const double *p, double x, double y, double z, const char *what)
+{
+    cr_expect(fabs(p[0] - x) < 1e-9 && fabs(p[1] - y) < 1e-9 && fabs(p[2] - z) < 1e-9,
+              "%s: (%g %g %g), expected (%g %g %g)", what, p[0], p[1], p[2], x, y, z);
+}
+
+static bool has_warning(const SgScene *s, const char *what)
+{
+    for (uint32_t i = 0; i < s->warning_count; i++)
+        if (strstr(s->warnings[i], what))
+            return true;
+    return false;
+}
+
+static const SgMaterial *material_of(const SgScene *s, uint32_t t)
+{
+    return &s->materials[s->triangle_material[t]];
+}
+
+/* ---- transforms --------------------------------------------------------- */
+
+Test(pbrt_transforms, statements_compose_in_pbrt_order)
+{
+    /* p' = T * R * S * p: the last statement applies first. */
+    SgScene *s = load_ok(HEADER "Translate 1 2 3\nRotate 90 0 0 1\nScale 2 2 2\n" TRIANGLE);
+    cr_assert_eq(s->triangle_count, 1);
+    expect_point(vertex(s, 0, 0), 1, 2, 3, "origin");
+    expect_point(vertex(s, 0, 1), 1, 4, 3, "(1,0,0)"); /* scale 2, x -> y, translate */
+    expect_point(vertex(s, 0, 2), -1, 2, 3, "(0,1,0)");
+    sg_scene_free(s);
+}
+
+Test(pbrt_transforms, transform_and_concat_are_column_major)
+{
+    /* The translation is the last four numbers. */
+    SgScene *s = load_ok(HEADER "Transform [ 1 0 0 0  0 1 0 0  0 0 1 0  5 6 7 1 ]\n"
+                                "ConcatTransform [ 0 1 0 0  -1 0 0 0  0 0 1 0  0 0 0 1 ]\n" TRIANGLE);
+    /* ConcatTransform: columns (0,1,0) (-1,0,0): x -> y, y -> -x */
+    expect_point(vertex(s, 0, 0), 5, 6, 7, "origin");
+    expect_point(vertex(s, 0, 1), 5, 7, 7, "(1,0,0)");
+    expect_point(vertex(s, 0, 2), 4, 6, 7, "(0,1,0)");
+    sg_scene_free(s);
+}
+
+Test(pbrt_transforms, attribute_blocks_restore_the_transform)
+{
+    SgScene *s = load_ok(HEADER "AttributeBegin\n"
+                                "  Translate 10 0 0\n"
+                                "  AttributeBegin\n"
+                                "    Translate 0 20 0\n"
+                                "    Scale 3 3 3\n" TRIANGLE /* t0: (10,20,0) + 3p */
+                                "  AttributeEnd\n" TRIANGLE  /* t1: (10,0,0) + p */
+                                "  TransformBegin\n"
+                                "    Translate 0 0 5\n" TRIANGLE /* t2: (10,0,5) + p */
+                                "  TransformEnd\n"
+                                "  Identity\n" TRIANGLE /* t3: p */
+                                "AttributeEnd\n"
+                                "Translate 0 0 -1\n" TRIANGLE /* t4: (0,0,-1) + p */);
+    cr_assert_eq(s->triangle_count, 5);
+    expect_point(vertex(s, 0, 1), 13, 20, 0, "nested block");
+    expect_point(vertex(s, 1, 1), 11, 0, 0, "after inner AttributeEnd");
+    expect_point(vertex(s, 2, 1), 11, 0, 5, "TransformBegin");
+    expect_point(vertex(s, 3, 1), 1, 0, 0, "Identity");
+    expect_point(vertex(s, 4, 1), 1, 0, -1, "after outer AttributeEnd");
+    sg_scene_free(s);
+}
+
+Test(pbrt_transforms, named_coordinate_systems)
+{
+    SgScene *s = load_ok(HEADER "Translate 4 0 0\nCoordinateSystem \"here\"\nIdentity\n"
+                                "CoordSysTransform \"here\"\n" TRIANGLE
+                                "CoordSysTransform \"world\"\n" TRIANGLE);
+    expect_point(vertex(s, 0, 0), 4, 0, 0, "CoordSysTransform here");
+    expect_point(vertex(s, 1, 0), 0, 0, 0, "CoordSysTransform world");
+    sg_scene_free(s);
+}
+
+Test(pbrt_transforms, instances_apply_their_transform_after_the_definition)
+{
+    SgScene *s = load_ok(HEADER "ObjectBegin \"tri\"\n"
+                                "  Translate 0 0 1\n" TRIANGLE /* defined at z = 1 */
+                                "ObjectEnd\n"
+                                TRIANGLE /* ObjectEnd restored the transform: z = 0 */
+                                "AttributeBegin\n  Translate 10 0 0\n  ObjectInstance \"tri\"\n"
+                                "AttributeEnd\n"
+                                "AttributeBegin\n  Translate 0 10 0\n  Scale 2 2 2\n"
+                                "  ObjectInstance \"tri\"\nAttributeEnd\n");
+    cr_assert_eq(s->triangle_count, 3, "the definition itself is not drawn");
+    expect_point(vertex(s, 0, 1), 1, 0, 0, "after ObjectEnd");
+    expect_point(vertex(s, 1, 1), 11, 0, 1, "instance 1");
+    expect_point(vertex(s, 2, 0), 0, 10, 2, "instance 2 origin");
+    expect_point(vertex(s, 2, 1), 2, 10, 2, "instance 2 (1,0,0)");
+    sg_scene_free(s);
+}
+
+/* ---- shapes ------------------------------------------------------------- */
+
+Test(pbrt_shapes, trianglemesh_bilinear_and_plymesh)
+{
+    /* A binary PLY whose first data byte is 0x0A, as in the bathroom. */
+    if (!scene_dir)
+        scene_dir = sg_test_tmpdir();
+    char ply[4200];
+    snprintf(ply, sizeof ply, "%s/quad.ply", scene_dir);
+    FILE *f = fopen(ply, "wb");
+    cr_assert(f);
+    fputs("ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\n"
+          "property float y\nproperty float z\nelement face 1\n"
+          "property list uchar int vertex_indices\nend_header\n",
+          f);
+    float v[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    memcpy(v, (const unsigned char[4]){0x0a, 0, 0, 0}, 4); /* first byte 0x0A: x = 1.4e-44 */
+    fwrite(v, sizeof v, 1, f);
+    unsigned char n = 4;
+    int idx[4] = {0, 1, 2, 3};
+    fwrite(&n, 1, 1, f);
+    fwrite(idx, sizeof idx, 1, f);
+    fclose(f);
+    SgScene *s = load_ok(HEADER
+                         "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n" /* no indices */
+                         "Shape \"bilinearmesh\" \"point3 P\" [ 0 0 1 1 0 1 0 1 1 1 1 1 ]\n"
+                         "    \"integer indices\" [ 0 1 2 3 ]\n"
+                         "Translate 0 0 5\n"
+                         "Shape \"plymesh\" \"string filename\" \"quad.ply\"\n");
+    cr_assert_eq(s->triangle_count, 1 + 2 + 2);
+    double area = 0;
+    for (uint32_t t = 1; t < 3; t++) {
+        double n3[3];
+        sg_scene_triangle_normal(s, t, n3);
+        area += 0.5 * sqrt(n3[0] * n3[0] + n3[1] * n3[1] + n3[2] * n3[2]);
+    }
+    cr_expect(fabs(area - 1) < 1e-12, "bilinear patch area %g", area);
+    expect_point(vertex(s, 3, 1), 1, 0, 5, "plymesh vertex 1, translated");
+    sg_scene_free(s);
+}
+
+Test(pbrt_shapes, unsupported_kinds_warn_once_each)
+{
+    SgScene *s = load_ok(HEADER TRIANGLE "Shape \"sphere\" \"float radius\" 1\n"
+                                "Shape \"sphere\" \"float radius\" 2\n"
+                                "Shape \"disk\"\n"
+                                "LightSource \"point\" \"rgb I\" [ 1 1 1 ]\n"
+                                "LightSource \"infinite\" \"rgb L\" [ 1 1 1 ]\n");
+    cr_assert_eq(s->triangle_count, 1);
+    int sphere = 0;
+    for (uint32_t i = 0; i < s->warning_count; i++)
+        sphere += strstr(s->warnings[i], "\"sphere\"") != NULL;
+    cr_expect_eq(sphere, 1, "one line for both spheres");
+    cr_expect(has_warning(s, "scene.pbrt:5: Shape \"sphere\" is not supported: left out (2 times)"));
+    cr_expect(has_warning(s, "Shape \"disk\""));
+    cr_expect(has_warning(s, "LightSource \"point\""));
+    cr_expect(has_warning(s, "LightSource \"infinite\""));
+    cr_expect_eq(s->warning_count, 4);
+    for (uint32_t i = 0; i < s->warning_count; i++)
+        cr_expect(!strchr(s->warnings[i], '\n'));
+    sg_scene_free(s);
+}
+
+Test(pbrt_shapes, include_and_import_resolve_against_the_main_file)
+{
+    if (!scene_dir)
+        scene_dir = sg_test_tmpdir();
+    char path[4200];
+    snprintf(path, sizeof path, "%s/parts", scene_dir);
+    mkdir(path, 0755);
+    write_scene("parts/materials.pbrt",
+                "MakeNamedMaterial \"red\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0.8 0 0 ]\n");
+    write_scene("parts/geometry.pbrt", "NamedMaterial \"red\"\nTranslate 0 0 2\n" TRIANGLE);
+    SgScene *s = load_ok(HEADER "Include \"parts/materials.pbrt\"\nImport \"parts/geometry.pbrt\"\n"
+                                "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n");
+    cr_assert_eq(s->triangle_count, 2);
+    expect_point(vertex(s, 0, 0), 0, 0, 2, "included shape");
+    cr_expect_float_eq(material_of(s, 0)->diffuse[0], 0.8f, 1e-6);
+    /* The transform and material set in the included file carry on. */
+    expect_point(vertex(s, 1, 0), 0, 0, 2, "shape after Include");
+    cr_expect_float_eq(material_of(s, 1)->diffuse[0], 0.8f, 1e-6);
+    sg_scene_free(s);
+}
+
+/* ---- materials ---------------------------------------------------------- */
+
+Test(pbrt_materials, mapped_to_ours)
+{
+    SgScene *s = load_ok(
+        HEADER
+        "Texture \"flat\" \"spectrum\" \"constant\" \"rgb value\" [ 0.2 0.4 0.6 ]\n"
+        "Texture \"half\" \"spectrum\" \"scale\" \"texture tex\" \"flat\" \"float scale\" 0.5\n"
+        "Texture \"photo\" \"spectrum\" \"imagemap\" \"string filename\" \"no-such.png\"\n"
+        "MakeNamedMaterial \"wall\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0.1 0.2 0.3 ]\n"
+        "MakeNamedMaterial \"floor\" \"string type\" \"coateddiffuse\" \"bool remaproughness\" false\n"
+        "    \"float roughness\" 0.1 \"texture reflectance\" \"half\"\n"
+        "MakeNamedMaterial \"gold\" \"string type\" \"conductor\" \"float roughness\" 0\n"
+        "    \"spectrum eta\" \"metal-Au-eta\" \"spectrum k\" \"metal-Au-k\"\n"
+        "MakeNamedMaterial \"brushed\" \"string type\" \"conductor\" \"bool remaproughness\" false\n"
+        "    \"float uroughness\" 0.3 \"float vroughness\" 0.3 \"rgb reflectance\" [ 0.9 0.8 0.7 ]\n"
+        "MakeNamedMaterial \"water\" \"string type\" \"dielectric\" \"float eta\" 1.33\n"
+        "MakeNamedMaterial \"poster\" \"string type\" \"diffuse\" \"texture reflectance\" \"photo\"\n"
+        "NamedMaterial \"wall\"\n" TRIANGLE "NamedMaterial \"floor\"\n" TRIANGLE
+        "NamedMaterial \"gold\"\n" TRIANGLE "NamedMaterial \"brushed\"\n" TRIANGLE
+        "NamedMaterial \"water\"\n" TRIANGLE "NamedMaterial \"poster\"\n" TRIANGLE
+        "Material \"hair\"\n" TRIANGLE "AttributeBegin\nMaterial \"diffuse\" \"rgb reflectance\" [ 0 1 0 ]\n"
+        TRIANGLE "AttributeEnd\n" TRIANGLE);
+    cr_assert_eq(s->triangle_count, 9);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect_eq(m->type, SG_MATERIAL_DIFFUSE);
+    cr_expect_float_eq(m->diffuse[2], 0.3f, 1e-6);
+    cr_expect_str_eq(m->name, "wall");
+
+    m = material_of(s, 1); /* coat: Fresnel 0.04 at eta 1.5; exponent 2/a^2 - 2 */
+    cr_expect_eq(m->type, SG_MATERIAL_GLOSSY);
+    cr_expect_float_eq(m->diffuse[1], 0.2f * 0.96f, 1e-6, "texture scale 0.5 of 0.4, minus coat");
+    cr_expect_float_eq(m->specular[0], 0.04f, 1e-6);
+    cr_expect_float_eq(m->exponent, 198.0f, 1e-3);
+
+    m = material_of(s, 2); /* smooth gold: a mirror with gold's normal reflectance */
+    cr_expect_eq(m->type, SG_MATERIAL_MIRROR);
+    cr_expect(m->specular[0] > 0.9f && m->specular[2] < 0.45f && m->specular[2] > 0.3f,
+              "gold %g %g %g", m->specular[0], m->specular[1], m->specular[2]);
+
+    m = material_of(s, 3);
+    cr_expect_eq(m->type, SG_MATERIAL_GLOSSY);
+    cr_expect_float_eq(m->specular[1], 0.8f, 1e-6);
+    cr_expect_float_eq(m->exponent, (float)(2 / 0.09 - 2), 1e-3);
+    cr_expect_float_eq(m->diffuse[0], 0.0f, 1e-9);
+
+    m = material_of(s, 4);
+    cr_expect_eq(m->type, SG_MATERIAL_DIELECTRIC);
+    cr_expect_float_eq(m->ior, 1.33f, 1e-6);
+
+    m = material_of(s, 5);
+    cr_expect_float_eq(m->diffuse[0], 0.5f, 1e-6, "image textures: grey");
+    cr_expect(has_warning(s, "image textures"));
+
+    m = material_of(s, 6);
+    cr_expect_eq(m->type, SG_MATERIAL_DIFFUSE);
+    cr_expect(has_warning(s, "Material \"hair\""));
+    cr_expect_float_eq(material_of(s, 7)->diffuse[1], 1.0f, 1e-6, "Material in a block");
+    cr_expect_float_eq(material_of(s, 8)->diffuse[1], 0.5f, 1e-6, "restored by AttributeEnd");
+    sg_scene_free(s);
+}
+
+/* ---- area lights -------------------------------------------------------- */
+
+Test(pbrt_lights, radiance_scale_and_emitting_side)
+{
+    SgScene *s = load_ok(
+        HEADER
+        "AttributeBegin\n" /* light 0: winding faces +z */
+        "  AreaLightSource \"diffuse\" \"rgb L\" [ 1 2 3 ] \"float scale\" 2\n" TRIANGLE
+        "AttributeEnd\n"
+        "AttributeBegin\n" /* light 1: normals say -z, winding says +z: normals win */
+        "  Translate 5 0 0\n"
+        "  AreaLightSource \"diffuse\" \"rgb L\" [ 4 4 4 ]\n"
+        "  Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ] \"integer indices\" [ 0 1 2 ]\n"
+        "      \"normal N\" [ 0 0 -1 0 0 -1 0 0 -1 ]\n"
+        "AttributeEnd\n"
+        "AttributeBegin\n" /* light 2: ReverseOrientation flips the winding */
+        "  Translate 10 0 0\n  ReverseOrientation\n"
+        "  AreaLightSource \"diffuse\" \"rgb L\" [ 5 5 5 ]\n" TRIANGLE
+        "AttributeEnd\n"
+        "AttributeBegin\n" /* light 3: a mirroring transform flips the side too */
+        "  Translate 15 0 0\n  Scale 1 1 -1\n"
+        "  AreaLightSource \"diffuse\" \"rgb L\" [ 6 6 6 ]\n" TRIANGLE
+        "AttributeEnd\n" TRIANGLE /* not emissive: the block ended */);
+    cr_assert_eq(s->light_count, 4);
+    cr_assert_eq(s->triangle_count, 5);
+    cr_expect_eq(s->triangle_light[4], SG_NO_LIGHT);
+    double expected_z[4] = {1, -1, -1, -1};
+    float expected_r[4] = {2, 4, 5, 6};
+    for (uint32_t k = 0; k < 4; k++) {
+        const SgLight *l = NULL;
+        for (uint32_t i = 0; i < s->light_count; i++)
+            if (fabsf(s->lights[i].radiance[0] - expected_r[k]) < 1e-6f)
+                l = &s->lights[i];
+        cr_assert(l, "light %u", k);
+        cr_expect(fabs(l->normal[2] - expected_z[k]) < 1e-12, "light %u normal z %g", k,
+                  l->normal[2]);
+        cr_expect(fabs(l->area - 0.5) < 1e-12);
+    }
+    for (uint32_t i = 0; i < s->light_count; i++)
+        if (s->lights[i].radiance[0] == 2)
+            cr_expect(s->lights[i].radiance[2] == 6, "scale applies to each channel");
+    sg_scene_free(s);
+}
+
+static double rgb_luminance(const float c[3])
+{
+    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+}
+
+Test(pbrt_lights, blackbody_has_luminance_one_and_two_sided_warns)
+{
+    SgScene *s = load_ok(HEADER "AttributeBegin\n"
+                                "AreaLightSource \"diffuse\" \"blackbody L\" 2700 \"float scale\" 3\n"
+                                "    \"bool twosided\" true\n" TRIANGLE "AttributeEnd\n"
+                                "Translate 5 0 0\n"
+                                "AreaLightSource \"diffuse\" \"blackbody L\" [ 6504 ]\n" TRIANGLE);
+    cr_assert_eq(s->light_count, 2);
+    cr_expect(has_warning(s, "two-sided"));
+    const float *warm = s->lights[0].radiance, *d65 = s->lights[1].radiance;
+    if (warm[0] < d65[0]) {
+        const float *t = warm;
+        warm = d65;
+        d65 = t;
+    }
+    /* pbrt normalizes a blackbody to luminance 1 (times "scale"). */
+    cr_expect(fabs(rgb_luminance(warm) - 3) < 1e-4, "luminance %g", rgb_luminance(warm));
+    cr_expect(fabs(rgb_luminance(d65) - 1) < 1e-5, "luminance %g", rgb_luminance(d65));
+    cr_expect(warm[0] > warm[1] && warm[1] > warm[2], "2700 K is orange: %g %g %g", warm[0],
+              warm[1], warm[2]);
+    /* 6504 K is close to sRGB's white (D65 is not exactly a blackbody). */
+    for (int c = 0; c < 3; c++)
+        cr_expect(fabs(d65[c] - 1) < 0.1, "6504 K channel %d: %g", c, d65[c]);
+    sg_scene_free(s);
+}
+
+Test(pbrt_lights, area_lights_in_instances_are_ignored_like_pbrt)
+{
+    SgScene *s = load_ok(HEADER "ObjectBegin \"lamp\"\n"
+                                "  AreaLightSource \"diffuse\" \"rgb L\" [ 1 1 1 ]\n" TRIANGLE
+                                "ObjectEnd\nObjectInstance \"lamp\"\n");
+    cr_expect_eq(s->triangle_count, 1);
+    cr_expect_eq(s->light_count, 0);
+    cr_expect(has_warning(s, "ObjectBegin"));
+    sg_scene_free(s);
+}
+
+/* ---- camera ------------------------------------------------------------- */
+
+static void expect_vec(const double *v, const double *w, double tol, const char *what)
+{
+    cr_expect(fabs(v[0] - w[0]) < tol && fabs(v[1] - w[1]) < tol && fabs(v[2] - w[2]) < tol,
+              "%s: (%.7g %.7g %.7g), expected (%.7g %.7g %.7g)", what, v[0], v[1], v[2], w[0],
+              w[1], w[2]);
+}
+
+Test(pbrt_camera, lookat_with_the_usual_mirror)
+{
+    SgScene *s = load_ok("Scale -1 1 1\nLookAt 1 2 3  1 2 0  0 1 0\n"
+                         "Film \"rgb\" \"integer xresolution\" 200 \"integer yresolution\" 100\n"
+                         "Camera \"perspective\" \"float fov\" 40\nWorldBegin\n" TRIANGLE);
+    cr_assert(s->has_camera);
+    expect_vec(s->camera.position, (double[]){1, 2, 3}, 1e-12, "position");
+    expect_vec(s->camera.look_at, (double[]){1, 2, 2}, 1e-12, "look_at (unit distance)");
+    expect_vec(s->camera.up, (double[]){0, 1, 0}, 1e-12, "up");
+    cr_expect_eq(s->camera.width, 200);
+    cr_expect_eq(s->camera.height, 100);
+    cr_expect(fabs(s->camera.fov_deg - 40) < 1e-9, "landscape: fov is vertical");
+    cr_expect_eq(s->warning_count, 0, "no mirror warning with Scale -1 1 1");
+    sg_scene_free(s);
+}
+
+Test(pbrt_camera, portrait_fov_and_plain_lookat_warns_mirror)
+{
+    SgScene *s = load_ok("LookAt 0 0 0  0 0 -1  0 1 0\n"
+                         "Film \"rgb\" \"integer xresolution\" 100 \"integer yresolution\" 200\n"
+                         "Camera \"perspective\" \"float fov\" 40\nWorldBegin\n" TRIANGLE);
+    double vertical = 2 * atan(tan(20 * M_PI / 180) * 2) * 180 / M_PI;
+    cr_expect(fabs(s->camera.fov_deg - vertical) < 1e-9, "fov %g, expected %g",
+              s->camera.fov_deg, vertical);
+    cr_expect(has_warning(s, "mirrored"));
+    sg_scene_free(s);
+}
+
+Test(pbrt_camera, transform_statement_equals_lookat)
+{
+    /* The world-to-camera matrix of LookAt (with Scale -1 1 1), written out. */
+    SgScene *a = load_ok("Scale -1 1 1\nLookAt 3 1 2  0 1 0  0 1 0\nCamera \"perspective\"\n"
+                         "WorldBegin\n" TRIANGLE);
+    SgCamera ca = a->camera;
+    sg_scene_free(a);
+    /* camera axes in world: right = up x dir... here dir = (-3,0,-2)/|.|;
+     * pbrt's right = normalize(up x dir); Scale -1 negates camera x. */
+    double l = sqrt(13), dx = -3 / l, dz = -2 / l;
+    double rx = dz, rz = -dx; /* (0,1,0) x (dx,0,dz) = (dz, 0, -dx) */
+    char text[2048];
+    /* rows of world->camera: -right, up, dir; translation -R p */
+    double r0[3] = {-rx, 0, -rz}, r1[3] = {0, 1, 0}, r2[3] = {dx, 0, dz}, p[3] = {3, 1, 2};
+    double t0 = -(r0[0] * p[0] + r0[2] * p[2]), t1 = -p[1], t2 = -(r2[0] * p[0] + r2[2] * p[2]);
+    snprintf(text, sizeof text,
+             "Transform [ %.17g %.17g %.17g 0  %.17g %.17g %.17g 0  %.17g %.17g %.17g 0  "
+             "%.17g %.17g %.17g 1 ]\nCamera \"perspective\"\nWorldBegin\n" TRIANGLE,
+             r0[0], r1[0], r2[0], r0[1], r1[1], r2[1], r0[2], r1[2], r2[2], t0, t1, t2);
+    SgScene *b = load_ok(text);
+    expect_vec(b->camera.position, ca.position, 1e-12, "position");
+    expect_vec(b->camera.look_at, ca.look_at, 1e-12, "look_at");
+    expect_vec(b->camera.up, ca.up, 1e-12, "up");
+    cr_expect_eq(b->camera.width, 1280, "pbrt's default film");
+    cr_expect_eq(b->camera.height, 720);
+    cr_expect(fabs(b->camera.fov_deg - 90) < 1e-12, "pbrt's default fov");
+    sg_scene_free(b);
+}
+
+/* The numbers of ../shared/scenes/NAME/camera.txt. */
+typedef struct ExpectedCamera {
+    double position[3], look_at[3], up[3], fov;
+    int width, height;
+} ExpectedCamera;
+
+static bool read_camera_txt(const char *path, ExpectedCamera *c)
+{
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return false;
+    char line[512];
+    int found = 0;
+    while (fgets(line, sizeof line, f)) {
+        double *v = NULL;
+        if (!strncmp(line, "position", 8))
+            v = c->position;
+        else if (!strncmp(line, "lookat", 6))
+            v = c->look_at;
+        else if (!strncmp(line, "up", 2))
+            v = c->up;
+        if (v && sscanf(strchr(line, ' '), "%lf %lf %lf", &v[0], &v[1], &v[2]) == 3)
+            found++;
+        if ((!strncmp(line, "fov_deg", 7) || !strncmp(line, "hfov_deg", 8)) &&
+            sscanf(strchr(line, ' '), "%lf", &c->fov) == 1)
+            found++;
+        if (!strncmp(line, "resolution", 10) &&
+            sscanf(line + 10, "%d %d", &c->width, &c->height) == 2)
+            found++;
+    }
+    fclose(f);
+    return found == 5;
+}
+
+static void check_shared_scene(const char *pbrt, const char *camera_txt, const char *json,
+                               const double light_normal[3])
+{
+    if (!sg_test_have_shared_scenes() || !sg_test_exists(pbrt))
+        cr_skip_test("%s is absent", pbrt);
+    ExpectedCamera want;
+    cr_assert(read_camera_txt(camera_txt, &want), "cannot read %s", camera_txt);
+    SgError err = {0};
+    SgScene *s = sg_scene_load(pbrt, &err);
+    cr_assert(s, "%s", err.message);
+    cr_expect_eq(s->camera.width, want.width);
+    cr_expect_eq(s->camera.height, want.height);
+    expect_vec(s->camera.position, want.position, 2e-5, "position");
+    expect_vec(s->camera.look_at, want.look_at, 2e-5, "look_at");
+    expect_vec(s->camera.up, want.up, 2e-5, "up");
+    /* camera.txt gives pbrt's fov (the shorter axis); ours is vertical */
+    double aspect = (double)want.width / want.height;
+    double vertical = aspect < 1 ? 2 * atan(tan(want.fov * M_PI / 360) / aspect) * 180 / M_PI
+                                 : want.fov;
+    cr_expect(fabs(s->camera.fov_deg - vertical) < 1e-9, "fov %g, expected %g",
+              s->camera.fov_deg, vertical);
+    for (uint32_t i = 0; i < s->warning_count; i++)
+        cr_expect(!strstr(s->warnings[i], "mirror"), "%s", s->warnings[i]);
+
+    cr_assert_eq(s->light_count, 1);
+    cr_expect_float_eq(s->lights[0].radiance[0], 30.0f, 1e-6);
+    expect_vec(s->lights[0].normal, light_normal, 1e-5, "light normal");
+
+    /* Same geometry as the hand-made JSON version of the scene. */
+    SgScene *j = sg_scene_load(json, &err);
+    cr_assert(j, "%s", err.message);
+    cr_expect_eq(s->triangle_count, j->triangle_count);
+    cr_expect_eq(s->degenerate_dropped, j->degenerate_dropped);
+    expect_vec(s->bounds_min, j->bounds_min, 1e-9, "bounds_min");
+    expect_vec(s->bounds_max, j->bounds_max, 1e-9, "bounds_max");
+    cr_expect(fabs(s->lights[0].area - j->lights[0].area) < 1e-9);
+    sg_scene_free(j);
+
+    /* Same file, same scene. */
+    SgScene *again = sg_scene_load(pbrt, &err);
+    cr_assert(again);
+    cr_expect_eq(again->geometry_hash, s->geometry_hash);
+    sg_scene_free(again);
+    sg_scene_free(s);
+}
+
+Test(pbrt_shared, staircase_camera_light_and_geometry)
+{
+    check_shared_scene(STAIRCASE, "../shared/scenes/staircase/camera.txt",
+                       "data/external/staircase.json", (double[]){0, -1, 0});
+}
+
+Test(pbrt_shared, bathroom_camera_light_and_geometry)
+{
+    check_shared_scene(BATHROOM, "../shared/scenes/bathroom/camera.txt",
+                       "data/external/bathroom.json", (double[]){1, 0, 0});
+}
+
+Test(pbrt_shared, material_mapping_of_the_shared_scenes)
+{
+    if (!sg_test_have_shared_scenes() || !sg_test_exists(BATHROOM))
+        cr_skip_test("shared scenes absent");
+    SgError err = {0};
+    SgScene *s = sg_scene_load(BATHROOM, &err);
+    cr_assert(s, "%s", err.message);
+    int mirror = 0, glass = 0, glossy = 0;
+    for (uint32_t i = 0; i < s->material_count; i++) {
+        const SgMaterial *m = &s->materials[i];
+        if (!strcmp(m->name, "Mirror"))
+            mirror += m->type == SG_MATERIAL_MIRROR && m->specular[1] > 0.95f;
+        if (!strcmp(m->name, "BulbGlass"))
+            glass += m->type == SG_MATERIAL_DIELECTRIC && fabsf(m->ior - 1.5f) < 1e-6f;
+        glossy += m->type == SG_MATERIAL_GLOSSY;
+    }
+    cr_expect_eq(mirror, 1, "the silver mirror");
+    cr_expect_eq(glass, 1);
+    cr_expect(glossy > 0);
+    sg_scene_free(s);
+}
+
+/* ---- malformed input ---------------------------------------------------- */
+
+Test(pbrt_errors, unbalanced_brackets)
+{
+    expect_error(HEADER "Shape \"trianglemesh\"\n  \"point3 P\" [ 0 0 0 1 0 0 0 1 0\n"
+                        "  \"integer indices\" [ 0 1 2 ]\n",
+                 5, "'[' is not closed");
+    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0\n"
+                        "Shape \"sphere\"\n",
+                 4, "'[' is not closed");
+    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ] ]\n", 4,
+                 "']'");
+    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0", 4,
+                 "never closed");
+    expect_error(HEADER "Transform [ 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\nWorldBegin\n", 4,
+                 "is not closed");
+}
+
+Test(pbrt_errors, unknown_parameter_types_and_statements)
+{
+    expect_error(HEADER "\n\nShape \"sphere\" \"floot radius\" [ 1 ]\n", 6,
+                 "unknown parameter type \"floot\"");
+    expect_error(HEADER "Shape \"sphere\" \"radius\" [ 1 ]\n", 4, "not a parameter declaration");
+    expect_error(HEADER "Shapes \"sphere\"\n", 4, "unknown statement \"Shapes\"");
+    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 \"x\" 0 1 0 ]\n", 4,
+                 "expected numbers");
+    expect_error(HEADER "Translate 1 2\nWorldEnd\n", 5, "expected a number");
+    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 nan 0 1 0 ]\n", 4,
+                 "expected a value, found nan");
+    expect_error(HEADER "Material \"diffuse\" \"string reflectance\" \"x\n", 4,
+                 "unterminated string");
+}
+
+Test(pbrt_errors, missing_files_and_names)
+{
+    expect_error(HEADER "\nShape \"plymesh\" \"string filename\" \"models/none.ply\"\n", 5,
+                 "models/none.ply: cannot open mesh");
+    expect_error(HEADER "Include \"none.pbrt\"\n", 4, "none.pbrt: cannot open");
+    expect_error(HEADER "NamedMaterial \"nothing\"\n", 4, "\"nothing\" is not defined");
+    expect_error(HEADER "ObjectInstance \"nothing\"\n", 4, "no such object");
+    expect_error(HEADER "Material \"diffuse\" \"texture reflectance\" \"none\"\n", 4,
+                 "no texture named \"none\"");
+    /* An error in an included file names that file. */
+    write_scene("bad.pbrt", "\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 ] \"integer indices\" [ 0 1 2 ]\n");
+    SgError err;
+    cr_assert_null(load_text(HEADER "Include \"bad.pbrt\"\n", &err));
+    cr_expect(strstr(err.message, "/bad.pbrt:2: index 1 is out of range"), "%s", err.message);
+}
+
+Test(pbrt_errors, unbalanced_blocks)
+{
+    expect_error(HEADER TRIANGLE "AttributeEnd\n", 5, "AttributeEnd without");
+    expect_error(HEADER "AttributeBegin\n" TRIANGLE, 4, "AttributeBegin has no matching");
+    expect_error(HEADER "TransformBegin\n" TRIANGLE, 4, "TransformBegin has no matching");
+    expect_error(HEADER "ObjectBegin \"a\"\n" TRIANGLE, 4, "ObjectBegin has no matching");
+    expect_error(HEADER "ObjectBegin \"a\"\nObjectBegin \"b\"\n", 5, "ObjectBegin inside");
+    expect_error(HEADER "ObjectEnd\n", 4, "ObjectEnd without");
+}
+
+Test(pbrt_errors, bad_geometry)
+{
+    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 1 1 1 ]\n", 4,
+                 "needs \"integer indices\"");
+    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n"
+                        "  \"integer indices\" [ 0 1 3 ]\n",
+                 4, "index 3 is out of range");
+    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 ]\n", 4,
+                 "needs \"point3 P\"");
+    SgError err;
+    cr_assert_null(load_text(HEADER "Shape \"sphere\"\n", &err));
+    cr_expect(strstr(err.message, "no triangles"), "%s", err.message);
+}
+
+/* ---- the programs take .pbrt files -------------------------------------- */
+
+Test(pbrt_programs, voxelize_reads_pbrt_and_prints_warnings)
+{
+    char prog[4096], cmd[16384], errs[8192];
+    sg_test_program("voxelize", prog, sizeof prog);
+    if (!sg_test_exists(prog))
+        cr_skip_test("bin/voxelize not built");
+    const char *scene = write_scene(
+        "room.pbrt", HEADER
+        "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 4 0 0 4 0 4 0 0 4  0 4 0 4 4 0 4 4 4 0 4 4 ]\n"
+        "  \"integer indices\" [ 0 1 2 0 2 3  4 6 5 4 7 6 ]\n"
+        "Shape \"sphere\"\n"
+        "AttributeBegin\n  AreaLightSource \"diffuse\" \"rgb L\" [ 5 5 5 ]\n"
+        "  Shape \"trianglemesh\" \"point3 P\" [ 1 3 1 3 3 1 3 3 3 1 3 3 ]\n"
+        "    \"integer indices\" [ 0 1 2 0 2 3 ]\nAttributeEnd\n");
+    snprintf(cmd, sizeof cmd, "%s %s -o %s/room.vdb --resolution 16", prog, scene, scene_dir);
+    int rc = sg_test_run(cmd, errs, sizeof errs);
+    cr_expect_eq(rc, 0, "%s", errs);
+    cr_expect(strstr(errs, "voxelize: warning: ") && strstr(errs, "room.pbrt:6: Shape \"sphere\""),
+              "%s", errs);
+    char vdb[4200];
+    snprintf(vdb, sizeof vdb, "%s/room.vdb", scene_dir);
+    cr_expect(sg_test_exists(vdb));
+}
+
+/* ---- render: mean brightness of the staircase ---------------------------- */
+
+/* The committed reference: tests/data/pbrt_staircase_mean.txt. */
+Test(pbrt_render, staircase_mean_brightness, .timeout = 120)
+{
+    char prog[4096];
+    sg_test_program("render", prog, sizeof prog);
+    if (!sg_test_exists(prog))
+        cr_skip_test("bin/render not built");
+    if (!sg_test_have_shared_scenes() || !sg_test_exists(STAIRCASE))
+        cr_skip_test("shared scenes absent");
+    FILE *f = fopen("tests/data/pbrt_staircase_mean.txt", "r");
+    cr_assert(f, "tests/data/pbrt_staircase_mean.txt missing");
+    char line[256];
+    double want[3] = {0, 0, 0}, tolerance = 0;
+    int spp = 0, width = 0, height = 0;
+    while (fgets(line, sizeof line, f)) {
+        sscanf(line, "mean %lf %lf %lf", &want[0], &want[1], &want[2]);
+        sscanf(line, "tolerance %lf", &tolerance);
+        sscanf(line, "spp %d", &spp);
+        sscanf(line, "size %dx%d", &width, &height);
+    }
+    fclose(f);
+    cr_assert(tolerance > 0 && spp > 0 && width > 0 && height > 0, "bad reference file");
+    if (!scene_dir)
+        scene_dir = sg_test_tmpdir();
+    char cmd[16384], errs[8192];
+    snprintf(cmd, sizeof cmd,
+             "%s %s --sampling bsdf --spp %d --size %dx%d --seed 1 -o %s/stairs.exr --quiet",
+             prog, STAIRCASE, spp, width, height, scene_dir);
+    int rc = sg_test_run(cmd, errs, sizeof errs);
+    cr_assert_eq(rc, 0, "%s", errs);
+    snprintf(cmd, sizeof cmd, "oiiotool %s/stairs.exr --printstats 2>&1 | grep 'Stats Avg'",
+             scene_dir);
+    FILE *stats = popen(cmd, "r");
+    cr_assert(stats);
+    double got[3] = {-1, -1, -1};
+    char *avg = fgets(line, sizeof line, stats) ? strstr(line, "Avg:") : NULL;
+    pclose(stats);
+    cr_assert(avg && sscanf(avg + 4, "%lf %lf %lf", &got[0], &got[1], &got[2]) == 3,
+              "no stats from oiiotool");
+    for (int c = 0; c < 3; c++)
+        cr_expect(fabs(got[c] - want[c]) <= tolerance * want[c],
+                  "channel %d: mean %g, reference %g (tolerance %g%%)", c, got[c], want[c],
+                  100 * tolerance);
+}

@@ -1,0 +1,364 @@
+/* Chi-square tests of every direction sampler of the renderer against its
+ * own pdf (the way pbrt-v4 and Mitsuba 3 test theirs): 1e6 samples
+ * histogrammed over theta/phi bins of the sphere, expected counts from the
+ * pdf integrated over each bin, bins expecting fewer than 5 pooled, and the
+ * test fails when the chi-square p-value is below 0.01 (Sidak-corrected for
+ * the number of tests in this file). A sample where the pdf is zero fails. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "../render/sampling.h"
+#include "rng.h"
+
+#define THETA_BINS 80
+#define PHI_BINS 160
+#define SAMPLES 1000000
+#define TESTS_IN_FILE 18
+
+typedef Vec3 (*SampleFn)(const void *ctx, float u0, float u1, float u2);
+typedef float (*PdfFn)(const void *ctx, Vec3 w);
+
+/* ---- chi-square survival function: Q(k/2, x/2), regularized upper
+ * incomplete gamma, by its series (x < a + 1) or continued fraction. */
+static double upper_gamma_q(double a, double x)
+{
+    if (x <= 0.0)
+        return 1.0;
+    double log_prefix = -x + a * log(x) - lgamma(a);
+    if (x < a + 1.0) {
+        double term = 1.0 / a, sum = term;
+        for (int n = 1; n < 100000; n++) {
+            term *= x / (a + n);
+            sum += term;
+            if (fabs(term) < fabs(sum) * 1e-15)
+                break;
+        }
+        return 1.0 - sum * exp(log_prefix);
+    }
+    /* Lentz's method for the continued fraction of Q. */
+    const double tiny = 1e-300;
+    double b = x + 1.0 - a, c = 1.0 / tiny, d = 1.0 / b, h = d;
+    for (int i = 1; i < 100000; i++) {
+        double an = -i * (i - a);
+        b += 2.0;
+        d = an * d + b;
+        if (fabs(d) < tiny) d = tiny;
+        c = b + an / c;
+        if (fabs(c) < tiny) c = tiny;
+        d = 1.0 / d;
+        double delta = d * c;
+        h *= delta;
+        if (fabs(delta - 1.0) < 1e-15)
+            break;
+    }
+    return exp(log_prefix) * h;
+}
+
+static double chi2_survival(double chi2, int dof)
+{
+    return upper_gamma_q(0.5 * dof, 0.5 * chi2);
+}
+
+Test(render_sampling, chi2_survival_matches_known_values)
+{
+    /* Tabulated: P(chi2_1 > 3.841) = 0.05, P(chi2_10 > 23.209) = 0.01,
+     * P(chi2_100 > 135.807) = 0.01, P(chi2_2 > x) = exp(-x/2). */
+    cr_assert_float_eq(chi2_survival(3.841459, 1), 0.05, 1e-6);
+    cr_assert_float_eq(chi2_survival(23.20925, 10), 0.01, 1e-6);
+    cr_assert_float_eq(chi2_survival(135.8067, 100), 0.01, 1e-5);
+    cr_assert_float_eq(chi2_survival(7.0, 2), exp(-3.5), 1e-12);
+}
+
+/* ---- histogram test ---------------------------------------------------- */
+
+static Vec3 sphere_dir(double theta, double phi)
+{
+    return v3((float)(sin(theta) * cos(phi)), (float)(sin(theta) * sin(phi)), (float)cos(theta));
+}
+
+/* Integral of the pdf over one bin by Simpson's rule in theta and phi
+ * (steps sub per side, even), with the sin(theta) Jacobian. */
+static double integrate_bin(PdfFn pdf, const void *ctx, double t0, double t1, double p0,
+                            double p1, int sub)
+{
+    /* Evaluate just inside the bin: a pdf that jumps on a bin edge (a lobe
+     * folded at the surface, with the normal on a coordinate axis) is then
+     * integrated from the correct side. */
+    const double inset = 1e-9;
+    double width_t = t1 - t0, width_p = p1 - p0;
+    t0 += inset;
+    t1 -= inset;
+    p0 += inset;
+    p1 -= inset;
+    double ht = (t1 - t0) / sub, hp = (p1 - p0) / sub, sum = 0.0;
+    for (int i = 0; i <= sub; i++) {
+        double wt = (i == 0 || i == sub) ? 1 : (i % 2 ? 4 : 2);
+        double theta = t0 + i * ht;
+        for (int j = 0; j <= sub; j++) {
+            double wp = (j == 0 || j == sub) ? 1 : (j % 2 ? 4 : 2);
+            double phi = p0 + j * hp;
+            sum += wt * wp * pdf(ctx, sphere_dir(theta, phi)) * sin(theta);
+        }
+    }
+    return sum * ht * hp / 9.0 * (width_t * width_p) / ((t1 - t0) * (p1 - p0));
+}
+
+typedef struct Chi2Result {
+    double p_value;
+    double pdf_integral;
+    long zero_pdf_samples;
+    long nonfinite_samples;
+    int dof;
+} Chi2Result;
+
+static int compare_expected(const void *a, const void *b)
+{
+    const double *x = a, *y = b;
+    return (x[0] > y[0]) - (x[0] < y[0]);
+}
+
+static Chi2Result chi2_test(SampleFn sample, PdfFn pdf, const void *ctx, uint64_t seed, int sub)
+{
+    Chi2Result res = {0};
+    const int bins = THETA_BINS * PHI_BINS;
+    double *observed = calloc(bins, sizeof *observed);
+    SgRng rng;
+    sg_rng_seed(&rng, seed, 7);
+    for (long s = 0; s < SAMPLES; s++) {
+        float u0 = sg_rng_float(&rng), u1 = sg_rng_float(&rng), u2 = sg_rng_float(&rng);
+        Vec3 w = sample(ctx, u0, u1, u2);
+        if (!isfinite(w.x) || !isfinite(w.y) || !isfinite(w.z) ||
+            fabsf(v3_length(w) - 1.0f) > 1e-4f) {
+            res.nonfinite_samples++;
+            continue;
+        }
+        if (!(pdf(ctx, w) > 0.0f))
+            res.zero_pdf_samples++;
+        double theta = acos(fmax(-1.0, fmin(1.0, (double)w.z)));
+        double phi = atan2((double)w.y, (double)w.x);
+        if (phi < 0)
+            phi += 2.0 * M_PI;
+        int ti = (int)(theta / M_PI * THETA_BINS), pi = (int)(phi / (2.0 * M_PI) * PHI_BINS);
+        ti = ti < 0 ? 0 : ti >= THETA_BINS ? THETA_BINS - 1 : ti;
+        pi = pi < 0 ? 0 : pi >= PHI_BINS ? PHI_BINS - 1 : pi;
+        observed[ti * PHI_BINS + pi] += 1.0;
+    }
+    /* pairs (expected, observed), sorted by expected to pool the small ones */
+    double *pairs = malloc(2 * sizeof(double) * bins);
+    for (int ti = 0; ti < THETA_BINS; ti++)
+        for (int pi = 0; pi < PHI_BINS; pi++) {
+            double e = integrate_bin(pdf, ctx, M_PI * ti / THETA_BINS, M_PI * (ti + 1) / THETA_BINS,
+                                     2 * M_PI * pi / PHI_BINS, 2 * M_PI * (pi + 1) / PHI_BINS, sub);
+            res.pdf_integral += e;
+            pairs[2 * (ti * PHI_BINS + pi)] = e * SAMPLES;
+            pairs[2 * (ti * PHI_BINS + pi) + 1] = observed[ti * PHI_BINS + pi];
+        }
+    qsort(pairs, bins, 2 * sizeof(double), compare_expected);
+    double chi2 = 0.0, pool_e = 0.0, pool_o = 0.0;
+    int cells = 0;
+    for (int i = 0; i < bins; i++) {
+        double e = pairs[2 * i], o = pairs[2 * i + 1];
+        if (e < 5.0 || (pool_e > 0.0 && pool_e < 5.0)) {
+            pool_e += e;
+            pool_o += o;
+            if (pool_e < 5.0)
+                continue;
+            e = pool_e;
+            o = pool_o;
+            pool_e = pool_o = 0.0;
+        }
+        chi2 += (o - e) * (o - e) / e;
+        cells++;
+    }
+    if (pool_e > 0.0) { /* leftover pool: fold into the statistic as one cell */
+        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / fmax(pool_e, 1e-12);
+        cells++;
+    }
+    res.dof = cells - 1;
+    res.p_value = chi2_survival(chi2, res.dof);
+    free(pairs);
+    free(observed);
+    return res;
+}
+
+static void assert_chi2(const char *name, SampleFn sample, PdfFn pdf, const void *ctx,
+                        uint64_t seed, int sub)
+{
+    Chi2Result r = chi2_test(sample, pdf, ctx, seed, sub);
+    double alpha = 1.0 - pow(1.0 - 0.01, 1.0 / TESTS_IN_FILE); /* Sidak */
+    cr_log_info("%s: p = %.4f (dof %d), pdf integral %.6f", name, r.p_value, r.dof,
+                r.pdf_integral);
+    cr_assert_eq(r.nonfinite_samples, 0, "%s: %ld non-unit or non-finite samples", name,
+                 r.nonfinite_samples);
+    cr_assert_eq(r.zero_pdf_samples, 0, "%s: %ld samples where the pdf is zero", name,
+                 r.zero_pdf_samples);
+    cr_assert(fabs(r.pdf_integral - 1.0) < 2e-3, "%s: pdf integrates to %.6f", name,
+              r.pdf_integral);
+    cr_assert(r.p_value >= alpha, "%s: chi-square p = %.3g < %.3g (dof %d)", name, r.p_value,
+              alpha, r.dof);
+}
+
+/* ---- the routines under test -------------------------------------------- */
+
+typedef struct AxisCtx {
+    Vec3 axis;
+    float exponent;
+} AxisCtx;
+
+static Vec3 cosine_sample(const void *c, float u0, float u1, float u2)
+{
+    (void)u0;
+    return sg_sample_cosine_hemisphere(((const AxisCtx *)c)->axis, u1, u2);
+}
+static float cosine_pdf(const void *c, Vec3 w)
+{
+    return sg_pdf_cosine_hemisphere(((const AxisCtx *)c)->axis, w);
+}
+static Vec3 power_sample(const void *c, float u0, float u1, float u2)
+{
+    (void)u0;
+    const AxisCtx *a = c;
+    return sg_sample_cosine_power(a->axis, a->exponent, u1, u2);
+}
+static float power_pdf(const void *c, Vec3 w)
+{
+    const AxisCtx *a = c;
+    return sg_pdf_cosine_power(a->axis, a->exponent, w);
+}
+static Vec3 glossy_sample(const void *c, float u0, float u1, float u2)
+{
+    return sg_sample_glossy(c, u0, u1, u2);
+}
+static float glossy_pdf(const void *c, Vec3 w) { return sg_pdf_glossy(c, w); }
+static Vec3 mixture_sample(const void *c, float u0, float u1, float u2)
+{
+    return sg_sample_mixture(c, u0, u1, u2);
+}
+static float mixture_pdf(const void *c, Vec3 w) { return sg_pdf_mixture(c, w); }
+
+static Vec3 tilted(float x, float y, float z) { return v3_normalize(v3(x, y, z)); }
+
+Test(render_sampling, cosine_hemisphere_tilted)
+{
+    AxisCtx c = {tilted(0.3f, -0.5f, 0.8f), 0};
+    assert_chi2("cosine tilted", cosine_sample, cosine_pdf, &c, 1, 8);
+}
+
+Test(render_sampling, cosine_hemisphere_facing_minus_z)
+{
+    /* the basis construction's singular direction */
+    AxisCtx c = {v3(0, 0, -1), 0};
+    assert_chi2("cosine -z", cosine_sample, cosine_pdf, &c, 2, 8);
+}
+
+static void power_case(float exponent, uint64_t seed, int sub)
+{
+    char name[64];
+    snprintf(name, sizeof name, "cosine power %g", exponent);
+    AxisCtx c = {tilted(-0.4f, 0.2f, 0.6f), exponent};
+    assert_chi2(name, power_sample, power_pdf, &c, seed, sub);
+}
+
+Test(render_sampling, cosine_power_0_uniform) { power_case(0.0f, 3, 8); }
+Test(render_sampling, cosine_power_1) { power_case(1.0f, 4, 8); }
+Test(render_sampling, cosine_power_10) { power_case(10.0f, 5, 8); }
+Test(render_sampling, cosine_power_100) { power_case(100.0f, 6, 16); }
+Test(render_sampling, cosine_power_1000) { power_case(1000.0f, 7, 32); }
+
+Test(render_sampling, cosine_power_10000_narrow_lobe)
+{
+    /* Too narrow for 80 theta bins: test it with the lobe's own moments.
+     * E[cos theta] = (p+1)/(p+2), E[1 - cos theta] = 1/(p+2) exactly. */
+    const float p = 10000.0f;
+    Vec3 a = tilted(0.1f, 0.9f, -0.3f);
+    SgRng rng;
+    sg_rng_seed(&rng, 8, 1);
+    double sum = 0.0, sum2 = 0.0;
+    const int n = SAMPLES;
+    for (int i = 0; i < n; i++) {
+        Vec3 w = sg_sample_cosine_power(a, p, sg_rng_float(&rng), sg_rng_float(&rng));
+        double one_minus = 1.0 - (double)v3_dot(w, a);
+        sum += one_minus;
+        sum2 += one_minus * one_minus;
+        cr_assert(sg_pdf_cosine_power(a, p, w) > 0.0f);
+    }
+    double mean = sum / n, var = sum2 / n - mean * mean;
+    double expected = 1.0 / (p + 2.0);
+    /* float directions: 1 - cos is resolved to ~6e-8 per sample, far below
+     * the tolerance; the statistical error is sqrt(var/n). */
+    cr_assert(fabs(mean - expected) < 4.0 * sqrt(var / n) + 1e-7,
+              "E[1-cos] = %.4g, expected %.4g", mean, expected);
+}
+
+typedef struct FoldCtx {
+    Vec3 axis, n;
+    float exponent;
+} FoldCtx;
+static Vec3 folded_sample(const void *c, float u0, float u1, float u2)
+{
+    (void)u0;
+    const FoldCtx *f = c;
+    return sg_sample_folded_lobe(f->axis, f->n, f->exponent, u1, u2);
+}
+static float folded_pdf(const void *c, Vec3 w)
+{
+    const FoldCtx *f = c;
+    return sg_pdf_folded_lobe(f->axis, f->n, f->exponent, w);
+}
+
+Test(render_sampling, folded_lobe_grazing_axis)
+{
+    /* axis 10 degrees above the surface: half the lobe is folded back */
+    FoldCtx c = {tilted(0.98f, 0.0f, 0.17f), v3(0, 0, 1), 8.0f};
+    assert_chi2("folded lobe 8 grazing", folded_sample, folded_pdf, &c, 14, 8);
+}
+
+Test(render_sampling, folded_lobe_axis_below_tilted_normal)
+{
+    FoldCtx c = {tilted(-0.3f, 0.5f, -0.2f), tilted(0.1f, 0.7f, 0.3f), 3.0f};
+    assert_chi2("folded lobe 3 below", folded_sample, folded_pdf, &c, 15, 8);
+}
+
+Test(render_sampling, glossy_diffuse_plus_phong)
+{
+    Vec3 n = tilted(0.2f, 0.1f, 0.9f);
+    Vec3 wo = tilted(0.9f, -0.2f, 0.3f); /* grazing: part of the lobe is below */
+    SgGlossyLobe lobe = sg_glossy_lobe(n, wo, 20.0f, 0.4f);
+    assert_chi2("glossy kd+ks", glossy_sample, glossy_pdf, &lobe, 9, 8);
+}
+
+Test(render_sampling, glossy_pure_phong_200)
+{
+    Vec3 n = v3(0, 0, 1);
+    Vec3 wo = tilted(-0.5f, 0.3f, 0.7f);
+    SgGlossyLobe lobe = sg_glossy_lobe(n, wo, 200.0f, 0.0f);
+    assert_chi2("glossy phong 200", glossy_sample, glossy_pdf, &lobe, 10, 16);
+}
+
+Test(render_sampling, mixture_half)
+{
+    Vec3 n = tilted(0.0f, -0.3f, 1.0f);
+    SgMixture m = {sg_glossy_lobe(n, tilted(0.3f, 0.3f, 0.9f), 0.0f, 1.0f),
+                   tilted(0.7f, 0.1f, 0.2f), 30.0f, 0.5f};
+    assert_chi2("mixture 0.5 diffuse + lobe 30", mixture_sample, mixture_pdf, &m, 11, 8);
+}
+
+Test(render_sampling, mixture_glossy_small_alpha)
+{
+    Vec3 n = v3(0, 1, 0);
+    SgMixture m = {sg_glossy_lobe(n, tilted(0.5f, 0.5f, 0.1f), 50.0f, 0.3f),
+                   tilted(-0.6f, 0.3f, -0.5f), 4.0f, 0.1f};
+    assert_chi2("mixture 0.1 glossy + lobe 4", mixture_sample, mixture_pdf, &m, 12, 8);
+}
+
+Test(render_sampling, mixture_lobe_axis_below_surface_keeps_support)
+{
+    /* The lobe points into the surface: the mixture still samples the
+     * whole upper hemisphere through its BSDF part. */
+    Vec3 n = v3(1, 0, 0);
+    SgMixture m = {sg_glossy_lobe(n, tilted(1, 1, 0), 0.0f, 1.0f), tilted(-1, 0.2f, 0.1f),
+                   10.0f, 0.5f};
+    assert_chi2("mixture lobe below", mixture_sample, mixture_pdf, &m, 13, 8);
+}
