@@ -12,7 +12,12 @@
  * exactly one coface left (or at the start). Cofaces only ever go, so that
  * count passes 1 once: a cell is queued at most once, with no need for a
  * "queued" bit per cell. A queued face may stop being free (its coface
- * goes with another face): it is checked again when its sub-step comes. */
+ * goes with another face): it is checked again when its sub-step comes.
+ *
+ * Threads: a large sub-step is verified in parallel (read only), then its
+ * pairs are processed by slabs of lattice planes, all even slabs at once,
+ * then all odd ones; slabs running together touch disjoint cells, so this
+ * is just one of the sequential orders, and no atomics are needed. */
 #include "collapse.h"
 
 #include <pthread.h>
