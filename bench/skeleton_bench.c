@@ -1,7 +1,7 @@
 /* Skeleton benchmark: the furnished synthetic room (walls, table, sofa,
  * pillar, hanging lamp) at a given grid size, through sg_skeletonize.
  *   skeleton_bench NX NY NZ [THREADS]
- * prints one table row: grid, medium voxels, wall seconds (distance,
+ * prints one table row: grid, threads, medium voxels, wall seconds (distance,
  * collapse, total), CPU seconds of the skeleton (user + system, all
  * threads), peak RSS in MB (VmHWM, the whole process including the
  * 1-byte-per-voxel input grid), nodes, edges, loops, cavities broken, mean
@@ -64,8 +64,8 @@ int main(int argc, char **argv)
     double cpu = cpu_seconds() - cpu0;
     char grid[64];
     snprintf(grid, sizeof grid, "%dx%dx%d", nx, ny, nz);
-    printf("%-12s %10" PRIu64 " %8.2f %8.2f %7.2f %6.2f %7.0f %6u %6u %5" PRId64 " %4u %6.3f\n",
-           grid, st.medium_voxels, st.seconds_distance, st.seconds_collapse,
+    printf("%-12s %7d %10" PRIu64 " %8.2f %8.2f %7.2f %6.2f %7.0f %6u %6u %5" PRId64 " %4u %6.3f\n",
+           grid, opt.threads, st.medium_voxels, st.seconds_distance, st.seconds_collapse,
            st.seconds_total, cpu, peak_rss_mb(), st.nodes, st.edges, st.loops,
            st.cavities_broken, st.mean_centredness);
     sg_skeleton_release(&skeleton);
