@@ -64,9 +64,6 @@ typedef struct Helper {
 } Helper;
 
 #define MAX_THREADS 8
-/* Sub-steps with fewer queued faces run sequentially: below this the
- * barriers cost more than the work. */
-#define PARALLEL_GRAIN 16384
 /* Slabs of lattice planes processed concurrently are at least this thick
  * and never adjacent: the work for a pair at plane z reads and writes
  * planes z-2..z+1 only. */
@@ -704,8 +701,8 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
 
     /* worker threads for large sub-steps: slabs of at least SLAB_MIN
      * planes, about 8 per thread for balance */
-    c.parallel_grain = parallel_grain ? parallel_grain : PARALLEL_GRAIN;
-    c.threads = sg_thread_count(threads);
+    c.parallel_grain = parallel_grain;
+    c.threads = parallel_grain ? sg_thread_count(threads) : 1;
     if (c.threads > MAX_THREADS)
         c.threads = MAX_THREADS;
     c.slab_planes = (size_t)cx->lz / (8 * (size_t)c.threads);

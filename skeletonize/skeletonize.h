@@ -44,12 +44,19 @@
 extern "C" {
 #endif
 
+#define SG_SKELETON_PARALLEL_GRAIN 16384
+
 typedef struct SgSkeletonOptions {
     bool camera_constraint; /* the camera's voxel joins the constraint set */
     int threads;            /* <= 0: every core */
     bool progress;          /* progress line on a terminal (stderr) */
-    uint32_t parallel_grain; /* collapse sub-steps with fewer queued faces run
-                               on one thread; 0: default; tests use 1 */
+    uint32_t parallel_grain; /* 0 (default): the collapse runs on one thread;
+                               n > 0: its sub-steps with at least n queued
+                               faces run on the threads (same result). On this
+                               2-core machine, busy with other work, that was
+                               slower (barriers wait for a descheduled thread),
+                               hence off by default; SG_SKELETON_PARALLEL_GRAIN
+                               is the suggested value when cores are idle */
     double filter_scale;    /* the lifespan rule keeps an edge when
                                lifespan > filter_scale x opening; 1 is [Cha10]'s
                                parameter-free rule (default), 0 keeps every
