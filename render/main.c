@@ -15,7 +15,7 @@
 #include "scene.h"
 
 static const char *usage =
-    "usage: render SCENE.json [--cache importance.cache] [--sampling bsdf|skeleton|guided]\n"
+    "usage: render SCENE [--cache importance.cache] [--sampling bsdf|skeleton|guided]\n"
     "              [--spp N | --time SECONDS] [--seed N] [--threads N] -o image.exr\n"
     "              [--png image.png] [--exposure STOPS] [--reference ref.exr --log curve.csv]\n"
     "              [--max-depth N] [--exponent P] [--alpha A] [--size WxH] [--quiet]\n"
@@ -233,6 +233,8 @@ int main(int argc, char **argv)
     scene = sg_scene_load(a.scene, &err);
     if (!scene)
         goto done;
+    if (!a.quiet)
+        sg_scene_print_warnings(scene, "render", stderr);
     if (!scene->has_camera) {
         sg_fail(&err, "%s: no camera in the scene", a.scene);
         goto done;
