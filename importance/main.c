@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli.h"
 #include "importance.h"
 #include "importance_cache.h"
 #include "medium.h"
@@ -110,17 +111,13 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--vectors") && i + 1 < argc) {
             options.vectors_path = argv[++i];
         } else if (!strcmp(a, "--threads") && i + 1 < argc) {
-            char *end;
-            long t = strtol(argv[++i], &end, 10);
-            if (*end || t < 1 || t > 1024) {
+            if (!sg_parse_int(argv[++i], 1, 1024, &options.threads)) {
                 fprintf(stderr, "importance: --threads takes a whole number in [1, 1024]\n");
                 return 2;
             }
-            options.threads = (int)t;
         } else if (!strcmp(a, "--run-tolerance") && i + 1 < argc) {
-            char *end;
-            double t = strtod(argv[++i], &end);
-            if (*end || !(t > 0 && t <= 1)) {
+            double t;
+            if (!sg_parse_double(argv[++i], 0, 1, &t) || t <= 0) {
                 fprintf(stderr, "importance: --run-tolerance takes a number in (0, 1]\n");
                 return 2;
             }

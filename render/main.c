@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli.h"
 #include "error.h"
 #include "image_io.h"
 #include "importance_cache.h"
@@ -53,28 +54,6 @@ typedef struct Args {
     bool has_exposure, has_exponent, has_alpha, quiet;
 } Args;
 
-static bool parse_long(const char *s, long lo, long hi, long *out)
-{
-    char *end;
-    errno = 0;
-    long v = strtol(s, &end, 10);
-    if (errno || end == s || *end || v < lo || v > hi)
-        return false;
-    *out = v;
-    return true;
-}
-
-static bool parse_double(const char *s, double lo, double hi, double *out)
-{
-    char *end;
-    errno = 0;
-    double v = strtod(s, &end);
-    if (errno || end == s || *end || !isfinite(v) || v < lo || v > hi)
-        return false;
-    *out = v;
-    return true;
-}
-
 static bool parse_args(int argc, char **argv, Args *a, SgError *err)
 {
     memset(a, 0, sizeof *a);
@@ -98,11 +77,11 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
         else if (!strcmp(s, "--log")) { NEED_VALUE(); a->log = v; }
         else if (!strcmp(s, "--spp")) {
             NEED_VALUE();
-            if (!parse_long(v, 1, 1L << 30, &a->spp))
+            if (!sg_parse_long(v, 1, 1L << 30, &a->spp))
                 return sg_fail(err, "--spp: '%s' is not a positive integer", v);
         } else if (!strcmp(s, "--time")) {
             NEED_VALUE();
-            if (!parse_double(v, 1e-6, 1e9, &a->time))
+            if (!sg_parse_double(v, 1e-6, 1e9, &a->time))
                 return sg_fail(err, "--time: '%s' is not a positive number of seconds", v);
         } else if (!strcmp(s, "--seed")) {
             NEED_VALUE();
@@ -114,25 +93,25 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
             a->seed = x;
         } else if (!strcmp(s, "--threads")) {
             NEED_VALUE();
-            if (!parse_long(v, 1, 4096, &a->threads))
+            if (!sg_parse_long(v, 1, 4096, &a->threads))
                 return sg_fail(err, "--threads: '%s' is not a positive integer", v);
         } else if (!strcmp(s, "--max-depth")) {
             NEED_VALUE();
-            if (!parse_long(v, 1, 100000, &a->max_depth))
+            if (!sg_parse_long(v, 1, 100000, &a->max_depth))
                 return sg_fail(err, "--max-depth: '%s' is not a positive integer", v);
         } else if (!strcmp(s, "--exposure")) {
             NEED_VALUE();
-            if (!parse_double(v, -100, 100, &a->exposure))
+            if (!sg_parse_double(v, -100, 100, &a->exposure))
                 return sg_fail(err, "--exposure: '%s' is not a number of stops", v);
             a->has_exposure = true;
         } else if (!strcmp(s, "--exponent")) {
             NEED_VALUE();
-            if (!parse_double(v, 0, 1e5, &a->exponent))
+            if (!sg_parse_double(v, 0, 1e5, &a->exponent))
                 return sg_fail(err, "--exponent: '%s' is not in [0, 1e5]", v);
             a->has_exponent = true;
         } else if (!strcmp(s, "--alpha")) {
             NEED_VALUE();
-            if (!parse_double(v, 0, 1, &a->alpha) || a->alpha <= 0)
+            if (!sg_parse_double(v, 0, 1, &a->alpha) || a->alpha <= 0)
                 return sg_fail(err, "--alpha: '%s' is not in (0, 1]", v);
             a->has_alpha = true;
         } else if (!strcmp(s, "--size")) {

@@ -4,6 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli.h"
+
 #include "medium.h"
 #include "progress.h"
 #include "skeleton_graph.h"
@@ -32,16 +34,6 @@ static void usage(FILE *out)
             "  -h, --help           this help\n");
 }
 
-static bool parse_int(const char *text, int lo, int hi, int *out)
-{
-    char *end;
-    long v = strtol(text, &end, 10);
-    if (!*text || *end || v < lo || v > hi)
-        return false;
-    *out = (int)v;
-    return true;
-}
-
 int main(int argc, char **argv)
 {
     const char *in_path = NULL, *out_path = NULL;
@@ -60,7 +52,7 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--camera-constraint")) {
             options.camera_constraint = true;
         } else if (!strcmp(a, "--threads") && i + 1 < argc) {
-            if (!parse_int(argv[++i], 1, 1024, &options.threads)) {
+            if (!sg_parse_int(argv[++i], 1, 1024, &options.threads)) {
                 fprintf(stderr, "skeletonize: --threads takes a whole number in [1, 1024]\n");
                 return 2;
             }

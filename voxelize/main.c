@@ -4,6 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli.h"
+
 #include "medium.h"
 #include "progress.h"
 #include "scene.h"
@@ -30,16 +32,6 @@ static void usage(FILE *out)
             SG_VOXELIZE_DEFAULT_RESOLUTION);
 }
 
-static bool parse_int(const char *text, int lo, int hi, int *out)
-{
-    char *end;
-    long v = strtol(text, &end, 10);
-    if (!*text || *end || v < lo || v > hi)
-        return false;
-    *out = (int)v;
-    return true;
-}
-
 int main(int argc, char **argv)
 {
     const char *scene_path = NULL, *out_path = NULL;
@@ -53,12 +45,12 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "-o") && i + 1 < argc) {
             out_path = argv[++i];
         } else if (!strcmp(a, "--resolution") && i + 1 < argc) {
-            if (!parse_int(argv[++i], 1, 4096, &options.resolution)) {
+            if (!sg_parse_int(argv[++i], 1, 4096, &options.resolution)) {
                 fprintf(stderr, "voxelize: --resolution takes a whole number in [1, 4096]\n");
                 return 2;
             }
         } else if (!strcmp(a, "--threads") && i + 1 < argc) {
-            if (!parse_int(argv[++i], 1, 1024, &options.threads)) {
+            if (!sg_parse_int(argv[++i], 1, 1024, &options.threads)) {
                 fprintf(stderr, "voxelize: --threads takes a whole number in [1, 1024]\n");
                 return 2;
             }
