@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "memory.h"
 #include "rng.h"
 #include "sampling.h"
 #include "threads.h"
@@ -266,6 +267,13 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
     if (!(o->lobe_exponent >= 0.0f && o->lobe_exponent <= 1e5f))
         return sg_fail(err, "%s: lobe exponent must be in [0, 1e5]", path), NULL;
 
+    /* sum (double) + last pass + the caller's image (float) per pixel, and
+     * the renderer's and Embree's copies of the triangles (~150 bytes each):
+     * refuse up front what the machine cannot hold rather than be killed */
+    char what[96];
+    snprintf(what, sizeof what, "a %dx%d image", o->width, o->height);
+    if (!sg_memory_check(48.0 * o->width * o->height + 150.0 * s->triangle_count, path, what, err))
+        return NULL;
     SgRenderer *r = calloc(1, sizeof *r);
     if (!r)
         return sg_fail(err, "%s: out of memory", path), NULL;
