@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <new>
+#include <stdexcept>
 #include <string>
 
 #include <unistd.h>
@@ -156,6 +157,20 @@ extern "C" bool sg_medium_write(const SgMedium *m, const char *path, SgError *er
         file.setCompression(openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK);
         file.write(grids, meta);
         file.close();
+        // OpenVDB does not check its stream after writing: on a full disk
+        // the file ends early and nothing says so. Read the grid back before
+        // the file takes the target's name.
+        bool complete = false;
+        try {
+            openvdb::io::File check(tmp);
+            check.open(false);
+            openvdb::GridBase::Ptr back = check.readGrid(SG_MEDIUM_GRID_NAME);
+            complete = back && back->activeVoxelCount() == grid->activeVoxelCount();
+            check.close();
+        } catch (const std::exception &) {
+        }
+        if (!complete)
+            throw std::runtime_error("the file does not read back complete (disk full?)");
     } catch (const std::exception &e) {
         std::remove(tmp);
         return sg_fail(err, "%s: cannot write VDB: %s", path, e.what());
