@@ -26,14 +26,33 @@
 // global new/delete through malloc/free keeps the standard behaviour in
 // every build. A request larger than the machine's memory is refused before
 // it reaches the allocator, so no sanitizer has anything to say about it.
+//
+// Below the machine's size a corrupt length can still ask for gigabytes
+// that are then zero-filled (a metadata string of 1.6 GB in a 10 kB file),
+// so while a medium is read, one allocation may not exceed what the file
+// can hold plus room for OpenVDB's fixed node tables (this thread only).
+static thread_local std::size_t sg_read_allocation_cap = SIZE_MAX;
+
 static bool sg_allocation_possible(std::size_t size)
 {
     static const std::size_t physical = [] {
         long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
         return pages > 0 && page > 0 ? (std::size_t)pages * (std::size_t)page : SIZE_MAX;
     }();
-    return size <= physical;
+    return size <= physical && size <= sg_read_allocation_cap;
 }
+
+namespace {
+// Sets the per-read allocation cap for its scope.
+struct ReadAllocationCap {
+    std::size_t previous;
+    explicit ReadAllocationCap(std::size_t cap) : previous(sg_read_allocation_cap)
+    {
+        sg_read_allocation_cap = cap;
+    }
+    ~ReadAllocationCap() { sg_read_allocation_cap = previous; }
+};
+} // namespace
 
 void *operator new(std::size_t size)
 {
@@ -187,7 +206,9 @@ extern "C" bool sg_medium_read(SgMedium *m, const char *path, SgError *err)
     FILE *probe = std::fopen(path, "rb");
     if (!probe)
         return sg_fail(err, "%s: cannot open: %s", path, std::strerror(errno));
+    long file_size = std::fseek(probe, 0, SEEK_END) == 0 ? std::ftell(probe) : -1;
     std::fclose(probe);
+    ReadAllocationCap cap(file_size >= 0 ? (std::size_t)file_size + ((std::size_t)64 << 20) : SIZE_MAX);
     try {
         openvdb::initialize();
         openvdb::io::File file(path);
