@@ -570,7 +570,9 @@ static bool guide_axis(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, Vec3 *ax
     *at_light = d3_length(to_light) < 1e-4 * r->scale;
     double d[3] = {q[0] - (p.x + r->centre[0]), q[1] - (p.y + r->centre[1]), q[2] - (p.z + r->centre[2])};
     double len = d3_length(d);
-    if (!(len > 1e-6 * r->scale))
+    /* a point at the shading point has no direction; one at infinity (a
+     * bad guide) would give a NaN axis that passes the test below */
+    if (!(len > 1e-6 * r->scale) || !isfinite(len))
         return false;
     Vec3 a = v3((float)(d[0] / len), (float)(d[1] / len), (float)(d[2] / len));
     if (v3_dot(a, n) <= 0.0f)
