@@ -282,6 +282,16 @@ static uint32_t voxel_node(const SgImportanceCache *c, int i, int j, int k)
     return c->palette[r->palette_offset + index];
 }
 
+/* The 26 neighbours, faces first, then edges, then corners: the nearest
+ * medium voxel is usually found early and the others skipped. */
+static const signed char neighbour_order[26][3] = {
+    {-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1},
+    {-1, -1, 0}, {1, -1, 0}, {-1, 1, 0}, {1, 1, 0}, {-1, 0, -1}, {1, 0, -1},
+    {-1, 0, 1}, {1, 0, 1}, {0, -1, -1}, {0, 1, -1}, {0, -1, 1}, {0, 1, 1},
+    {-1, -1, -1}, {1, -1, -1}, {-1, 1, -1}, {1, 1, -1},
+    {-1, -1, 1}, {1, -1, 1}, {-1, 1, 1}, {1, 1, 1},
+};
+
 bool sg_cache_nearest_node(const SgImportanceCache *c, const double p[3], uint32_t *node)
 {
     double v[3];
@@ -300,23 +310,21 @@ bool sg_cache_nearest_node(const SgImportanceCache *c, const double p[3], uint32
          * take the medium voxel among the 26 neighbours whose centre is
          * nearest to p, so that the point's own side of a wall wins. */
         double best = INFINITY;
-        for (int dz = -1; dz <= 1; dz++)
-            for (int dy = -1; dy <= 1; dy++)
-                for (int dx = -1; dx <= 1; dx++) {
-                    int q[3] = {ijk[0] + dx, ijk[1] + dy, ijk[2] + dz};
-                    uint32_t m = voxel_node(c, q[0], q[1], q[2]);
-                    if (m == SG_CACHE_NONE)
-                        continue;
-                    double d2 = 0;
-                    for (int a = 0; a < 3; a++) {
-                        double t = v[a] - (q[a] + 0.5);
-                        d2 += t * t;
-                    }
-                    if (d2 < best) {
-                        best = d2;
-                        n = m;
-                    }
-                }
+        for (int q = 0; q < 26; q++) {
+            const signed char *o = neighbour_order[q];
+            double d2 = 0;
+            for (int a = 0; a < 3; a++) {
+                double t = v[a] - (ijk[a] + o[a] + 0.5);
+                d2 += t * t;
+            }
+            if (d2 >= best)
+                continue; /* cannot win: skip the table lookup */
+            uint32_t m = voxel_node(c, ijk[0] + o[0], ijk[1] + o[1], ijk[2] + o[2]);
+            if (m != SG_CACHE_NONE) {
+                best = d2;
+                n = m;
+            }
+        }
     }
     if (n == SG_CACHE_NONE)
         return false;

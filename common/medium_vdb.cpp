@@ -48,6 +48,9 @@
 // can hold plus room for OpenVDB's fixed node tables (this thread only).
 static thread_local std::size_t sg_read_allocation_cap = SIZE_MAX;
 
+// GCC sees free() inlined where OpenVDB's `new` is visible and cannot know
+// that this `new` is malloc: its mismatched-new-delete warning is wrong here.
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
 static bool sg_allocation_possible(std::size_t size)
 {
     static const std::size_t physical = [] {

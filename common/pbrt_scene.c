@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "image_io.h"
 #include "ply_mesh.h"
 #include "scene_builder.h"
 #include "vecmath.h"
@@ -75,6 +76,10 @@ typedef struct PbrtMaterial {
     SgMaterial material;
     bool invisible; /* "interface": the shape only bounds a medium */
     uint32_t scene_id; /* UINT32_MAX until used */
+    /* Named by NamedMaterial before its MakeNamedMaterial (pbrt-v4 resolves
+     * names after parsing): shapes use it now, the definition fills it in. */
+    bool pending;
+    Token first_use;
 } PbrtMaterial;
 
 typedef struct EmissiveMaterial {
@@ -107,6 +112,13 @@ typedef struct Object {
     ObjectShape *shapes;
     size_t shape_count, shape_capacity;
 } Object;
+
+typedef struct ImageAverage {
+    char *path;
+    bool linear; /* the encoding it was averaged with */
+    float value[3];
+    bool readable;
+} ImageAverage;
 
 typedef struct Warning {
     char kind[160];   /* what could not be honoured */
@@ -162,6 +174,9 @@ typedef struct Parser {
 
     Warning *warnings;
     size_t warning_count, warning_capacity;
+
+    ImageAverage *images; /* image files read for textures, by path */
+    size_t image_count, image_capacity;
 } Parser;
 
 /* Grows *array to hold needed items of size item. */
@@ -254,6 +269,12 @@ static bool push_file(Parser *p, const char *path, const Token *from)
     if (p->depth >= MAX_INCLUDE_DEPTH)
         return fail_at(p, from, "Include nested more than %d deep (does a file include itself?)",
                        MAX_INCLUDE_DEPTH);
+    size_t n = strlen(path);
+    if (n > 3 && !strcmp(path + n - 3, ".gz")) {
+        if (from)
+            return fail_at(p, from, "%s: compressed files are not read: gunzip it first", path);
+        return sg_fail(p->err, "%s: compressed files are not read: gunzip it first", path);
+    }
     FILE *f = fopen(path, "rb");
     if (!f) {
         if (from)
@@ -595,7 +616,7 @@ static bool parse_params(Parser *p)
             return false;
         Param *param = &p->params[p->param_count++];
         memset(param, 0, sizeof *param);
-        snprintf(param->type, sizeof param->type, "%s", type);
+        snprintf(param->type, sizeof param->type, "%.15s", type); /* a known type: short */
         snprintf(param->name, sizeof param->name, "%s", name);
         param->line = decl.line;
         param->source = decl.source;
@@ -796,9 +817,15 @@ static bool param_color(Parser *p, const char *name, const float fallback[3], fl
         return true;
     }
     if (!strcmp(type, "blackbody")) {
-        if (param->count != 1 || !(p->numbers[param->first] > 0))
+        /* pbrt-v3 wrote [kelvin scale] */
+        if (param->count < 1 || param->count > 2 || !(p->numbers[param->first] > 0))
             return fail_at(p, &at, "\"blackbody %s\" needs one temperature in kelvin", name);
         blackbody_rgb(p->numbers[param->first], out);
+        double scale = param->count == 2 ? p->numbers[param->first + 1] : 1;
+        if (!(scale >= 0))
+            return fail_at(p, &at, "\"blackbody %s\": negative scale", name);
+        for (int a = 0; a < 3; a++)
+            out[a] = (float)(out[a] * scale);
         return true;
     }
     if (!strcmp(type, "spectrum")) {
@@ -844,6 +871,84 @@ static bool param_color(Parser *p, const char *name, const float fallback[3], fl
     return fail_at(p, &at, "\"%s %s\" is not a colour", type, name);
 }
 
+/* A float parameter that may also be a (float) texture: its average. */
+static bool param_scalar(Parser *p, const char *name, double fallback, double *out)
+{
+    const float f[3] = {(float)fallback, (float)fallback, (float)fallback};
+    float v[3];
+    if (!param_color(p, name, f, v, NULL))
+        return false;
+    *out = find_param(p, name) ? v[0] : fallback;
+    return true;
+}
+
+static bool resolve_path(Parser *p, const Token *at, const Token *name, char *out, size_t size)
+{
+    int n = name->len && name->s[0] == '/'
+                ? snprintf(out, size, "%.*s", (int)name->len, name->s)
+                : snprintf(out, size, "%s%.*s", p->base_dir, (int)name->len, name->s);
+    if (n < 0 || (size_t)n >= size)
+        return fail_at(p, at, "file name too long");
+    return true;
+}
+
+static bool has_suffix(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), k = strlen(suffix);
+    if (n < k)
+        return false;
+    for (size_t i = 0; i < k; i++) {
+        char a = s[n - k + i], b = suffix[i];
+        if ((a >= 'A' && a <= 'Z' ? a + 32 : a) != b)
+            return false;
+    }
+    return true;
+}
+
+static double srgb_to_linear(double c)
+{
+    return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
+}
+
+/* The mean linear colour of an image file (cached by path). gamma: 0 for
+ * linear data, -1 for sRGB, else the exponent. False if it cannot be read. */
+static bool image_average(Parser *p, const char *path, double gamma, float out[3])
+{
+    for (size_t i = 0; i < p->image_count; i++)
+        if (!strcmp(p->images[i].path, path) && p->images[i].linear == (gamma == 0)) {
+            memcpy(out, p->images[i].value, 3 * sizeof(float));
+            return p->images[i].readable;
+        }
+    int w = 0, h = 0;
+    float *rgb = NULL;
+    SgError ignored = {0};
+    bool readable = sg_image_read(path, &w, &h, &rgb, &ignored);
+    double sum[3] = {0, 0, 0};
+    if (readable) {
+        /* A few hundred thousand pixels give the mean well enough. */
+        size_t step = 1 + (size_t)w * (size_t)h / 262144, n = 0;
+        for (size_t i = 0; i < (size_t)w * (size_t)h; i += step, n++)
+            for (int c = 0; c < 3; c++) {
+                double v = rgb[3 * i + c];
+                v = !isfinite(v) || v < 0 ? 0 : v;
+                sum[c] += gamma == 0 ? v : gamma < 0 ? srgb_to_linear(v) : pow(v, gamma);
+            }
+        for (int c = 0; c < 3; c++)
+            out[c] = (float)(sum[c] / (double)(n ? n : 1));
+    }
+    free(rgb);
+    if (RESERVE(p, p->images, p->image_count, p->image_capacity, 1)) {
+        ImageAverage *a = &p->images[p->image_count];
+        if ((a->path = strdup(path))) {
+            a->linear = gamma == 0;
+            a->readable = readable;
+            memcpy(a->value, readable ? out : (const float[3]){0, 0, 0}, sizeof a->value);
+            p->image_count++;
+        }
+    }
+    return readable;
+}
+
 static bool texture_statement(Parser *p, const Token *statement)
 {
     Token name, type, klass;
@@ -871,21 +976,48 @@ static bool texture_statement(Parser *p, const Token *statement)
         float a[3], b[3];
         double amount = 0.5;
         if (!param_color(p, "tex1", one, a, NULL) || !param_color(p, "tex2", zero, b, NULL) ||
-            (string_is(&klass, "mix") && !param_float(p, "amount", 0.5, &amount)))
+            (string_is(&klass, "mix") && !param_scalar(p, "amount", 0.5, &amount)))
             return false;
         for (int c = 0; c < 3; c++)
             value[c] = (float)((1 - amount) * a[c] + amount * b[c]);
     } else if (string_is(&klass, "imagemap")) {
         const Token *file = param_string(p, "filename");
+        const Token *encoding = param_string(p, "encoding");
         float scale[3];
-        if (!param_color(p, "scale", one, scale, NULL))
+        bool invert;
+        if (!param_color(p, "scale", one, scale, NULL) || !param_bool(p, "invert", false, &invert))
             return false;
-        for (int c = 0; c < 3; c++)
-            value[c] = grey[c] * scale[c];
         if (!file)
             return fail_at(p, statement, "imagemap texture without \"string filename\"");
-        warn_at(p, statement,
-                "image textures are not read: their average colour is taken as grey 0.5");
+        char path[8192];
+        if (!resolve_path(p, statement, file, path, sizeof path))
+            return false;
+        /* pbrt's default: 8-bit images hold sRGB, float formats linear values */
+        double gamma = has_suffix(path, ".exr") || has_suffix(path, ".pfm") ||
+                               has_suffix(path, ".hdr")
+                           ? 0
+                           : -1;
+        if (encoding && string_is(encoding, "linear"))
+            gamma = 0;
+        else if (encoding && string_is(encoding, "sRGB"))
+            gamma = -1;
+        else if (encoding && encoding->len > 6 && encoding->len < 40 &&
+                 !memcmp(encoding->s, "gamma ", 6)) {
+            char number[40];
+            snprintf(number, sizeof number, "%.*s", (int)encoding->len - 6, encoding->s + 6);
+            gamma = atof(number) > 0 ? atof(number) : -1;
+        }
+        float average[3];
+        if (!image_average(p, path, gamma, average)) {
+            memcpy(average, grey, sizeof average);
+            warn_at(p, statement, "image textures that cannot be read (missing files) are "
+                                  "taken as grey 0.5");
+        }
+        for (int c = 0; c < 3; c++) {
+            value[c] = average[c] * scale[c];
+            if (invert)
+                value[c] = value[c] < 1 ? 1 - value[c] : 0;
+        }
     } else {
         warn_at(p, statement, "Texture \"%.*s\" is not supported: taken as grey 0.5",
                 (int)klass.len, klass.s);
@@ -911,33 +1043,38 @@ static void clamp_albedo(Parser *p, const Token *at, float c[3], const char *wha
         }
 }
 
-/* A float parameter that may also be a (float) texture: its average. */
-static bool param_scalar(Parser *p, const char *name, double fallback, double *out)
+/* pbrt-v3's roughness remapping (a fit in log roughness). */
+static double v3_roughness_to_alpha(double rough)
 {
-    const float f[3] = {(float)fallback, (float)fallback, (float)fallback};
-    float v[3];
-    if (!param_color(p, name, f, v, NULL))
-        return false;
-    *out = find_param(p, name) ? v[0] : fallback;
-    return true;
+    double x = log(fmax(rough, 1e-3));
+    return 1.62142 + 0.819955 * x + 0.1734 * x * x + 0.0171201 * x * x * x +
+           0.000640711 * x * x * x * x;
 }
 
-/* Microfacet roughness to a Phong exponent (alpha^2 = 2 / (n + 2)). */
-static bool roughness_exponent(Parser *p, double *exponent, double *alpha_out)
+/* Microfacet roughness to a Phong exponent (alpha^2 = 2 / (n + 2)).
+ * fallback: the material's default roughness; v3: pbrt-v3's remapping. */
+static bool roughness_exponent_of(Parser *p, double fallback, bool v3, double *exponent,
+                                  double *alpha_out)
 {
     double rough, u, v;
     bool remap;
-    if (!param_scalar(p, "uroughness", 0, &u) || !param_scalar(p, "vroughness", 0, &v) ||
+    if (!param_scalar(p, "uroughness", fallback, &u) ||
+        !param_scalar(p, "vroughness", fallback, &v) ||
         !param_bool(p, "remaproughness", true, &remap) ||
         !param_scalar(p, "roughness", 0.5 * (u + v), &rough))
         return false;
     if (!(rough >= 0))
         rough = 0;
-    double alpha = remap ? sqrt(rough) : rough;
+    double alpha = !remap ? rough : v3 ? v3_roughness_to_alpha(rough) : sqrt(rough);
     *alpha_out = alpha;
     double n = alpha > 0 ? 2 / (alpha * alpha) - 2 : 1e4;
     *exponent = fmin(fmax(n, 1), 1e4);
     return true;
+}
+
+static bool roughness_exponent(Parser *p, double *exponent, double *alpha_out)
+{
+    return roughness_exponent_of(p, 0, false, exponent, alpha_out);
 }
 
 /* Smooth-enough conductors become mirrors: a Phong lobe this narrow is a
@@ -957,7 +1094,8 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
         warn_at(p, at, "bump and normal maps (\"displacement\", \"normalmap\") are ignored");
     if (string_is(type, "diffuse") || string_is(type, "diffusetransmission") ||
         string_is(type, "subsurface") || string_is(type, "measured") ||
-        string_is(type, "hair")) {
+        string_is(type, "hair") || string_is(type, "kdsubsurface") ||
+        string_is(type, "fourier") || string_is(type, "disney")) {
         if (!string_is(type, "diffuse"))
             warn_at(p, at, "Material \"%.*s\" is not supported: diffuse instead", (int)type->len,
                     type->s);
@@ -971,7 +1109,7 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
         double exponent, alpha, eta;
         float reflectance[3];
         if (!param_color(p, "reflectance", half, reflectance, NULL) ||
-            !roughness_exponent(p, &exponent, &alpha) || !param_float(p, "eta", 1.5, &eta))
+            !roughness_exponent(p, &exponent, &alpha) || !param_scalar(p, "eta", 1.5, &eta))
             return false;
         clamp_albedo(p, at, reflectance, "reflectance");
         if (!(eta >= 1))
@@ -986,13 +1124,14 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
         m->exponent = (float)exponent;
         return true;
     }
-    if (string_is(type, "conductor") || string_is(type, "coatedconductor")) {
+    if (string_is(type, "conductor") || string_is(type, "coatedconductor") ||
+        string_is(type, "metal")) {
         if (string_is(type, "coatedconductor"))
             warn_at(p, at, "Material \"coatedconductor\" is approximated by its conductor");
         float eta[3], k[3], reflectance[3];
         bool has_reflectance;
         const NamedMetal *cu = &named_metals[3];
-        bool coated = string_is(type, "coatedconductor");
+        bool coated = string_is(type, "coatedconductor"), v3 = string_is(type, "metal");
         if (!param_color(p, coated ? "conductor.eta" : "eta", cu->eta, eta, NULL) ||
             !param_color(p, coated ? "conductor.k" : "k", cu->k, k, NULL) ||
             !param_color(p, "reflectance", half, reflectance, &has_reflectance))
@@ -1004,10 +1143,66 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
             m->diffuse[a] = 0;
         }
         double exponent, alpha;
-        if (!roughness_exponent(p, &exponent, &alpha))
+        if (!roughness_exponent_of(p, v3 ? 0.01 : 0, v3, &exponent, &alpha))
             return false;
         m->type = alpha < MIRROR_ALPHA ? SG_MATERIAL_MIRROR : SG_MATERIAL_GLOSSY;
         m->exponent = (float)exponent;
+        return true;
+    }
+    /* pbrt-v3 materials: Bitterli's collection first came in v3 syntax. */
+    if (string_is(type, "matte") || string_is(type, "translucent")) {
+        if (string_is(type, "translucent"))
+            warn_at(p, at, "Material \"translucent\" is taken as diffuse (its Kd)");
+        if (!param_color(p, "Kd", half, m->diffuse, NULL))
+            return false;
+        clamp_albedo(p, at, m->diffuse, "Kd");
+        m->type = SG_MATERIAL_DIFFUSE;
+        return true;
+    }
+    if (string_is(type, "plastic") || string_is(type, "substrate") || string_is(type, "uber")) {
+        bool substrate = string_is(type, "substrate");
+        float d = substrate ? 0.5f : 0.25f;
+        const float kd[3] = {d, d, d};
+        double exponent, alpha, opacity;
+        if (!param_color(p, "Kd", kd, m->diffuse, NULL) ||
+            !param_color(p, "Ks", kd, m->specular, NULL) ||
+            !roughness_exponent_of(p, 0.1, true, &exponent, &alpha) ||
+            !param_scalar(p, "opacity", 1, &opacity))
+            return false;
+        if (opacity < 1 || find_param(p, "Kr") || find_param(p, "Kt"))
+            warn_at(p, at, "uber opacity, Kr and Kt are ignored");
+        for (int a = 0; a < 3; a++) { /* keep energy: scale the pair down */
+            float sum = m->diffuse[a] + m->specular[a];
+            if (sum > 1) {
+                m->diffuse[a] /= sum;
+                m->specular[a] /= sum;
+            }
+        }
+        m->type = SG_MATERIAL_GLOSSY;
+        m->exponent = (float)exponent;
+        return true;
+    }
+    if (string_is(type, "mirror")) {
+        const float kr[3] = {0.9f, 0.9f, 0.9f};
+        if (!param_color(p, "Kr", kr, m->specular, NULL))
+            return false;
+        clamp_albedo(p, at, m->specular, "Kr");
+        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
+        m->type = SG_MATERIAL_MIRROR;
+        return true;
+    }
+    if (string_is(type, "glass")) {
+        double ior;
+        if (!param_scalar(p, "index", 1.5, &ior) ||
+            (find_param(p, "eta") && !param_scalar(p, "eta", 1.5, &ior)))
+            return false;
+        if (ior > 0 && ior < 1)
+            ior = 1 / ior;
+        if (!(ior >= 1 && ior <= 10))
+            return fail_at(p, at, "glass index %g is out of range", ior);
+        m->type = SG_MATERIAL_DIELECTRIC;
+        m->ior = (float)ior;
+        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
         return true;
     }
     if (string_is(type, "dielectric") || string_is(type, "thindielectric")) {
@@ -1038,7 +1233,7 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
     if (string_is(type, "mix")) {
         const Param *names = find_param(p, "materials");
         double amount;
-        if (!param_float(p, "amount", 0.5, &amount))
+        if (!param_scalar(p, "amount", 0.5, &amount))
             return false;
         warn_at(p, at, "Material \"mix\" is replaced by the material with the larger weight");
         if (names && names->kind == PARAM_STRINGS && names->count == 2) {
@@ -1048,6 +1243,7 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
                     *out = p->materials[i];
                     out->name = NULL;
                     out->scene_id = UINT32_MAX;
+                    out->pending = false;
                     snprintf(out->material.name, sizeof out->material.name, "%s", label);
                     return true;
                 }
@@ -1096,6 +1292,31 @@ static bool make_named_material_statement(Parser *p, const Token *statement)
     uint32_t index;
     if (!make_material(p, statement, type, label, &m))
         return false;
+    for (size_t i = p->material_count; i-- > 0;) {
+        PbrtMaterial *old = &p->materials[i];
+        if (!old->name || !string_is(&name, old->name))
+            continue;
+        if (!old->pending) {
+            warn_at(p, statement, "MakeNamedMaterial redefines a name: later uses get the new one");
+            break;
+        }
+        /* Fill in the forward reference, and what shapes already got. */
+        old->material = m.material;
+        old->invisible = m.invisible;
+        old->pending = false;
+        SgScene *scene = p->core.scene;
+        if (old->scene_id != UINT32_MAX)
+            scene->materials[old->scene_id] = m.material;
+        for (size_t k = 0; k < p->emissive_count; k++)
+            if (p->emissive[k].material == i) {
+                SgMaterial *e = &scene->materials[p->emissive[k].scene_id];
+                float emission[3];
+                memcpy(emission, e->emission, sizeof emission);
+                *e = m.material;
+                memcpy(e->emission, emission, sizeof emission);
+            }
+        return true;
+    }
     if (!(m.name = token_dup(&name)))
         return sg_fail(p->err, "%s: out of memory", p->core.path);
     if (!add_pbrt_material(p, &m, &index)) {
@@ -1115,7 +1336,21 @@ static bool named_material_statement(Parser *p, const Token *statement)
             p->state.material = (uint32_t)i;
             return true;
         }
-    return fail_at(p, &name, "NamedMaterial \"%.*s\" is not defined", (int)name.len, name.s);
+    PbrtMaterial m;
+    memset(&m, 0, sizeof m);
+    char label[64];
+    snprintf(label, sizeof label, "%.*s", (int)(name.len > 63 ? 63 : name.len), name.s);
+    sg_material_default(&m.material, label);
+    m.scene_id = UINT32_MAX;
+    m.pending = true;
+    m.first_use = name;
+    if (!(m.name = token_dup(&name)))
+        return sg_fail(p->err, "%s: out of memory", p->core.path);
+    if (!add_pbrt_material(p, &m, &p->state.material)) {
+        free(m.name);
+        return false;
+    }
+    return true;
 }
 
 /* The scene material of the current state (emissive copies cached). */
@@ -1446,7 +1681,8 @@ static bool emit_mesh(Parser *p, const Token *at, const char *what, const double
                 if (det < 0)
                     for (int a = 0; a < 3; a++)
                         nw[a] = -nw[a];
-                flip = d3_dot(n, nw) < 0;
+                if (d3_length(nw) > 0) /* else: the winding decides */
+                    flip = d3_dot(n, nw) < 0;
             }
             if (flip) {
                 uint32_t k = idx[1];
@@ -1484,15 +1720,6 @@ static bool emit_mesh(Parser *p, const Token *at, const char *what, const double
                                   triangle_count, &xf, material, p->err);
 }
 
-static bool resolve_path(Parser *p, const Token *at, const Token *name, char *out, size_t size)
-{
-    int n = name->len && name->s[0] == '/'
-                ? snprintf(out, size, "%.*s", (int)name->len, name->s)
-                : snprintf(out, size, "%s%.*s", p->base_dir, (int)name->len, name->s);
-    if (n < 0 || (size_t)n >= size)
-        return fail_at(p, at, "file name too long");
-    return true;
-}
 
 static bool plymesh(Parser *p, const Token *statement)
 {
@@ -1508,11 +1735,8 @@ static bool plymesh(Parser *p, const Token *statement)
     SgError local = {0};
     if (!sg_ply_mesh_read(&mesh, path, &local))
         return fail_at(p, statement, "%s", local.message);
-    if (p->state.area_light && !p->defining)
-        warn_at(p, statement, "emissive plymesh: the emitting side follows the winding (PLY "
-                              "normals are not read)");
     bool ok = emit_mesh(p, statement, path, mesh.positions, mesh.vertex_count, mesh.indices,
-                        mesh.triangle_count, NULL);
+                        mesh.triangle_count, mesh.normals);
     sg_ply_mesh_release(&mesh);
     return ok;
 }
@@ -1974,6 +2198,9 @@ static void parser_release(Parser *p)
     }
     free(p->objects);
     free(p->warnings);
+    for (size_t i = 0; i < p->image_count; i++)
+        free(p->images[i].path);
+    free(p->images);
 }
 
 SgScene *sg_pbrt_scene_load(const char *path, SgError *err)
@@ -2006,6 +2233,10 @@ SgScene *sg_pbrt_scene_load(const char *path, SgError *err)
         ok = fail_at(&p, begin, "%.*s has no matching %s", (int)begin->len, begin->s,
                      token_is(begin, "TransformBegin") ? "TransformEnd" : "AttributeEnd");
     }
+    for (size_t i = 0; ok && i < p.material_count; i++)
+        if (p.materials[i].pending)
+            ok = fail_at(&p, &p.materials[i].first_use, "NamedMaterial \"%s\" is never defined",
+                         p.materials[i].name);
     ok = ok && finish_camera(&p);
     if (ok && s->triangle_count == 0)
         ok = sg_fail(err, "%s: the scene has no triangles%s", path,

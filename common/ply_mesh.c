@@ -230,13 +230,16 @@ bool sg_ply_mesh_read(SgPlyMesh *mesh, const char *path, SgError *err)
     for (int e = 0; ok && e < element_count; e++) {
         Element *el = &elements[e];
         bool is_vertex = !strcmp(el->name, "vertex"), is_face = !strcmp(el->name, "face");
-        int px = -1, py = -1, pz = -1, pf = -1;
+        int px = -1, py = -1, pz = -1, pf = -1, pnx = -1, pny = -1, pnz = -1;
         for (int p = 0; p < el->property_count; p++) {
             const char *n = el->properties[p].name;
             bool list = el->properties[p].count_type != T_NONE;
             if (is_vertex && !list && !strcmp(n, "x")) px = p;
             if (is_vertex && !list && !strcmp(n, "y")) py = p;
             if (is_vertex && !list && !strcmp(n, "z")) pz = p;
+            if (is_vertex && !list && !strcmp(n, "nx")) pnx = p;
+            if (is_vertex && !list && !strcmp(n, "ny")) pny = p;
+            if (is_vertex && !list && !strcmp(n, "nz")) pnz = p;
             if (is_face && list && (!strcmp(n, "vertex_indices") || !strcmp(n, "vertex_index")))
                 pf = p;
         }
@@ -255,6 +258,13 @@ bool sg_ply_mesh_read(SgPlyMesh *mesh, const char *path, SgError *err)
             if (!mesh->positions) {
                 ok = sg_fail(err, "%s: out of memory", path);
                 break;
+            }
+            if (pnx >= 0 && pny >= 0 && pnz >= 0) {
+                mesh->normals = malloc((el->count ? el->count : 1) * 3 * sizeof(double));
+                if (!mesh->normals) {
+                    ok = sg_fail(err, "%s: out of memory", path);
+                    break;
+                }
             }
         }
         if (is_face && pf < 0) {
@@ -279,6 +289,9 @@ bool sg_ply_mesh_read(SgPlyMesh *mesh, const char *path, SgError *err)
                         }
                         mesh->positions[3 * row + (p == px ? 0 : p == py ? 1 : 2)] = v;
                     }
+                    if (is_vertex && mesh->normals && (p == pnx || p == pny || p == pnz))
+                        mesh->normals[3 * row + (p == pnx ? 0 : p == pny ? 1 : 2)] =
+                            isfinite(v) ? v : 0;
                     continue;
                 }
                 double count;
@@ -337,5 +350,6 @@ void sg_ply_mesh_release(SgPlyMesh *mesh)
 {
     free(mesh->positions);
     free(mesh->indices);
+    free(mesh->normals);
     memset(mesh, 0, sizeof *mesh);
 }

@@ -16,6 +16,7 @@ typedef struct SgPlyMesh {
     double *positions;   /* 3 * vertex_count */
     uint32_t triangle_count;
     uint32_t *indices;   /* 3 * triangle_count; polygons are fanned */
+    double *normals;     /* 3 * vertex_count from nx ny nz, or NULL if the file has none */
 } SgPlyMesh;
 
 bool sg_ply_mesh_read(SgPlyMesh *mesh, const char *path, SgError *err);

@@ -856,7 +856,7 @@ static SgScene *load_json_scene(const char *path, SgError *err)
 
 SgScene *sg_scene_load(const char *path, SgError *err)
 {
-    if (has_extension(path, ".pbrt"))
+    if (has_extension(path, ".pbrt") || has_extension(path, ".pbrt.gz"))
         return sg_pbrt_scene_load(path, err);
     return load_json_scene(path, err);
 }

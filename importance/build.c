@@ -134,6 +134,7 @@ typedef struct PointPass {
     const double *light_position;
     float *points; /* node_count * light_count * 3 */
     uint32_t light, light_count;
+    double tolerance;
 } PointPass;
 
 enum { POINT_CHUNK = 32 };
@@ -152,7 +153,7 @@ static void point_chunk(void *ctx, uint64_t chunk, int thread)
             continue;
         }
         sg_importance_point(p->vis, p->skeleton, p->pred, p->dist, (uint32_t)n,
-                            p->light_position, out);
+                            p->light_position, p->tolerance, out);
     }
 }
 
@@ -210,20 +211,21 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
     const SgGrid *grid = &medium->grid;
     const double t0 = sg_seconds();
     const uint32_t N = skeleton->node_count, L = medium->light_count;
+    const char *mname = options->medium_name ? options->medium_name : "medium";
+    const char *sname = options->skeleton_name ? options->skeleton_name : "skeleton";
 
     if (N == 0)
-        return sg_fail(err, "%s: the skeleton has no nodes", out_path);
+        return sg_fail(err, "%s: the skeleton has no nodes", sname);
     if (grid->nx <= 0 || grid->ny <= 0 || grid->nz <= 0 || !grid->voxels)
-        return sg_fail(err, "%s: the medium grid is empty", out_path);
+        return sg_fail(err, "%s: the medium grid is empty", mname);
     for (uint32_t n = 0; n < N; n++) {
         const SgSkeletonNode *v = &skeleton->nodes[n];
         if (v->kind == SG_NODE_LIGHT && v->light >= 0 && (uint32_t)v->light >= L)
-            return sg_fail(err, "%s: skeleton node %u names light %d but the medium has %u "
-                           "lights (skeleton.ply and medium.vdb do not belong together)",
-                           out_path, n, v->light, L);
+            return sg_fail(err, "%s: node %u names light %d but %s has %u lights (they do "
+                           "not belong together)", sname, n, v->light, mname, L);
         for (int a = 0; a < 3; a++)
             if (!isfinite(v->position[a]))
-                return sg_fail(err, "%s: skeleton node %u has a non-finite position", out_path, n);
+                return sg_fail(err, "%s: node %u has a non-finite position", sname, n);
     }
     if ((uint64_t)N * L > (uint64_t)1 << 32)
         return sg_fail(err, "%s: %u nodes x %u lights is too many importance points", out_path,
@@ -247,6 +249,8 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
     if (ok) {
         stats.medium_voxels = labels.medium_voxels;
         stats.labelled_voxels = labels.labelled_voxels;
+        stats.label_rounds = labels.rounds;
+        stats.label_settled = labels.settled;
     }
 
     /* 2. Graph, components, the light table. */
@@ -270,6 +274,7 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
         stats.components = sg_graph_components(&graph, component, scratch);
 
     int threads = sg_thread_count(options->threads);
+    double tolerance = options->run_tolerance > 0 ? options->run_tolerance : 0;
     SgVisibility vis = {0};
     if (ok)
         ok = sg_visibility_init(&vis, grid, err);
@@ -299,7 +304,7 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
         cl->component = component[sources[0]];
         sg_graph_shortest_paths(&graph, sources, count, dist, pred, heap);
         PointPass pp = {&vis, skeleton, component, cl->component, pred, dist, ml->position,
-                        points, k, L};
+                        points, k, L, tolerance};
         sg_parallel_for((N + POINT_CHUNK - 1) / POINT_CHUNK, threads, point_chunk, &pp);
         stats.lights_reachable++;
         sg_progress_update(&progress, k + 1);
@@ -423,6 +428,10 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
     }
     stats.seconds_table = sg_seconds() - t2;
     double t3 = sg_seconds();
+    /* The side output first: the cache, the target make waits for, appears
+     * only when everything succeeded. */
+    if (ok && options->vectors_path)
+        ok = write_vectors(options->vectors_path, skeleton, component, lights, L, points, err);
     if (ok) {
         SgOutputFile out;
         ok = sg_output_open(&out, out_path, err);
@@ -435,8 +444,6 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
             }
         }
     }
-    if (ok && options->vectors_path)
-        ok = write_vectors(options->vectors_path, skeleton, component, lights, L, points, err);
     stats.seconds_write = sg_seconds() - t3;
 
     stats.nodes = N;

@@ -9,37 +9,48 @@
 #include "hash.h"
 #include "importance_cache_format.h"
 
-/* Medium test with the brick accelerator: a bit per 4x4x4 brick that is
- * all medium (a few hundred KB, cache resident) spares most loads from the
- * byte grid, whose z neighbours are a cache line apart. */
-static inline bool medium_at(const SgVisibility *v, int i, int j, int k)
+static inline bool level_full(const SgVisibility *v, int level, const int c[3])
+{
+    int sh = level ? 4 : 2;
+    size_t b = (size_t)(c[0] >> sh) +
+               v->bx[level] * ((size_t)(c[1] >> sh) + v->by[level] * (size_t)(c[2] >> sh));
+    return v->full[level][b >> 6] >> (b & 63) & 1;
+}
+
+/* Medium test: the brick bits (a few hundred KB, cache resident) spare
+ * most loads from the byte grid, whose z neighbours are far apart. */
+static inline bool medium_at(const SgVisibility *v, const int c[3])
 {
     const SgGrid *g = v->grid;
-    if (!sg_grid_inside(g, i, j, k))
+    if (!sg_grid_inside(g, c[0], c[1], c[2]))
         return false;
-    if (v->full) {
-        size_t b = (size_t)(i >> 2) + v->bx * ((size_t)(j >> 2) + v->by * (size_t)(k >> 2));
-        if (v->full[b >> 6] >> (b & 63) & 1)
-            return true;
-    }
-    return g->voxels[sg_grid_index(g, i, j, k)] != 0;
+    if (v->full[0] && level_full(v, 0, c))
+        return true;
+    return g->voxels[sg_grid_index(g, c[0], c[1], c[2])] != 0;
 }
 
 bool sg_visibility_init(SgVisibility *v, const SgGrid *g, SgError *err)
 {
     memset(v, 0, sizeof *v);
     v->grid = g;
-    v->bx = ((size_t)g->nx + 3) / 4;
-    v->by = ((size_t)g->ny + 3) / 4;
-    size_t bz = ((size_t)g->nz + 3) / 4, bricks = v->bx * v->by * bz;
-    v->full = calloc((bricks + 63) / 64, sizeof *v->full);
-    if (!v->full)
-        return sg_fail(err, "out of memory for the visibility bricks");
+    size_t bz[2];
+    for (int level = 0; level < 2; level++) {
+        int size = level ? 16 : 4;
+        v->bx[level] = ((size_t)g->nx + size - 1) / size;
+        v->by[level] = ((size_t)g->ny + size - 1) / size;
+        bz[level] = ((size_t)g->nz + size - 1) / size;
+        size_t count = v->bx[level] * v->by[level] * bz[level];
+        v->full[level] = calloc((count + 63) / 64, sizeof *v->full[level]);
+        if (!v->full[level]) {
+            sg_visibility_release(v);
+            return sg_fail(err, "out of memory for the visibility bricks");
+        }
+    }
     /* A brick is full when each of its 16 x-rows is 4 medium voxels (bricks
      * that stick out of the grid are never full). */
-    for (size_t bk = 0; bk < bz; bk++)
-        for (size_t bj = 0; bj < v->by; bj++)
-            for (size_t bi = 0; bi < v->bx; bi++) {
+    for (size_t bk = 0; bk < bz[0]; bk++)
+        for (size_t bj = 0; bj < v->by[0]; bj++)
+            for (size_t bi = 0; bi < v->bx[0]; bi++) {
                 if ((bi + 1) * 4 > (size_t)g->nx || (bj + 1) * 4 > (size_t)g->ny ||
                     (bk + 1) * 4 > (size_t)g->nz)
                     continue;
@@ -52,8 +63,26 @@ bool sg_visibility_init(SgVisibility *v, const SgGrid *g, SgError *err)
                         full = row[0] && row[1] && row[2] && row[3];
                     }
                 if (full) {
-                    size_t b = bi + v->bx * (bj + v->by * bk);
-                    v->full[b >> 6] |= (uint64_t)1 << (b & 63);
+                    size_t b = bi + v->bx[0] * (bj + v->by[0] * bk);
+                    v->full[0][b >> 6] |= (uint64_t)1 << (b & 63);
+                }
+            }
+    /* A super-brick is full when its 64 bricks are. */
+    for (size_t sk = 0; sk < bz[1]; sk++)
+        for (size_t sj = 0; sj < v->by[1]; sj++)
+            for (size_t si = 0; si < v->bx[1]; si++) {
+                bool full = true;
+                for (int z = 0; z < 4 && full; z++)
+                    for (int y = 0; y < 4 && full; y++)
+                        for (int x = 0; x < 4 && full; x++) {
+                            int c[3] = {(int)(si * 16) + 4 * x, (int)(sj * 16) + 4 * y,
+                                        (int)(sk * 16) + 4 * z};
+                            full = c[0] < g->nx && c[1] < g->ny && c[2] < g->nz &&
+                                   level_full(v, 0, c);
+                        }
+                if (full) {
+                    size_t b = si + v->bx[1] * (sj + v->by[1] * sk);
+                    v->full[1][b >> 6] |= (uint64_t)1 << (b & 63);
                 }
             }
     return true;
@@ -61,14 +90,49 @@ bool sg_visibility_init(SgVisibility *v, const SgGrid *g, SgError *err)
 
 void sg_visibility_release(SgVisibility *v)
 {
-    free(v->full);
+    free(v->full[0]);
+    free(v->full[1]);
     memset(v, 0, sizeof *v);
 }
 
-static inline bool brick_full(const SgVisibility *v, const int c[3])
+/* Inside an all-medium cube of `size` voxels (aligned): advance every axis
+ * by its crossings before the first one that leaves the cube. Returns true
+ * when the segment ends inside the cube. */
+static inline bool jump_through(int cur[3], int64_t m[3], const int64_t len[3],
+                                const int64_t step[3], int size)
 {
-    size_t b = (size_t)(c[0] >> 2) + v->bx * ((size_t)(c[1] >> 2) + v->by * (size_t)(c[2] >> 2));
-    return v->full[b >> 6] >> (b & 63) & 1;
+    int exit_axis = -1;
+    int64_t exit_index = 0;
+    for (int x = 0; x < 3; x++) {
+        int in = cur[x] & (size - 1);
+        int64_t k = step[x] > 0 ? size - in : in + 1; /* crossings to leave */
+        int64_t index = m[x] + k - 1;
+        if (index >= len[x])
+            continue; /* the segment ends before leaving along x */
+        /* (2 index + 1) / len_x < (2 exit_index + 1) / len_exit ? */
+        if (exit_axis < 0 || (2 * index + 1) * len[exit_axis] < (2 * exit_index + 1) * len[x]) {
+            exit_axis = x;
+            exit_index = index;
+        }
+    }
+    if (exit_axis < 0)
+        return true;
+    /* Crossings strictly before T = N / (2 len_e): the count of k with
+     * (2k+1) len_e < N len_x, i.e. floor((floor((N len_x - 1) / len_e) + 1) / 2). */
+    int64_t N = 2 * exit_index + 1, Q = len[exit_axis];
+    for (int x = 0; x < 3; x++) {
+        if (len[x] == 0)
+            continue;
+        int64_t f = (N * len[x] - 1) / Q;
+        int64_t count = (f + 1) / 2;
+        if (count > len[x])
+            count = len[x];
+        if (count > m[x]) {
+            cur[x] += (int)(step[x] * (count - m[x]));
+            m[x] = count;
+        }
+    }
+    return false;
 }
 
 bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3])
@@ -79,9 +143,9 @@ bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3])
      * next crossings is a cross-multiplication. Crossings that coincide
      * (the segment passes through an edge or corner) step diagonally,
      * consistent with the medium's 26-connectivity.
-     * Inside an all-medium 4x4x4 brick the walk jumps to the brick's exit:
-     * the first crossing that leaves the brick is found per axis, and every
-     * axis is advanced by its crossings before it (counted in closed form). */
+     * Inside an all-medium brick or super-brick the walk jumps to its exit:
+     * the first crossing that leaves it is found per axis, and every axis
+     * is advanced by its crossings before that one (counted in closed form). */
     int cur[3] = {a[0], a[1], a[2]};
     int64_t len[3], step[3], m[3] = {0, 0, 0};
     for (int x = 0; x < 3; x++) {
@@ -92,40 +156,12 @@ bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3])
     if (!sg_grid_inside(vis->grid, a[0], a[1], a[2]) || !sg_grid_inside(vis->grid, b[0], b[1], b[2]))
         return false;
     for (;;) {
-        if (vis->full && brick_full(vis, cur)) {
-            /* Crossing index, per axis, of the first step out of the brick. */
-            int exit_axis = -1;
-            int64_t exit_index = 0;
-            for (int x = 0; x < 3; x++) {
-                int in = cur[x] & 3;
-                int64_t k = step[x] > 0 ? 4 - in : in + 1; /* crossings to leave */
-                int64_t index = m[x] + k - 1;
-                if (index >= len[x])
-                    continue; /* the segment ends before leaving along x */
-                /* (2 index + 1) / len_x < (2 exit_index + 1) / len_exit ? */
-                if (exit_axis < 0 ||
-                    (2 * index + 1) * len[exit_axis] < (2 * exit_index + 1) * len[x]) {
-                    exit_axis = x;
-                    exit_index = index;
-                }
-            }
-            if (exit_axis < 0)
-                return true; /* b is in this brick */
-            /* Crossings strictly before T = N / (2 len_e): count of k with
-             * (2k+1) len_e < N len_x, i.e. floor((floor((N len_x - 1) / len_e) + 1) / 2). */
-            int64_t N = 2 * exit_index + 1, Q = len[exit_axis];
-            for (int x = 0; x < 3; x++) {
-                if (len[x] == 0)
-                    continue;
-                int64_t f = (N * len[x] - 1) / Q;
-                int64_t count = (f + 1) / 2;
-                if (count > len[x])
-                    count = len[x];
-                if (count > m[x]) {
-                    cur[x] += (int)(step[x] * (count - m[x]));
-                    m[x] = count;
-                }
-            }
+        if (vis->full[1] && level_full(vis, 1, cur)) {
+            if (jump_through(cur, m, len, step, 16))
+                return true;
+        } else if (vis->full[0] && level_full(vis, 0, cur)) {
+            if (jump_through(cur, m, len, step, 4))
+                return true;
         }
         int best = -1;
         for (int x = 0; x < 3; x++) {
@@ -143,14 +179,14 @@ bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3])
                 cur[x] += (int)step[x];
                 m[x]++;
             }
-        if (!medium_at(vis, cur[0], cur[1], cur[2]))
+        if (!medium_at(vis, cur))
             return false;
     }
 }
 
 bool sg_importance_visible(const SgGrid *grid, const int a[3], const int b[3])
 {
-    SgVisibility plain = {grid, NULL, 0, 0};
+    SgVisibility plain = {grid, {NULL, NULL}, {0, 0}, {0, 0}};
     return sg_visibility_test(&plain, a, b);
 }
 
@@ -328,7 +364,7 @@ static double voxel_distance(const int a[3], const int b[3])
 
 void sg_importance_point(const SgVisibility *vis, const SgSkeleton *s, const uint32_t *pred,
                          const double *dist, uint32_t node, const double light_position[3],
-                         float point[3])
+                         double tolerance, float point[3])
 {
     const SgSkeletonNode *n = &s->nodes[node];
     if (dist[node] == 0) {
@@ -337,7 +373,7 @@ void sg_importance_point(const SgVisibility *vis, const SgSkeleton *s, const uin
         return;
     }
     /* Walk the path toward the light in chunks: a chunk spans at most
-     * SG_RUN_TOLERANCE times its distance from the node, and when its last
+     * `tolerance` times its distance from the node, and when its last
      * node is visible the nodes inside it are taken as visible too (an
      * obstacle would have to hide between two sight lines that close).
      * Otherwise its nodes are tested one by one, so the end of the run is
@@ -348,7 +384,7 @@ void sg_importance_point(const SgVisibility *vis, const SgSkeleton *s, const uin
     bool reached = false;
     uint32_t m = pred[node];
     while (m != SG_CACHE_NONE && !reached) {
-        double budget = SG_RUN_TOLERANCE * voxel_distance(n->voxel, s->nodes[m].voxel);
+        double budget = tolerance * voxel_distance(n->voxel, s->nodes[m].voxel);
         double span = 0;
         uint32_t last = m;
         while (dist[last] != 0 && pred[last] != SG_CACHE_NONE) {

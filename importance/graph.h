@@ -24,25 +24,23 @@ void sg_graph_shortest_paths(const SgGraph *graph, const uint32_t *sources,
                              void *heap_memory);
 size_t sg_graph_heap_bytes(const SgGraph *graph);
 
-/* Segment visibility with an occupancy accelerator (4x4x4 bricks). */
+/* Segment visibility with a two-level occupancy accelerator: a bit per
+ * 4^3 brick and per 16^3 super-brick that is all medium. */
 typedef struct SgVisibility {
     const SgGrid *grid;
-    uint64_t *full; /* bit per brick: all medium; NULL: none */
-    size_t bx, by;
+    uint64_t *full[2]; /* level 0: 4^3 bricks, level 1: 16^3; NULL: no accelerator */
+    size_t bx[2], by[2];
 } SgVisibility;
 
 bool sg_visibility_init(SgVisibility *vis, const SgGrid *grid, SgError *err);
 void sg_visibility_release(SgVisibility *vis);
 bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3]);
 
-/* Chunks of the path toward the light whose far end is visible count as
- * visible when they span at most this fraction of their distance. */
-#define SG_RUN_TOLERANCE 0.125
-
 /* Importance point of `node` for the light whose shortest-path tree is
- * (pred, dist) (dist 0 at the light's nodes). */
+ * (pred, dist) (dist 0 at the light's nodes). tolerance: see
+ * SgImportanceOptions.run_tolerance (0: every node tested). */
 void sg_importance_point(const SgVisibility *vis, const SgSkeleton *skeleton, const uint32_t *pred,
                          const double *dist, uint32_t node, const double light_position[3],
-                         float point[3]);
+                         double tolerance, float point[3]);
 
 #endif

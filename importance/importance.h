@@ -21,9 +21,20 @@
 extern "C" {
 #endif
 
+/* By default every node of a run is tested (the paper's rule). With a run
+ * tolerance T > 0 the path is walked in chunks instead: a chunk whose far
+ * end is visible counts as visible when it spans at most T times its
+ * distance from the node; otherwise its nodes are tested one by one, so the
+ * end of the run found is still a real first invisible node. Faster on
+ * long runs, but an obstacle hidden between two close sight lines is
+ * missed: on a real staircase (23k nodes) T = 1/8 changed 1.3% of the
+ * points by more than 10 degrees. */
 typedef struct SgImportanceOptions {
     int threads;              /* <= 0: every core */
+    double run_tolerance;     /* 0: exact (every node of the run tested) */
     const char *vectors_path; /* optional: figure 2 as a PLY of node -> point edges */
+    const char *medium_name;   /* the inputs' names in messages (default "medium", */
+    const char *skeleton_name; /* "skeleton") */
     bool quiet;               /* no summary line on stderr */
 } SgImportanceOptions;
 
@@ -31,6 +42,8 @@ typedef struct SgImportanceOptions {
 typedef struct SgImportanceStats {
     uint64_t medium_voxels;
     uint64_t labelled_voxels; /* medium voxels reached from some node */
+    uint32_t label_rounds;    /* slab rounds of the nearest-node propagation */
+    uint64_t label_settled;   /* voxels settled over all rounds */
     uint32_t nodes, components, lights, lights_reachable;
     uint64_t blocks, palette_entries, bytes;
     double seconds_labels, seconds_points, seconds_table, seconds_write, seconds_total;

@@ -263,7 +263,10 @@ bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int thr
 
     SgProgress progress;
     sg_progress_begin(&progress, "nearest nodes", medium);
+    uint32_t rounds = 0;
+    uint64_t settled = 0;
     for (int round = 0; ok; round++) {
+        rounds++;
         L->first_round = round == 0;
         sg_parallel_for((uint64_t)slabs, slabs, run_slab, L);
         uint64_t relaxed = 0;
@@ -271,6 +274,7 @@ bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int thr
             ok = ok && !L->slabs[s].failed;
             relaxed += L->slabs[s].relaxed;
         }
+        settled = relaxed;
         sg_progress_update(&progress, relaxed < medium ? relaxed : medium);
         bool more = false;
         for (int s = 0; ok && s + 1 < slabs; s++) {
@@ -306,6 +310,8 @@ bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int thr
     out->key = key;
     out->medium_voxels = medium;
     out->labelled_voxels = labelled;
+    out->rounds = rounds;
+    out->settled = settled;
     return true;
 }
 

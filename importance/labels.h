@@ -15,6 +15,8 @@ typedef struct SgLabelGrid {
                            no node / not medium */
     uint64_t medium_voxels;
     uint64_t labelled_voxels;
+    uint32_t rounds;           /* slab rounds until the boundaries were stable */
+    uint64_t settled;          /* voxels settled over all rounds (>= labelled) */
 } SgLabelGrid;
 
 bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int threads,

@@ -27,6 +27,9 @@ static void usage(FILE *out)
             "  -o FILE           output cache (written to a temporary name, then renamed)\n"
             "  --vectors FILE    also write node -> importance point edges as PLY (figure 2)\n"
             "  --threads N       worker threads (default: every core)\n"
+            "  --run-tolerance T test the path toward the light in chunks spanning T times\n"
+            "                    their distance (0 < T <= 1; e.g. 0.125): faster on long\n"
+            "                    runs, approximate; default: every node tested (exact)\n"
             "  --info CACHE [SCENE.json]\n"
             "                    validate a cache and print one JSON object: lights_total,\n"
             "                    lights_reachable (with a scene: lights that can reach its\n"
@@ -115,6 +118,14 @@ int main(int argc, char **argv)
                 return 2;
             }
             options.threads = (int)t;
+        } else if (!strcmp(a, "--run-tolerance") && i + 1 < argc) {
+            char *end;
+            double t = strtod(argv[++i], &end);
+            if (*end || !(t > 0 && t <= 1)) {
+                fprintf(stderr, "importance: --run-tolerance takes a number in (0, 1]\n");
+                return 2;
+            }
+            options.run_tolerance = t;
         } else if (!strcmp(a, "--info") && i + 1 < argc) {
             want_info = true;
             info_path = argv[++i];
@@ -143,6 +154,8 @@ int main(int argc, char **argv)
         return 2;
     }
     options.quiet = quiet;
+    options.medium_name = inputs[0];
+    options.skeleton_name = inputs[1];
 
     SgError err = {0};
     SgMedium medium;
@@ -173,10 +186,10 @@ int main(int argc, char **argv)
         fprintf(stderr,
                 "importance: %s: %u nodes (%u components), %u/%u lights on the skeleton, "
                 "%" PRIu64 " medium voxels (%" PRIu64 " labelled), %" PRIu64 " blocks, "
-                "%.1f MB, %.2f s (labels %.2f, points %.2f, table %.2f, write %.2f)\n",
+                "%.1f MB, %.2f s (labels %.2f in %u rounds, points %.2f, table %.2f, write %.2f)\n",
                 out_path, stats.nodes, stats.components, stats.lights_reachable, stats.lights,
                 stats.medium_voxels, stats.labelled_voxels, stats.blocks, stats.bytes / 1e6,
-                stats.seconds_total, stats.seconds_labels, stats.seconds_points,
+                stats.seconds_total, stats.seconds_labels, stats.label_rounds, stats.seconds_points,
                 stats.seconds_table, stats.seconds_write);
     }
     sg_skeleton_release(&skeleton);

@@ -706,3 +706,19 @@ Test(importance_cache, light_found_by_its_seed_and_no_lights_at_all)
     s.medium.light_count = 1;
     l_scene_free(&s);
 }
+
+Test(importance_cache, failed_vectors_leave_no_cache)
+{
+    LScene s;
+    l_scene(&s);
+    char path[256];
+    sgt_temp_path(path, sizeof path, "novec");
+    unlink(path);
+    SgImportanceOptions opt = {.threads = 1, .vectors_path = "/nonexistent/dir/vectors.ply"};
+    SgError err = {0};
+    cr_assert_not(sg_importance_build(&s.medium, &s.skeleton, &opt, path, NULL, &err));
+    cr_assert(strstr(err.message, "/nonexistent/dir/vectors.ply") == err.message, "%s",
+              err.message);
+    cr_assert_neq(access(path, F_OK), 0, "the cache was written although the build failed");
+    l_scene_free(&s);
+}

@@ -173,6 +173,23 @@ Test(importance_cli, bad_inputs_fail_with_one_line_and_no_output, .init = setup)
     cr_assert_eq(sg_test_count_lines(err), 1, "%s", err);
     cr_assert_not(sg_test_exists(cache));
 
+    /* A skeleton made for another medium: a light node naming light 7. */
+    SgSkeleton other = {0};
+    int a0[3] = {2, 6, 2}, a1[3] = {12, 6, 2};
+    uint32_t last = sgt_line(&other, SG_CACHE_NONE, a0, a1);
+    other.nodes[last].kind = SG_NODE_LIGHT;
+    other.nodes[last].light = 7;
+    char other_path[4096];
+    snprintf(other_path, sizeof other_path, "%s/other.ply", dir);
+    SgError e = {0};
+    cr_assert(sg_skeleton_write_ply(&other, other_path, &e), "%s", e.message);
+    sg_skeleton_release(&other);
+    snprintf(cmd, sizeof cmd, "%s %s %s -o %s", program, medium, other_path, cache);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 1);
+    cr_assert_eq(sg_test_count_lines(err), 1, "%s", err);
+    cr_assert(strstr(err, other_path) != NULL && strstr(err, "light 7") != NULL, "%s", err);
+    cr_assert_not(sg_test_exists(cache));
+
     /* --info on something that is not a cache, and on a missing file. */
     snprintf(cmd, sizeof cmd, "%s --info %s", program, medium);
     cr_assert_eq(sg_test_run(cmd, err, sizeof err), 1);
@@ -236,6 +253,15 @@ static void lattice_skeleton(const SgMedium *m, int pitch, SgSkeleton *s)
                 sgt_edge(s, ln, n);
         }
     }
+    /* sgt_node places nodes in unit voxels at the origin: use the grid's
+     * world transform instead. */
+    for (uint32_t n = 0; n < s->node_count; n++) {
+        double p[3];
+        const int *v = s->nodes[n].voxel;
+        sg_grid_voxel_center(g, v[0], v[1], v[2], p);
+        for (int a = 0; a < 3; a++)
+            s->nodes[n].position[a] = (float)p[a];
+    }
     free(id);
 }
 
@@ -264,7 +290,10 @@ Test(importance_cli, corridor_scene_end_to_end, .init = setup)
     lattice_skeleton(&m, 3, &s);
     cr_assert(sg_skeleton_write_ply(&s, skeleton, &e), "%s", e.message);
 
-    snprintf(cmd, sizeof cmd, "%s %s %s -o %s -q", program, medium, skeleton, cache);
+    char vectors[4096];
+    snprintf(vectors, sizeof vectors, "%s/vectors.ply", dir);
+    snprintf(cmd, sizeof cmd, "%s %s %s -o %s --vectors %s -q", program, medium, skeleton, cache,
+             vectors);
     cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
     snprintf(cmd, sizeof cmd, "%s --info %s data/corridor/corridor.json > %s", program, cache,
              info);
@@ -278,10 +307,20 @@ Test(importance_cli, corridor_scene_end_to_end, .init = setup)
     cJSON_Delete(j);
 
     /* Every medium voxel finds a node, and each node's importance point for
-     * a reachable light is finite and inside the grid's box. */
+     * a reachable light is inside the grid's box (or on the light). */
     SgImportanceCache *c = sg_cache_open(cache, &e);
     cr_assert_not_null(c, "%s", e.message);
     const SgGrid *g = &m.grid;
+    for (uint32_t n = 0; n < s.node_count; n++)
+        for (uint32_t k = 0; k < m.light_count; k++) {
+            double q[3];
+            if (!sg_cache_node_importance_point(c, n, k, q))
+                continue;
+            for (int a = 0; a < 3; a++) {
+                double lo = g->origin[a], hi = lo + g->voxel_size * (a == 0 ? g->nx : a == 1 ? g->ny : g->nz);
+                cr_assert(q[a] >= lo - 1e-3 && q[a] <= hi + 1e-3, "node %u point %g outside", n, q[a]);
+            }
+        }
     uint64_t found = 0, medium_voxels = 0;
     for (int k = 0; k < g->nz; k++)
         for (int jy = 0; jy < g->ny; jy++)

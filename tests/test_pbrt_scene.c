@@ -10,6 +10,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "image_io.h"
 #include "scene.h"
 #include "support_files.h"
 
@@ -317,12 +318,135 @@ Test(pbrt_materials, mapped_to_ours)
     sg_scene_free(s);
 }
 
+Test(pbrt_materials, textures_as_their_average)
+{
+    SgScene *s = load_ok(
+        HEADER "Texture \"quarter\" \"float\" \"constant\" \"float value\" 0.25\n"
+               "Texture \"flat\" \"spectrum\" \"constant\" \"rgb value\" [ 0.2 0.4 0.6 ]\n"
+               "Texture \"m\" \"spectrum\" \"mix\" \"texture tex1\" \"flat\"\n"
+               "    \"rgb tex2\" [ 1 1 1 ] \"texture amount\" \"quarter\"\n"
+               "Texture \"c\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [ 1 0 0 ]\n"
+               "    \"rgb tex2\" [ 0 0 1 ]\n"
+               "Material \"diffuse\" \"texture reflectance\" \"m\"\n" TRIANGLE
+               "Material \"coateddiffuse\" \"texture reflectance\" \"c\"\n"
+               "    \"texture roughness\" \"quarter\"\n" TRIANGLE);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect_float_eq(m->diffuse[0], 0.75f * 0.2f + 0.25f, 1e-6);
+    cr_expect_float_eq(m->diffuse[2], 0.75f * 0.6f + 0.25f, 1e-6);
+    m = material_of(s, 1);
+    cr_expect_float_eq(m->diffuse[0], 0.5f * 0.96f, 1e-6, "checkerboard: mean of the two");
+    cr_expect_float_eq(m->diffuse[1], 0.0f, 1e-9);
+    /* remaproughness (default true): alpha = sqrt(0.25) = 0.5, n = 2/0.25 - 2 */
+    cr_expect_float_eq(m->exponent, 6.0f, 1e-4);
+    cr_expect_eq(s->warning_count, 0);
+    sg_scene_free(s);
+}
+
+Test(pbrt_materials, image_textures_as_their_mean_linear_colour)
+{
+    if (!scene_dir)
+        scene_dir = sg_test_tmpdir();
+    /* Left half (0.2, 0.4, 0.6), right half (0.6, 0.4, 0.2): mean 0.4. */
+    enum { W = 64, H = 32 };
+    static float rgb[W * H * 3];
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++)
+            for (int c = 0; c < 3; c++)
+                rgb[3 * (y * W + x) + c] = x < W / 2 ? 0.2f * (1 + c) : 0.2f * (3 - c);
+    char png[4200], exr[4200];
+    snprintf(png, sizeof png, "%s/wood.png", scene_dir);
+    snprintf(exr, sizeof exr, "%s/wood.exr", scene_dir);
+    SgError err = {0};
+    cr_assert(sg_image_write_png(png, W, H, rgb, 0, &err), "%s", err.message);
+    cr_assert(sg_image_write_exr(exr, W, H, rgb, NULL, 0, &err), "%s", err.message);
+    SgScene *s = load_ok(
+        HEADER "Texture \"a\" \"spectrum\" \"imagemap\" \"string filename\" \"wood.png\"\n"
+               "Texture \"b\" \"spectrum\" \"imagemap\" \"string filename\" \"wood.exr\"\n"
+               "    \"float scale\" 0.5\n"
+               "Texture \"c\" \"spectrum\" \"imagemap\" \"string filename\" \"wood.png\"\n"
+               "    \"string encoding\" \"linear\"\n"
+               "Texture \"d\" \"spectrum\" \"imagemap\" \"string filename\" \"none.png\"\n"
+               "Material \"diffuse\" \"texture reflectance\" \"a\"\n" TRIANGLE
+               "Material \"diffuse\" \"texture reflectance\" \"b\"\n" TRIANGLE
+               "Material \"diffuse\" \"texture reflectance\" \"c\"\n" TRIANGLE
+               "Material \"diffuse\" \"texture reflectance\" \"d\"\n" TRIANGLE);
+    for (int c = 0; c < 3; c++) {
+        /* the PNG holds sRGB bytes: decoded back to linear, up to 8-bit rounding */
+        cr_expect(fabsf(material_of(s, 0)->diffuse[c] - 0.4f) < 0.004f, "png %d: %g", c,
+                  material_of(s, 0)->diffuse[c]);
+        cr_expect(fabsf(material_of(s, 1)->diffuse[c] - 0.2f) < 1e-4f, "exr %d: %g", c,
+                  material_of(s, 1)->diffuse[c]);
+        cr_expect_float_eq(material_of(s, 3)->diffuse[c], 0.5f, 1e-6, "missing file: grey");
+    }
+    /* read as linear, the sRGB bytes are brighter than the colour they encode */
+    cr_expect(material_of(s, 2)->diffuse[1] > 0.6f, "%g", material_of(s, 2)->diffuse[1]);
+    cr_expect(has_warning(s, "scene.pbrt:9: image textures that cannot be read"));
+    cr_expect_eq(s->warning_count, 1);
+    sg_scene_free(s);
+}
+
+Test(pbrt_materials, pbrt_v3_materials)
+{
+    SgScene *s = load_ok(
+        HEADER "Material \"matte\" \"color Kd\" [ 0.3 0.2 0.1 ]\n" TRIANGLE
+               "Material \"plastic\" \"rgb Kd\" [ 0.8 0.8 0.8 ] \"rgb Ks\" [ 0.4 0.4 0.4 ]\n"
+               "    \"float roughness\" 0.02 \"bool remaproughness\" \"false\"\n" TRIANGLE
+               "Material \"mirror\"\n" TRIANGLE
+               "Material \"glass\" \"float index\" 1.7\n" TRIANGLE
+               "Material \"metal\" \"float roughness\" 0.001\n" TRIANGLE
+               "Material \"substrate\"\n" TRIANGLE);
+    cr_assert_eq(s->triangle_count, 6);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect(m->type == SG_MATERIAL_DIFFUSE && fabsf(m->diffuse[0] - 0.3f) < 1e-6f);
+    m = material_of(s, 1); /* Kd + Ks = 1.2: scaled to 1, keeping the ratio */
+    cr_expect_eq(m->type, SG_MATERIAL_GLOSSY);
+    cr_expect_float_eq(m->diffuse[0], 0.8f / 1.2f, 1e-6);
+    cr_expect_float_eq(m->specular[0], 0.4f / 1.2f, 1e-6);
+    cr_expect_float_eq(m->exponent, (float)(2 / 4e-4 - 2), 1e-1);
+    m = material_of(s, 2);
+    cr_expect(m->type == SG_MATERIAL_MIRROR && fabsf(m->specular[1] - 0.9f) < 1e-6f);
+    m = material_of(s, 3);
+    cr_expect(m->type == SG_MATERIAL_DIELECTRIC && fabsf(m->ior - 1.7f) < 1e-6f);
+    m = material_of(s, 4); /* v3 remapping of 0.001: alpha ~ 0.05, a glossy copper */
+    cr_expect_eq(m->type, SG_MATERIAL_GLOSSY);
+    cr_expect(m->specular[0] > m->specular[2], "copper is red");
+    m = material_of(s, 5);
+    cr_expect(m->type == SG_MATERIAL_GLOSSY && fabsf(m->diffuse[0] - 0.5f) < 1e-6f);
+    cr_expect_eq(s->warning_count, 0);
+    sg_scene_free(s);
+}
+
+Test(pbrt_materials, named_before_defined_like_pbrt_v4)
+{
+    SgScene *s = load_ok(HEADER "NamedMaterial \"late\"\n" TRIANGLE
+                                "AreaLightSource \"diffuse\" \"rgb L\" [ 2 2 2 ]\n" TRIANGLE
+                                "MakeNamedMaterial \"late\" \"string type\" \"conductor\"\n"
+                                "    \"float roughness\" 0 \"rgb reflectance\" [ 0.9 0.9 0.9 ]\n");
+    cr_assert_eq(s->triangle_count, 2);
+    for (uint32_t t = 0; t < 2; t++) {
+        cr_expect_eq(material_of(s, t)->type, SG_MATERIAL_MIRROR, "triangle %u", t);
+        cr_expect_float_eq(material_of(s, t)->specular[0], 0.9f, 1e-6);
+    }
+    cr_expect_float_eq(material_of(s, 1)->emission[0], 2.0f, 1e-6, "keeps its emission");
+    cr_expect_float_eq(material_of(s, 0)->emission[0], 0.0f, 1e-9);
+    sg_scene_free(s);
+}
+
 /* ---- area lights -------------------------------------------------------- */
 
 Test(pbrt_lights, radiance_scale_and_emitting_side)
 {
+    /* light 4: a PLY whose normals (-z) disagree with its winding (+z) */
+    write_scene("lamp.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                            "property float y\nproperty float z\nproperty float nx\n"
+                            "property float ny\nproperty float nz\nelement face 1\n"
+                            "property list uchar int vertex_indices\nend_header\n"
+                            "0 0 0 0 0 -1\n1 0 0 0 0 -1\n0 1 0 0 0 -1\n3 0 1 2\n");
     SgScene *s = load_ok(
         HEADER
+        "AttributeBegin\n  Translate 20 0 0\n"
+        "  AreaLightSource \"diffuse\" \"rgb L\" [ 7 7 7 ]\n"
+        "  Shape \"plymesh\" \"string filename\" \"lamp.ply\"\nAttributeEnd\n"
         "AttributeBegin\n" /* light 0: winding faces +z */
         "  AreaLightSource \"diffuse\" \"rgb L\" [ 1 2 3 ] \"float scale\" 2\n" TRIANGLE
         "AttributeEnd\n"
@@ -340,12 +464,12 @@ Test(pbrt_lights, radiance_scale_and_emitting_side)
         "  Translate 15 0 0\n  Scale 1 1 -1\n"
         "  AreaLightSource \"diffuse\" \"rgb L\" [ 6 6 6 ]\n" TRIANGLE
         "AttributeEnd\n" TRIANGLE /* not emissive: the block ended */);
-    cr_assert_eq(s->light_count, 4);
-    cr_assert_eq(s->triangle_count, 5);
-    cr_expect_eq(s->triangle_light[4], SG_NO_LIGHT);
-    double expected_z[4] = {1, -1, -1, -1};
-    float expected_r[4] = {2, 4, 5, 6};
-    for (uint32_t k = 0; k < 4; k++) {
+    cr_assert_eq(s->light_count, 5);
+    cr_assert_eq(s->triangle_count, 6);
+    cr_expect_eq(s->triangle_light[5], SG_NO_LIGHT);
+    double expected_z[5] = {1, -1, -1, -1, -1};
+    float expected_r[5] = {2, 4, 5, 6, 7};
+    for (uint32_t k = 0; k < 5; k++) {
         const SgLight *l = NULL;
         for (uint32_t i = 0; i < s->light_count; i++)
             if (fabsf(s->lights[i].radiance[0] - expected_r[k]) < 1e-6f)
@@ -621,7 +745,9 @@ Test(pbrt_errors, missing_files_and_names)
     expect_error(HEADER "\nShape \"plymesh\" \"string filename\" \"models/none.ply\"\n", 5,
                  "models/none.ply: cannot open mesh");
     expect_error(HEADER "Include \"none.pbrt\"\n", 4, "none.pbrt: cannot open");
-    expect_error(HEADER "NamedMaterial \"nothing\"\n", 4, "\"nothing\" is not defined");
+    expect_error(HEADER "Include \"part.pbrt.gz\"\n", 4, "gunzip it first");
+    expect_error(HEADER TRIANGLE "NamedMaterial \"nothing\"\n" TRIANGLE, 5,
+                 "\"nothing\" is never defined");
     expect_error(HEADER "ObjectInstance \"nothing\"\n", 4, "no such object");
     expect_error(HEADER "Material \"diffuse\" \"texture reflectance\" \"none\"\n", 4,
                  "no texture named \"none\"");
