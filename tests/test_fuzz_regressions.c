@@ -26,6 +26,9 @@
 #define LLVMFuzzerTestOneInput fuzz_skeleton_ply_one
 #include "fuzz/fuzz_skeleton_ply.c"
 #undef LLVMFuzzerTestOneInput
+#define LLVMFuzzerTestOneInput fuzz_scene_pbrt_one
+#include "fuzz/fuzz_scene_pbrt.c"
+#undef LLVMFuzzerTestOneInput
 #define LLVMFuzzerTestOneInput fuzz_cache_one
 #include "fuzz/fuzz_cache.c"
 #undef LLVMFuzzerTestOneInput
@@ -147,6 +150,11 @@ static int feed_folder(const char *name, FuzzTarget target, FileReader reader)
 Test(fuzz_regressions, scene_json, .timeout = 300)
 {
     cr_assert_gt(feed_folder("fuzz_scene_json", fuzz_scene_json_one, read_scene), 0);
+}
+
+Test(fuzz_regressions, scene_pbrt, .timeout = 300)
+{
+    cr_assert_gt(feed_folder("fuzz_scene_pbrt", fuzz_scene_pbrt_one, read_scene), 0);
 }
 
 Test(fuzz_regressions, medium_vdb, .timeout = 300)
