@@ -30,6 +30,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <dlfcn.h>
 #include <unistd.h>
 
 #include "output_file.h"
@@ -94,6 +95,62 @@ void operator delete(void *p, std::size_t) noexcept { std::free(p); }
 void operator delete[](void *p, std::size_t) noexcept { std::free(p); }
 void operator delete(void *p, const std::nothrow_t &) noexcept { std::free(p); }
 void operator delete[](void *p, const std::nothrow_t &) noexcept { std::free(p); }
+
+// OpenVDB 10 reads an uncompressed chunk (a negative size before it) of
+// whatever length the file states into a buffer sized for the node: a
+// corrupt file overflows the heap (found by fuzz_medium_vdb). Its two chunk
+// readers are replaced here by ones that check that length first and then
+// hand over to the library's own (the calls from OpenVDB's templates, all
+// instantiated in this file, bind to these definitions).
+#define SG_STR2(x) #x
+#define SG_STR(x) SG_STR2(x)
+namespace {
+using ChunkReader = void (*)(std::istream &, char *, size_t);
+
+// The library's function: the next definition of the same symbol.
+ChunkReader library_chunk_reader(const char *name, std::size_t name_length)
+{
+    const std::string version = SG_STR(OPENVDB_VERSION_NAME);
+    const std::string symbol = "_ZN7openvdb" + std::to_string(version.size()) + version + "2io" +
+                               std::to_string(name_length) + name + "ERSiPcm";
+    return reinterpret_cast<ChunkReader>(dlsym(RTLD_NEXT, symbol.c_str()));
+}
+
+void read_chunk_checked(ChunkReader original, const char *name, std::istream &is, char *data,
+                        size_t numBytes)
+{
+    if (!original)
+        OPENVDB_THROW(openvdb::RuntimeError, "cannot find OpenVDB's " << name);
+    std::streampos start = is.tellg();
+    openvdb::Int64 size = 0;
+    is.read(reinterpret_cast<char *>(&size), sizeof size);
+    if (!is.good() || start == std::streampos(-1))
+        OPENVDB_THROW(openvdb::RuntimeError, "stream failure reading the size of a chunk");
+    if (size <= 0 && (size == INT64_MIN || (std::uint64_t)(-size) != numBytes))
+        OPENVDB_THROW(openvdb::RuntimeError, "expected a " << numBytes << "-byte chunk, the file says "
+                                                           << (size == INT64_MIN ? 0 : -size));
+    is.seekg(start);
+    original(is, data, numBytes);
+}
+} // namespace
+
+namespace openvdb {
+OPENVDB_USE_VERSION_NAMESPACE
+namespace OPENVDB_VERSION_NAME {
+namespace io {
+void unzipFromStream(std::istream &is, char *data, size_t numBytes)
+{
+    static const ChunkReader original = library_chunk_reader("unzipFromStream", 15);
+    read_chunk_checked(original, "unzipFromStream", is, data, numBytes);
+}
+void bloscFromStream(std::istream &is, char *data, size_t numBytes)
+{
+    static const ChunkReader original = library_chunk_reader("bloscFromStream", 15);
+    read_chunk_checked(original, "bloscFromStream", is, data, numBytes);
+}
+} // namespace io
+} // namespace OPENVDB_VERSION_NAME
+} // namespace openvdb
 
 namespace {
 
