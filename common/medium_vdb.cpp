@@ -327,8 +327,15 @@ extern "C" bool sg_medium_read(SgMedium *m, const char *path, SgError *err)
             active.min().y() < 0 || active.min().z() < 0 || active.max().x() >= dims[0] ||
             active.max().y() >= dims[1] || active.max().z() >= dims[2]) {
             shift = active.min();
-            openvdb::Coord ext = active.extents();
-            dims = openvdb::Vec3i(ext.x(), ext.y(), ext.z());
+            // in 64 bits: a corrupt file's box may span more than an int
+            std::int64_t ext[3];
+            for (int a = 0; a < 3; a++) {
+                ext[a] = (std::int64_t)active.max()[a] - active.min()[a] + 1;
+                if (ext[a] > (1 << 30))
+                    return sg_fail(err, "%s: the medium's active region is implausibly large "
+                                   "(%lld voxels along axis %d)", path, (long long)ext[a], a);
+            }
+            dims = openvdb::Vec3i((int)ext[0], (int)ext[1], (int)ext[2]);
         }
         double origin[3];
         for (int a = 0; a < 3; a++)
@@ -342,9 +349,10 @@ extern "C" bool sg_medium_read(SgMedium *m, const char *path, SgError *err)
         }
         SgGrid *g = &m->grid;
         auto set_box = [&](const openvdb::CoordBBox &box) {
-            for (int k = box.min().z(); k <= box.max().z(); k++)
-                for (int j = box.min().y(); j <= box.max().y(); j++)
-                    for (int i = box.min().x(); i <= box.max().x(); i++)
+            // 64-bit counters: a box may end at INT_MAX
+            for (std::int64_t k = box.min().z(); k <= box.max().z(); k++)
+                for (std::int64_t j = box.min().y(); j <= box.max().y(); j++)
+                    for (std::int64_t i = box.min().x(); i <= box.max().x(); i++)
                         g->voxels[sg_grid_index(g, i - shift.x(), j - shift.y(), k - shift.z())] = 1;
         };
         if (auto bgrid = openvdb::gridPtrCast<openvdb::BoolGrid>(base)) {
