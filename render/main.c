@@ -36,8 +36,8 @@ static const char *usage =
     "  --reference REF --log CSV  after every pass append seconds,spp,mse,relmse against\n"
     "                    REF (measuring time is not counted)\n"
     "  --max-depth N     maximum path length (default: the scene's render.max_depth, else 8)\n"
-    "  --exponent P      cosine-power exponent of the guiding lobe (default 4)\n"
-    "  --alpha A         guided: probability of BSDF sampling in the mixture, (0, 1] (default 0.5)\n"
+    "  --exponent P      cosine-power exponent of the lobe (default 8; skeleton: 4, the paper's)\n"
+    "  --alpha A         guided: probability of BSDF sampling in the mixture, (0, 1] (default 0.75)\n"
     "  --size WxH        image size (default: the scene's image size, else 320x240)\n"
     "  --quiet           no summary line\n";
 
@@ -241,6 +241,8 @@ int main(int argc, char **argv)
         sg_fail(&err, "--sampling: '%s' is not bsdf, skeleton or guided", a.sampling);
         goto done;
     }
+    if (o.sampling == SG_SAMPLING_SKELETON && !a.has_exponent)
+        o.lobe_exponent = 4.0f; /* the paper's p_skel for its corridor */
     if (o.sampling != SG_SAMPLING_BSDF && !a.cache) {
         sg_fail(&err, "--sampling %s needs --cache importance.cache", sg_sampling_name(o.sampling));
         goto done;
@@ -270,8 +272,20 @@ int main(int argc, char **argv)
             goto done;
         }
         uint32_t dropped = 0;
+        /* The litmus test needs the camera inside the voxel grid: one outside
+         * the scene's box (in front of an open box, say) cannot be tested,
+         * so every light is followed. Inside the box but outside the medium,
+         * the camera is in air no light reaches: nothing is followed. */
+        int dims[3];
+        double origin[3], h = sg_cache_voxel_size(cache);
+        sg_cache_grid(cache, dims, origin);
+        bool testable = true;
+        for (int a = 0; a < 3; a++)
+            if (!(scene->camera.position[a] >= origin[a] &&
+                  scene->camera.position[a] <= origin[a] + dims[a] * h))
+                testable = false;
         for (uint32_t l = 0; l < scene->light_count; l++) {
-            if (sg_cache_light_reaches(cache, l, scene->camera.position))
+            if (!testable || sg_cache_light_reaches(cache, l, scene->camera.position))
                 follow[l] = scene->lights[l].power;
             else
                 dropped++;

@@ -59,6 +59,15 @@ struct SgRenderer {
     double *light_tri_cdf;  /* per light, cumulative area fractions */
     double *follow_cdf;     /* guide: cumulative follow probability per light */
     double *light_centre;   /* 3 per light, local coordinates (SgLight.position) */
+    /* Guided mode: a coarse grid over the scene's bounds whose cells are
+     * marked where every probe of the guide found the light itself in view
+     * (so the mixture would not be used there anyway): vertices in them skip
+     * the cache query. A rule on the position alone: unbiased whatever it
+     * marks; it only saves time in well-lit regions. */
+    uint8_t *bsdf_cells;
+    int cells[3];
+    Vec3 cells_min;
+    float cell_inv_size;
 
     /* camera in local coordinates */
     Vec3 cam_pos, cam_forward, cam_right, cam_up;
@@ -100,8 +109,8 @@ void sg_render_options_default(SgRenderOptions *o, const SgScene *scene)
     o->height = scene && scene->has_camera && scene->camera.height > 0 ? scene->camera.height : 240;
     o->max_depth = scene && scene->render.max_depth > 0 ? scene->render.max_depth : 8;
     o->sampling = SG_SAMPLING_BSDF;
-    o->lobe_exponent = 4.0f;
-    o->alpha = 0.5f;
+    o->lobe_exponent = 8.0f;
+    o->alpha = 0.75f;
 }
 
 static float luminance(Vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
@@ -248,6 +257,100 @@ static void setup_camera(SgRenderer *r, const SgScene *s)
     r->aspect = (float)r->opt.width / (float)r->opt.height;
 }
 
+/* Is the guide's importance point at world position w the light itself,
+ * for every light it follows? 1 yes, 0 no, -1 no answer for any light. */
+static int probe_at_light(const SgRenderer *r, const double w[3])
+{
+    int answer = -1;
+    double prev = 0.0;
+    for (uint32_t l = 0; l < r->light_count; l++) {
+        double weight = r->follow_cdf[l] - prev;
+        prev = r->follow_cdf[l];
+        if (weight <= 0.0)
+            continue;
+        double q[3];
+        if (!r->opt.guide.importance_point(r->opt.guide.ctx, w, l, q))
+            continue;
+        double d[3] = {q[0] - (r->light_centre[3 * l] + r->centre[0]),
+                       q[1] - (r->light_centre[3 * l + 1] + r->centre[1]),
+                       q[2] - (r->light_centre[3 * l + 2] + r->centre[2])};
+        if (d3_length(d) >= 1e-4 * r->scale)
+            return 0;
+        answer = 1;
+    }
+    return answer;
+}
+
+static bool setup_bsdf_cells(SgRenderer *r, const SgScene *s, SgError *err)
+{
+    (void)s;
+    if (!r->opt.guide.importance_point || !r->light_count)
+        return true;
+    const int longest = 32;
+    double lo[3], hi[3], extent = 0.0;
+    for (int i = 0; i < 3; i++) {
+        lo[i] = INFINITY;
+        hi[i] = -INFINITY;
+    }
+    for (uint32_t t = 0; t < r->triangle_count; t++)
+        for (int k = 0; k < 3; k++) {
+            Vec3 v = r->vertices[r->indices[3 * t + k]];
+            float c[3] = {v.x, v.y, v.z};
+            for (int i = 0; i < 3; i++) {
+                lo[i] = fmin(lo[i], c[i]);
+                hi[i] = fmax(hi[i], c[i]);
+            }
+        }
+    for (int i = 0; i < 3; i++)
+        extent = fmax(extent, hi[i] - lo[i]);
+    double size = extent / longest;
+    size_t total = 1;
+    for (int i = 0; i < 3; i++) {
+        r->cells[i] = (int)ceil((hi[i] - lo[i]) / size) + 1;
+        total *= (size_t)r->cells[i];
+    }
+    r->cells_min = v3((float)lo[0], (float)lo[1], (float)lo[2]);
+    r->cell_inv_size = (float)(1.0 / size);
+    r->bsdf_cells = calloc(total, 1);
+    if (!r->bsdf_cells)
+        return sg_fail(err, "%s: out of memory for the guide's cell grid", s->path);
+    /* 9 probes per cell: the centre and 8 points halfway to the corners */
+    for (int z = 0; z < r->cells[2]; z++)
+        for (int y = 0; y < r->cells[1]; y++)
+            for (int x = 0; x < r->cells[0]; x++) {
+                int verdict = -1;
+                for (int k = 0; k < 9 && verdict != 0; k++) {
+                    double f[3] = {0.5, 0.5, 0.5};
+                    if (k < 8)
+                        for (int i = 0; i < 3; i++)
+                            f[i] = (k >> i & 1) ? 0.75 : 0.25;
+                    double w[3] = {lo[0] + (x + f[0]) * size + r->centre[0],
+                                   lo[1] + (y + f[1]) * size + r->centre[1],
+                                   lo[2] + (z + f[2]) * size + r->centre[2]};
+                    int a = probe_at_light(r, w);
+                    if (a >= 0)
+                        verdict = a;
+                }
+                r->bsdf_cells[((size_t)z * r->cells[1] + y) * r->cells[0] + x] = verdict == 1;
+            }
+    return true;
+}
+
+static bool in_bsdf_cell(const SgRenderer *r, Vec3 p)
+{
+    if (!r->bsdf_cells)
+        return false;
+    int c[3];
+    float v[3] = {(p.x - r->cells_min.x) * r->cell_inv_size, (p.y - r->cells_min.y) * r->cell_inv_size,
+                  (p.z - r->cells_min.z) * r->cell_inv_size};
+    for (int i = 0; i < 3; i++) {
+        if (!(v[i] >= 0.0f && v[i] < (float)r->cells[i]))
+            return false;
+        c[i] = (int)v[i];
+    }
+    return r->bsdf_cells[((size_t)c[2] * r->cells[1] + c[1]) * r->cells[0] + c[0]] != 0;
+}
+
 SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgError *err)
 {
     const char *path = s->path[0] ? s->path : "scene";
@@ -352,6 +455,10 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         return NULL;
     }
     setup_camera(r, s);
+    if (o->sampling == SG_SAMPLING_GUIDED && !setup_bsdf_cells(r, s, err)) {
+        sg_renderer_free(r);
+        return NULL;
+    }
 
     r->device = rtcNewDevice(NULL);
     if (!r->device) {
@@ -397,6 +504,7 @@ void sg_renderer_free(SgRenderer *r)
     free(r->light_tri_cdf);
     free(r->follow_cdf);
     free(r->light_centre);
+    free(r->bsdf_cells);
     free(r->sum);
     free(r->last);
     free(r);
@@ -497,7 +605,7 @@ static Vec3 eval_bsdf(const Material *m, const SgGlossyLobe *lobe, Vec3 wi)
     if (m->type == SG_MATERIAL_GLOSSY) {
         float c = v3_dot(wi, lobe->r);
         if (c > 0.0f) {
-            float s = (m->exponent + 2.0f) * (0.5f * SG_INV_PI) * powf(fminf(c, 1.0f), m->exponent);
+            float s = (m->exponent + 2.0f) * (0.5f * SG_INV_PI) * sg_pow_exponent(fminf(c, 1.0f), m->exponent);
             f = v3_add(f, v3_scale(m->ks, s));
         }
     }
@@ -657,7 +765,8 @@ static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStat
             BounceSampler bs = {0, {lobe, n, r->opt.lobe_exponent, 1.0f}};
             Vec3 axis;
             bool at_light = false;
-            bool guided = mode != SG_SAMPLING_BSDF && guide_axis(r, h.p, n, rng, &axis, &at_light);
+            bool guided = mode != SG_SAMPLING_BSDF && !(mode == SG_SAMPLING_GUIDED && in_bsdf_cell(r, h.p)) &&
+                          guide_axis(r, h.p, n, rng, &axis, &at_light);
             /* Where the importance point is the light itself the light is in
              * view and next-event estimation already samples it: the guided
              * mode keeps to the BSDF there (a rule on the position alone,

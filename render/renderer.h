@@ -53,7 +53,8 @@ typedef struct SgRenderOptions {
 } SgRenderOptions;
 
 /* Defaults: image size and depth from the scene (320x240, 8 when not
- * given), bsdf sampling, seed 0, every core, p_skel 4, alpha 0.5. */
+ * given), bsdf sampling, seed 0, every core, p_skel 8, alpha 0.75
+ * (best of a sweep on the corridor: docs/render.md). */
 void sg_render_options_default(SgRenderOptions *o, const SgScene *scene);
 
 typedef struct SgRenderer SgRenderer;

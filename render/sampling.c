@@ -45,7 +45,7 @@ float sg_pdf_cosine_power(Vec3 a, float p, Vec3 w)
     float c = v3_dot(a, w);
     if (c <= 0.0f)
         return 0.0f;
-    return (p + 1.0f) * (0.5f * SG_INV_PI) * powf(fminf(c, 1.0f), p);
+    return (p + 1.0f) * (0.5f * SG_INV_PI) * sg_pow_exponent(fminf(c, 1.0f), p);
 }
 
 Vec3 sg_sample_folded_lobe(Vec3 a, Vec3 n, float p, float u1, float u2)

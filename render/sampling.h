@@ -68,6 +68,22 @@ typedef struct SgMixture {
 Vec3 sg_sample_mixture(const SgMixture *m, float u0, float u1, float u2);
 float sg_pdf_mixture(const SgMixture *m, Vec3 w);
 
+/* c^p for c in [0, 1]: by squaring when p is a small whole number (the
+ * usual lobe exponents), powf otherwise. */
+static inline float sg_pow_exponent(float c, float p)
+{
+    if (p >= 0.0f && p <= 64.0f && p == (float)(int)p) {
+        float r = 1.0f, b = c;
+        for (int e = (int)p; e; e >>= 1) {
+            if (e & 1)
+                r *= b;
+            b *= b;
+        }
+        return r;
+    }
+    return powf(c, p);
+}
+
 /* Reflection of wo (pointing away from the surface) about n. */
 static inline Vec3 sg_reflect(Vec3 wo, Vec3 n)
 {

@@ -67,32 +67,33 @@ precompute() { # scene outdir -> outdir/importance.cache
 }
 
 echo
-echo "-- per-sample cost of guided over bsdf (same spp; the paper paid +25%, target < +10%)"
+echo "-- per-sample cost of guided over bsdf (same spp, runs interleaved, best of each;"
+echo "   the paper paid +25%, target < +10%)"
 if [ $have_pipeline = 0 ]; then
   echo "(needs bin/voxelize, bin/skeletonize, bin/importance)"
 else
-  printf '%-14s %-9s %10s %10s %12s %12s\n' scene sampling seconds spp us/sample us/ray
-  for sc in "$sponza" data/corridor/corridor.json; do
+  printf '%-14s %-9s %10s %12s %12s %12s\n' scene sampling spp us/sample us/ray rays/sample
+  for sc in "$sponza" data/corridor/corridor.json data/cornell-box/cornell-box.json; do
     [ -e "$sc" ] || continue
     name=$(basename "$sc" .json)
     if ! precompute "$sc" "$out/$name"; then echo "$name: precompute failed"; continue; fi
-    spp=16; [ "$quick" = 1 ] && spp=4
-    declare -A per=()
-    for mode in bsdf guided; do
-      best=999999 bray=999999
-      for _ in $(seq $runs); do
+    spp=16; [ "$quick" = 1 ] && spp=8
+    declare -A us=() ur=()
+    us[bsdf]=999999; us[guided]=999999; ur[bsdf]=999999; ur[guided]=999999
+    for _ in $(seq $((runs + 1))); do
+      for mode in bsdf guided; do
         line=$("$bin/render" "$sc" --cache "$out/$name/importance.cache" --sampling $mode \
                  --spp $spp --max-depth 8 -o "$out/g.exr" 2>&1)
-        s=$(sed -nE 's/.* ([0-9.]+) s, .*/\1/p' <<<"$line")
         sps=$(field Msamples/s "$line"); mr=$(field Mrays/s "$line")
-        us=$(awk -v x="$sps" 'BEGIN{print 1/x}'); ur=$(awk -v x="$mr" 'BEGIN{print 1/x}')
-        best=$(awk -v a="$best" -v b="$us" 'BEGIN{print (b<a)?b:a}')
-        bray=$(awk -v a="$bray" -v b="$ur" 'BEGIN{print (b<a)?b:a}')
+        us[$mode]=$(awk -v a="${us[$mode]}" -v x="$sps" 'BEGIN{b=1/x; print (b<a)?b:a}')
+        ur[$mode]=$(awk -v a="${ur[$mode]}" -v x="$mr" 'BEGIN{b=1/x; print (b<a)?b:a}')
       done
-      per[$mode]=$best; per[${mode}_ray]=$bray
-      printf '%-14s %-9s %10s %10s %12.4f %12.4f\n' "$name" $mode "$s" $spp "$best" "$bray"
     done
-    awk -v g="${per[guided]}" -v b="${per[bsdf]}" -v gr="${per[guided_ray]}" -v br="${per[bsdf_ray]}" -v n="$name" \
+    for mode in bsdf guided; do
+      printf '%-14s %-9s %10s %12.4f %12.4f %12.2f\n' "$name" $mode $spp "${us[$mode]}" "${ur[$mode]}" \
+        "$(awk -v a="${us[$mode]}" -v b="${ur[$mode]}" 'BEGIN{print a/b}')"
+    done
+    awk -v g="${us[guided]}" -v b="${us[bsdf]}" -v gr="${ur[guided]}" -v br="${ur[bsdf]}" -v n="$name" \
       'BEGIN{c=100*(g/b-1); printf "%s: guided costs %+.1f%% per sample, %+.1f%% per ray: %s (target < +10%% per sample)\n", n, c, 100*(gr/br-1), (c<10)?"ok":"MISSED"}'
   done
 fi
@@ -102,16 +103,19 @@ echo "-- time to error, guided vs bsdf (relMSE against a long bsdf reference; me
 if [ $have_pipeline = 0 ]; then
   echo "(needs bin/voxelize, bin/skeletonize, bin/importance)"
 else
-  seeds=3; seconds=20; ref_seconds=240
-  [ "$quick" = 1 ] && { seeds=1; seconds=6; ref_seconds=40; }
-  printf '%-12s %10s %14s %14s %8s  %s\n' scene relMSE bsdf_seconds guided_seconds gain target
+  seeds=3; seconds=20; ref_seconds=180
+  [ "$quick" = 1 ] && { seeds=1; seconds=8; ref_seconds=40; }
+  echo "   relMSE after $seconds s (mean of $seeds seeds); t_bsdf: seconds of the bsdf run; t_guided:"
+  echo "   seconds guided needs to reach bsdf's final error (* = extrapolated); gain = error ratio"
+  printf '%-12s %11s %11s %11s %8s %9s %8s  %s\n' scene bsdf guided skeleton t_bsdf t_guided gain target
   for sc in data/corridor/corridor.json data/cornell-box/cornell-box.json; do
     [ -e "$sc" ] || continue
     name=$(basename "$sc" .json)
     if ! precompute "$sc" "$out/$name"; then echo "$name: precompute failed"; continue; fi
     "$bin/render" "$sc" --sampling bsdf --time $ref_seconds --seed 999 -o "$out/$name/ref.exr" --quiet
-    for mode in bsdf guided; do
-      for seed in $(seq $seeds); do
+    # modes interleaved, so that a change in the machine's load hits all alike
+    for seed in $(seq $seeds); do
+      for mode in bsdf guided skeleton; do
         "$bin/render" "$sc" --cache "$out/$name/importance.cache" --sampling $mode --time $seconds \
           --seed $seed -o "$out/$name/$mode.exr" --reference "$out/$name/ref.exr" \
           --log "$out/$name/$mode-$seed.csv" --quiet
@@ -121,16 +125,18 @@ else
     avg() { paste -d, "$@" | awk -F, -v n=$# 'NR>1{t=0;e=0;ok=1;for(i=0;i<n;i++){if($(4*i+1)==""){ok=0;break};t+=$(4*i+1);e+=$(4*i+4)} if(ok)print t/n, e/n}'; }
     avg "$out/$name"/bsdf-*.csv > "$out/$name/bsdf.curve"
     avg "$out/$name"/guided-*.csv > "$out/$name/guided.curve"
-    # target: the error bsdf reaches at the end of its run
-    target=$(tail -1 "$out/$name/bsdf.curve" | awk '{print $2}')
-    tb=$(awk -v e="$target" '$2<=e{print $1; exit}' "$out/$name/bsdf.curve")
-    tg=$(awk -v e="$target" '$2<=e{print $1; exit}' "$out/$name/guided.curve")
-    if [ -z "$tg" ]; then
-      printf '%-12s %10.4g %14.2f %14s %8s  %s\n' "$name" "$target" "$tb" "> $seconds" "< 1" "guided never reached it"
-      continue
-    fi
+    avg "$out/$name"/skeleton-*.csv > "$out/$name/skeleton.curve"
+    # Unbiased Monte Carlo error falls as 1/time, so the ratio of the errors
+    # after equal time is the speed-up; the time guided needs to reach the
+    # error bsdf ends with is shown too (extrapolated as 1/t if not reached).
+    eb=$(tail -1 "$out/$name/bsdf.curve" | awk '{print $2}')
+    eg=$(tail -1 "$out/$name/guided.curve" | awk '{print $2}')
+    es=$(tail -1 "$out/$name/skeleton.curve" | awk '{print $2}')
+    tb=$(tail -1 "$out/$name/bsdf.curve" | awk '{print $1}')
+    tg=$(awk -v e="$eb" '$2<=e{print $1; exit}' "$out/$name/guided.curve")
+    [ -z "$tg" ] && tg=$(tail -1 "$out/$name/guided.curve" | awk -v e="$eb" '{printf "%.2f*", $1*$2/e}')
     case $name in corridor) want=3; cmp=">= 3x";; *) want=0.95; cmp=">= 0.95x";; esac
-    awk -v n="$name" -v e="$target" -v a="$tb" -v b="$tg" -v w="$want" -v c="$cmp" \
-      'BEGIN{g=a/b; printf "%-12s %10.4g %14.2f %14.2f %7.2fx  %s: %s\n", n, e, a, b, g, c, (g>=w)?"ok":"MISSED"}'
+    awk -v n="$name" -v eb="$eb" -v eg="$eg" -v es="$es" -v tb="$tb" -v tg="$tg" -v w="$want" -v c="$cmp" \
+      'BEGIN{g=eb/eg; printf "%-12s %11.4g %11.4g %11.4g %8.2f %9s %7.2fx  %s: %s\n", n, eb, eg, es, tb, tg, g, c, (g>=w)?"ok":"MISSED"}'
   done
 fi
