@@ -1,7 +1,7 @@
 /* Skeleton benchmark: the furnished synthetic room (walls, table, sofa,
  * pillar, hanging lamp) at a given grid size, through sg_skeletonize.
- *   skeleton_bench NX NY NZ [THREADS]
- * prints one table row: grid, medium voxels, wall seconds (distance,
+ *   skeleton_bench NX NY NZ [THREADS [par]]   (par: parallel collapse too)
+ * prints one table row: grid, threads, medium voxels, wall seconds (distance,
  * collapse, total), CPU seconds of the skeleton (user + system, all
  * threads), peak RSS in MB (VmHWM, the whole process including the
  * 1-byte-per-voxel input grid), nodes, edges, loops, cavities broken, mean
@@ -40,7 +40,7 @@ static double cpu_seconds(void)
 int main(int argc, char **argv)
 {
     if (argc < 4) {
-        fprintf(stderr, "usage: skeleton_bench NX NY NZ [THREADS]\n");
+        fprintf(stderr, "usage: skeleton_bench NX NY NZ [THREADS [par]]\n");
         return 2;
     }
     int nx = atoi(argv[1]), ny = atoi(argv[2]), nz = atoi(argv[3]);
@@ -53,6 +53,7 @@ int main(int argc, char **argv)
     sg_skeleton_options_default(&opt);
     opt.progress = false;
     opt.threads = argc > 4 ? atoi(argv[4]) : 0;
+    opt.parallel_grain = argc > 5 && !strcmp(argv[5], "par") ? SG_SKELETON_PARALLEL_GRAIN : 0;
     SgSkeleton skeleton;
     SgSkeletonStats st;
     SgError err = {0};
@@ -64,8 +65,10 @@ int main(int argc, char **argv)
     double cpu = cpu_seconds() - cpu0;
     char grid[64];
     snprintf(grid, sizeof grid, "%dx%dx%d", nx, ny, nz);
-    printf("%-12s %10" PRIu64 " %8.2f %8.2f %7.2f %6.2f %7.0f %6u %6u %5" PRId64 " %4u %6.3f\n",
-           grid, st.medium_voxels, st.seconds_distance, st.seconds_collapse,
+    char threads[16];
+    snprintf(threads, sizeof threads, "%d%s", opt.threads, opt.parallel_grain ? "+par" : "");
+    printf("%-12s %7s %10" PRIu64 " %8.2f %8.2f %7.2f %6.2f %7.0f %6u %6u %5" PRId64 " %4u %6.3f\n",
+           grid, threads, st.medium_voxels, st.seconds_distance, st.seconds_collapse,
            st.seconds_total, cpu, peak_rss_mb(), st.nodes, st.edges, st.loops,
            st.cavities_broken, st.mean_centredness);
     sg_skeleton_release(&skeleton);

@@ -19,7 +19,7 @@ checks=(
   "openimageio-tools:/usr/bin/idiff"
 )
 if [ "${SG_WITH_BENCH_TOOLS:-0}" = 1 ]; then
-  checks+=("embree-tools:/usr/bin/pathtracer" "python3:/usr/bin/python3" "time:/usr/bin/time")
+  checks+=("embree-tools:/usr/bin/pathtracer" "python3:/usr/bin/python3" "time:/usr/bin/time" "gnuplot-nox:/usr/bin/gnuplot")
 fi
 
 missing=()

@@ -12,11 +12,20 @@
  * exactly one coface left (or at the start). Cofaces only ever go, so that
  * count passes 1 once: a cell is queued at most once, with no need for a
  * "queued" bit per cell. A queued face may stop being free (its coface
- * goes with another face): it is checked again when its sub-step comes. */
+ * goes with another face): it is checked again when its sub-step comes.
+ *
+ * Threads: a large sub-step is verified in parallel (read only), then its
+ * pairs are processed by slabs of lattice planes, all even slabs at once,
+ * then all odd ones; slabs running together touch disjoint cells, so this
+ * is just one of the sequential orders, and no atomics are needed. */
 #include "collapse.h"
 
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "threads.h"
 
 #define KINDS 18
 #define SQUARE_BITS 0x68u /* masks 3, 5, 6 */
@@ -31,7 +40,36 @@ typedef struct EdgeVec {
     size_t n, cap;
 } EdgeVec;
 
-typedef struct Collapse {
+/* Where a pass over removed pairs sends what it finds: the collapse's own
+ * queues and lists (sequential), or a worker's (parallel). */
+typedef struct Sink {
+    U32Vec *cur, *next; /* KINDS queues each */
+    EdgeVec *noted;
+    bool oom;
+} Sink;
+
+typedef struct Worker {
+    U32Vec pairs;
+    U32Vec cur[KINDS], next[KINDS];
+    EdgeVec noted;
+    Sink sink;
+} Worker;
+
+typedef enum Job { JOB_VERIFY, JOB_EVEN, JOB_ODD, JOB_EXIT } Job;
+
+typedef struct Collapse Collapse;
+typedef struct Helper {
+    Collapse *c;
+    int t;
+} Helper;
+
+#define MAX_THREADS 8
+/* Slabs of lattice planes processed concurrently are at least this thick
+ * and never adjacent: the work for a pair at plane z reads and writes
+ * planes z-2..z+1 only. */
+#define SLAB_MIN 8
+
+struct Collapse {
     SgComplex *cx;
     uint8_t *cells, *cons;
     size_t st[3];
@@ -47,7 +85,20 @@ typedef struct Collapse {
     uint32_t cavities_broken_total, forced_total;
     int64_t filter256;
     bool oom;
-} Collapse;
+    /* parallel sub-steps */
+    int threads;
+    size_t parallel_grain;
+    Worker *workers;
+    pthread_barrier_t start, end;
+    pthread_mutex_t gate_lock;
+    pthread_cond_t gate;
+    bool gate_open;
+    Job job;
+    const U32Vec *job_queue;
+    size_t slab_planes, slab_count;
+    size_t *slab_start;      /* pairs of slab i: pairs.a[2*slab_start[i] .. 2*slab_start[i+1]) */
+    _Atomic size_t next_slab;
+};
 
 static bool vec_reserve(void **a, size_t *cap, size_t need, size_t size)
 {
@@ -61,6 +112,22 @@ static bool vec_reserve(void **a, size_t *cap, size_t need, size_t size)
         return false;
     *a = p;
     *cap = cap2;
+    return true;
+}
+
+static inline bool vec_push_u32(U32Vec *v, uint32_t x)
+{
+    if (v->n == v->cap && !vec_reserve((void **)&v->a, &v->cap, v->n + 1, sizeof *v->a))
+        return false;
+    v->a[v->n++] = x;
+    return true;
+}
+
+static inline bool vec_push_edge(EdgeVec *v, SgIsolatedEdge e)
+{
+    if (v->n == v->cap && !vec_reserve((void **)&v->a, &v->cap, v->n + 1, sizeof *v->a))
+        return false;
+    v->a[v->n++] = e;
     return true;
 }
 
@@ -122,16 +189,17 @@ static inline int free_kind(const Collapse *c, uint32_t f, uint32_t *g)
     return axis * 6 + ori * 3 + (3 - sg_cell_dim(gm));
 }
 
-static inline void consider(Collapse *c, uint32_t h)
+static inline void consider(const Collapse *c, Sink *sk, uint32_t h)
 {
     uint32_t g;
     int k = free_kind(c, h, &g);
     if (k < 0)
         return;
-    u32_push(c, k > c->substep ? &c->cur[k] : &c->next[k], h);
+    if (!vec_push_u32(k > c->substep ? &sk->cur[k] : &sk->next[k], h))
+        sk->oom = true;
 }
 
-static inline void consider_faces(Collapse *c, uint32_t cell)
+static inline void consider_faces(const Collapse *c, Sink *sk, uint32_t cell)
 {
     size_t v = cell >> 3;
     unsigned m = cell & 7;
@@ -140,8 +208,8 @@ static inline void consider_faces(Collapse *c, uint32_t cell)
         if (!(m & bit))
             continue;
         unsigned fm = m ^ bit;
-        consider(c, (uint32_t)(v * 8 + fm));
-        consider(c, (uint32_t)((v + c->st[a]) * 8 + fm));
+        consider(c, sk, (uint32_t)(v * 8 + fm));
+        consider(c, sk, (uint32_t)((v + c->st[a]) * 8 + fm));
     }
 }
 
@@ -160,7 +228,7 @@ static uint16_t edge_opening(const Collapse *c, size_t v, unsigned m)
 }
 
 /* A square was removed: record its edges that have no square left. */
-static void note_isolated_edges(Collapse *c, uint32_t square)
+static void note_isolated_edges(const Collapse *c, Sink *sk, uint32_t square)
 {
     size_t v = square >> 3;
     unsigned m = square & 7;
@@ -182,60 +250,196 @@ static void note_isolated_edges(Collapse *c, uint32_t square)
                 if (has(c->cells, w, em | bb) || has(c->cells, w - c->st[b], em | bb))
                     isolated = false;
             }
-            if (isolated)
-                edge_push(c, &c->live,
-                          (SgIsolatedEdge){(uint32_t)(w * 8 + em), c->step, -1,
-                                           edge_opening(c, w, em)});
+            if (isolated && !vec_push_edge(sk->noted, (SgIsolatedEdge){(uint32_t)(w * 8 + em),
+                                                                      c->step, -1,
+                                                                      edge_opening(c, w, em)}))
+                sk->oom = true;
         }
     }
 }
 
-static void remove_cell(Collapse *c, uint32_t cell)
+static void remove_cell(const Collapse *c, uint32_t cell)
 {
     c->cells[cell >> 3] &= (uint8_t) ~(1u << (cell & 7));
+}
+
+/* Removes pairs [lo, hi) of c->pairs one by one, noting isolated edges and
+ * queueing newly free faces. The pairs were all tested against the complex
+ * as the sub-step found it, so removing them in any order gives the same
+ * complex; noting an edge right after each square goes notes it exactly
+ * once (when its last square goes); a face tested too early is tested
+ * again when its other coface goes. */
+static void process_pairs(const Collapse *c, Sink *sk, size_t lo, size_t hi)
+{
+    int coface_dim = 3 - c->substep % 3;
+    for (size_t i = lo; i < hi; i++) {
+        uint32_t f = c->pairs.a[2 * i], g = c->pairs.a[2 * i + 1];
+        remove_cell(c, f);
+        remove_cell(c, g);
+        /* coface_dim 3: each edge of the square f is also an edge of
+         * another square of the cube g, still here: none becomes isolated */
+        if (coface_dim == 2)
+            note_isolated_edges(c, sk, g);
+        consider_faces(c, sk, g);
+        consider_faces(c, sk, f);
+    }
+}
+
+static void run_job(Collapse *c, int t)
+{
+    Worker *w = &c->workers[t];
+    if (c->job == JOB_VERIFY) {
+        const U32Vec *q = c->job_queue;
+        size_t lo = q->n * (size_t)t / (size_t)c->threads;
+        size_t hi = q->n * (size_t)(t + 1) / (size_t)c->threads;
+        for (size_t i = lo; i < hi; i++) {
+            uint32_t f = q->a[i], g = 0;
+            if (free_kind(c, f, &g) == c->substep &&
+                (!vec_push_u32(&w->pairs, f) || !vec_push_u32(&w->pairs, g)))
+                w->sink.oom = true;
+        }
+        return;
+    }
+    /* slabs of one parity: any two are separated by a slab of the other */
+    size_t parity = c->job == JOB_ODD;
+    for (;;) {
+        size_t k = atomic_fetch_add(&c->next_slab, 1);
+        size_t slab = 2 * k + parity;
+        if (slab >= c->slab_count)
+            break;
+        process_pairs(c, &w->sink, c->slab_start[slab], c->slab_start[slab + 1]);
+    }
+}
+
+static void *helper_main(void *arg)
+{
+    Helper *h = arg;
+    Collapse *c = h->c;
+    pthread_mutex_lock(&c->gate_lock);
+    while (!c->gate_open)
+        pthread_cond_wait(&c->gate, &c->gate_lock);
+    pthread_mutex_unlock(&c->gate_lock);
+    for (;;) {
+        pthread_barrier_wait(&c->start);
+        if (c->job == JOB_EXIT)
+            break;
+        run_job(c, h->t);
+        pthread_barrier_wait(&c->end);
+    }
+    return NULL;
+}
+
+static void run_parallel(Collapse *c, Job job)
+{
+    c->job = job;
+    atomic_store(&c->next_slab, 0);
+    pthread_barrier_wait(&c->start);
+    run_job(c, 0);
+    pthread_barrier_wait(&c->end);
+}
+
+static bool append_u32(U32Vec *dst, U32Vec *src)
+{
+    if (src->n == 0)
+        return true;
+    if (!vec_reserve((void **)&dst->a, &dst->cap, dst->n + src->n, sizeof *dst->a))
+        return false;
+    memcpy(dst->a + dst->n, src->a, src->n * sizeof *src->a);
+    dst->n += src->n;
+    src->n = 0;
+    return true;
+}
+
+/* The sub-step on the worker threads: verify (read only), sort the pairs
+ * into slabs of lattice planes, then process even slabs concurrently and
+ * odd slabs concurrently. Slabs running together touch disjoint cells, so
+ * this is one of the sequential orders; queues get the same sets (in
+ * another order), and the collapse depends on the sets only: the result
+ * does not depend on the threads. */
+static void run_substep_parallel(Collapse *c, U32Vec *q)
+{
+    c->job_queue = q;
+    run_parallel(c, JOB_VERIFY);
+    q->n = 0;
+    size_t total = 0;
+    for (int t = 0; t < c->threads; t++) {
+        c->oom |= c->workers[t].sink.oom;
+        total += c->workers[t].pairs.n;
+    }
+    if (c->oom || !vec_reserve((void **)&c->pairs.a, &c->pairs.cap, total, sizeof *c->pairs.a)) {
+        c->oom = true;
+        return;
+    }
+    /* counting sort of the pairs by the slab of their face's plane */
+    size_t *start = c->slab_start;
+    memset(start, 0, (c->slab_count + 1) * sizeof *start);
+    for (int t = 0; t < c->threads; t++) {
+        const U32Vec *p = &c->workers[t].pairs;
+        for (size_t i = 0; i < p->n; i += 2)
+            start[(p->a[i] >> 3) / c->st[2] / c->slab_planes + 1]++;
+    }
+    for (size_t i = 1; i <= c->slab_count; i++)
+        start[i] += start[i - 1];
+    for (int t = 0; t < c->threads; t++) {
+        U32Vec *p = &c->workers[t].pairs;
+        for (size_t i = 0; i < p->n; i += 2) {
+            size_t at = start[(p->a[i] >> 3) / c->st[2] / c->slab_planes]++;
+            c->pairs.a[2 * at] = p->a[i];
+            c->pairs.a[2 * at + 1] = p->a[i + 1];
+        }
+        p->n = 0;
+    }
+    for (size_t i = c->slab_count; i > 0; i--) /* back to slab starts */
+        start[i] = start[i - 1];
+    start[0] = 0;
+    c->pairs.n = total;
+    run_parallel(c, JOB_EVEN);
+    run_parallel(c, JOB_ODD);
+    c->removed += total;
+    if (3 - c->substep % 3 >= 2)
+        c->squares -= total / 2;
+    for (int t = 0; t < c->threads && !c->oom; t++) {
+        Worker *w = &c->workers[t];
+        c->oom |= w->sink.oom;
+        for (int k = 0; k < KINDS && !c->oom; k++)
+            if (!append_u32(&c->cur[k], &w->cur[k]) || !append_u32(&c->next[k], &w->next[k]))
+                c->oom = true;
+        for (size_t i = 0; i < w->noted.n && !c->oom; i++)
+            edge_push(c, &c->live, w->noted.a[i]);
+        w->noted.n = 0;
+    }
 }
 
 static void run_substep(Collapse *c, int s)
 {
     c->substep = s;
     U32Vec *q = &c->cur[s];
-    c->pairs.n = 0;
-    for (size_t i = 0; i < q->n; i++) {
-        uint32_t f = q->a[i], g;
-        if (free_kind(c, f, &g) == s) {
-            u32_push(c, &c->pairs, f);
-            u32_push(c, &c->pairs, g);
+    if (c->threads > 1 && q->n >= c->parallel_grain) {
+        run_substep_parallel(c, q);
+    } else {
+        c->pairs.n = 0;
+        for (size_t i = 0; i < q->n; i++) {
+            uint32_t f = q->a[i], g;
+            if (free_kind(c, f, &g) == s) {
+                u32_push(c, &c->pairs, f);
+                u32_push(c, &c->pairs, g);
+            }
         }
+        q->n = 0;
+        if (c->oom)
+            return;
+        size_t n = c->pairs.n / 2;
+        c->removed += 2 * n;
+        if (3 - s % 3 >= 2)
+            c->squares -= n;
+        Sink sink = {c->cur, c->next, &c->live, false};
+        process_pairs(c, &sink, 0, n);
+        c->oom |= sink.oom;
     }
-    q->n = 0;
     if (q->cap > (1u << 16)) { /* the border moves on: do not keep the slack */
         free(q->a);
         q->a = NULL;
         q->cap = 0;
-    }
-    if (c->oom)
-        return;
-    /* The pairs were all tested against the complex as the sub-step found
-     * it; removing them one by one now gives the same complex. Noting an
-     * edge right after each square goes notes it exactly once (when its
-     * last square goes); a face tested too early is tested again when its
-     * other coface goes. */
-    c->removed += c->pairs.n;
-    int coface_dim = 3 - s % 3;
-    for (size_t i = 0; i < c->pairs.n; i += 2) {
-        uint32_t f = c->pairs.a[i], g = c->pairs.a[i + 1];
-        remove_cell(c, f);
-        remove_cell(c, g);
-        if (coface_dim == 3) {
-            /* each edge of the square f is also an edge of another square
-             * of the cube g, still here: no edge becomes isolated */
-            c->squares--;
-        } else if (coface_dim == 2) {
-            c->squares--;
-            note_isolated_edges(c, g);
-        }
-        consider_faces(c, g);
-        consider_faces(c, f);
     }
 }
 
@@ -313,6 +517,7 @@ static uint16_t voxel_dist8(const Collapse *c, size_t v)
  * forced break, which adds a loop. */
 static bool break_cavities(Collapse *c)
 {
+    Sink sink = {c->cur, c->next, &c->live, false};
     SgComplex *cx = c->cx;
     U32Vec squares = {0};
     for (size_t v = 0; v < cx->vertex_count; v++) {
@@ -417,8 +622,8 @@ static bool break_cavities(Collapse *c)
         c->squares--;
         c->removed++;
         broken++;
-        note_isolated_edges(c, squares.a[i]);
-        consider_faces(c, squares.a[i]);
+        note_isolated_edges(c, &sink, squares.a[i]);
+        consider_faces(c, &sink, squares.a[i]);
     }
     c->cavities_broken_total += broken;
     if (broken == 0 && n > 0) {
@@ -427,10 +632,10 @@ static bool break_cavities(Collapse *c)
         c->squares--;
         c->removed++;
         c->forced_total++;
-        note_isolated_edges(c, squares.a[i]);
-        consider_faces(c, squares.a[i]);
+        note_isolated_edges(c, &sink, squares.a[i]);
+        consider_faces(c, &sink, squares.a[i]);
     }
-    ok = !c->oom;
+    ok = !c->oom && !sink.oom;
 done:
     free(squares.a);
     free(side);
@@ -468,11 +673,17 @@ static int popcount8(unsigned x)
 
 bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
                  const uint16_t *dist8, const uint16_t *open8, double filter_scale,
-                 SgProgress *progress,
+                 int threads, uint32_t parallel_grain, SgProgress *progress,
                  SgCollapseResult *result, SgError *err)
 {
     memset(result, 0, sizeof *result);
+    Helper helpers[MAX_THREADS];
+    pthread_t ids[MAX_THREADS];
+    int started = 0;
     Collapse c = {.cx = cx, .cells = cx->cells, .dist8 = dist8, .open8 = open8};
+    pthread_mutex_init(&c.gate_lock, NULL);
+    pthread_cond_init(&c.gate, NULL);
+    atomic_init(&c.next_slab, 0);
     /* the rule compares 8 x lifespan with scale x (8 x opening): in 1/256 */
     c.filter256 = filter_scale >= 0 && filter_scale < 1e6 ? (int64_t)(filter_scale * 256 + 0.5) : 256;
     for (int a = 0; a < 3; a++)
@@ -488,8 +699,51 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
     for (size_t i = 0; i < constrained_count; i++)
         c.cons[constrained[i] >> 3] |= (uint8_t)(1u << (constrained[i] & 7));
 
+    /* worker threads for large sub-steps: slabs of at least SLAB_MIN
+     * planes, about 8 per thread for balance */
+    c.parallel_grain = parallel_grain;
+    c.threads = parallel_grain ? sg_thread_count(threads) : 1;
+    if (c.threads > MAX_THREADS)
+        c.threads = MAX_THREADS;
+    c.slab_planes = (size_t)cx->lz / (8 * (size_t)c.threads);
+    if (c.slab_planes < SLAB_MIN)
+        c.slab_planes = SLAB_MIN;
+    c.slab_count = ((size_t)cx->lz + c.slab_planes - 1) / c.slab_planes;
+    if (c.slab_count < 4)
+        c.threads = 1; /* too thin to split */
+    if (c.threads > 1) {
+        c.workers = calloc((size_t)c.threads, sizeof *c.workers);
+        c.slab_start = calloc(c.slab_count + 1, sizeof *c.slab_start);
+        if (!c.workers || !c.slab_start) {
+            c.oom = true;
+            goto done;
+        }
+        for (int t = 0; t < c.threads; t++) {
+            Worker *w = &c.workers[t];
+            w->sink = (Sink){w->cur, w->next, &w->noted, false};
+        }
+        /* helpers wait at the gate until the barriers are sized to the
+         * threads that really started */
+        for (int t = 1; t < c.threads; t++) {
+            helpers[t] = (Helper){&c, t};
+            if (pthread_create(&ids[t], NULL, helper_main, &helpers[t]) != 0)
+                break;
+            started = t;
+        }
+        c.threads = started + 1;
+        if (started > 0) {
+            pthread_barrier_init(&c.start, NULL, (unsigned)c.threads);
+            pthread_barrier_init(&c.end, NULL, (unsigned)c.threads);
+        }
+        pthread_mutex_lock(&c.gate_lock);
+        c.gate_open = true;
+        pthread_cond_broadcast(&c.gate);
+        pthread_mutex_unlock(&c.gate_lock);
+    }
+
     /* the first free faces: only vertices next to the outside of the medium */
     c.substep = KINDS - 1;
+    Sink sink = {c.cur, c.next, &c.live, false};
     for (int z = 0; z <= cx->nz; z++) {
         for (int y = 0; y <= cx->ny; y++) {
             size_t v = sg_complex_vertex(cx, 0, y, z);
@@ -503,11 +757,13 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
                     continue;
                 for (unsigned m = 0; m < 7; m++)
                     if (bits >> m & 1)
-                        consider(&c, (uint32_t)(v * 8 + m));
+                        consider(&c, &sink, (uint32_t)(v * 8 + m));
             }
         }
-        if (c.oom)
+        if (c.oom || sink.oom) {
+            c.oom = true;
             goto done;
+        }
     }
 
     if (progress)
@@ -553,11 +809,40 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
             result->edges[w++] = c.live.a[i];
     qsort(result->edges, w, sizeof *result->edges, compare_edge_cell);
     result->edge_count = w;
+    for (size_t i = 1; i < w; i++)
+        if (result->edges[i].cell == result->edges[i - 1].cell) {
+            sg_fail(err, "collapse: internal error: edge noted twice");
+            c.oom = true;
+            goto done;
+        }
     result->steps = (uint32_t)c.step;
     result->cavities_broken = c.cavities_broken_total;
     result->forced_breaks = c.forced_total;
     ok = true;
 done:
+    if (started > 0) {
+        c.job = JOB_EXIT;
+        pthread_barrier_wait(&c.start);
+        for (int t = 1; t <= started; t++)
+            pthread_join(ids[t], NULL);
+        pthread_barrier_destroy(&c.start);
+        pthread_barrier_destroy(&c.end);
+    }
+    pthread_mutex_destroy(&c.gate_lock);
+    pthread_cond_destroy(&c.gate);
+    if (c.workers) {
+        for (int t = 0; t < c.threads; t++) {
+            Worker *wk = &c.workers[t];
+            free(wk->pairs.a);
+            for (int k = 0; k < KINDS; k++) {
+                free(wk->cur[k].a);
+                free(wk->next[k].a);
+            }
+            free(wk->noted.a);
+        }
+    }
+    free(c.workers);
+    free(c.slab_start);
     for (int k = 0; k < KINDS; k++) {
         free(c.queue_a[k].a);
         free(c.queue_b[k].a);

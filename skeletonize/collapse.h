@@ -28,10 +28,12 @@ typedef struct SgCollapseResult {
  * lists cell ids that are never removed. dist8/open8 are the medium's
  * distance and opening in lattice layout (voxel (i,j,k) at the index of
  * vertex (i,j,k), 0 elsewhere). An isolated edge joins the constraint set
- * when lifespan > filter_scale x opening (1: [Cha10]). */
+ * when lifespan > filter_scale x opening (1: [Cha10]). Sub-steps with at
+ * least parallel_grain queued faces (0: none) run on `threads` threads
+ * (<= 0: every core); the result is the same. */
 bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
                  const uint16_t *dist8, const uint16_t *open8, double filter_scale,
-                 SgProgress *progress,
+                 int threads, uint32_t parallel_grain, SgProgress *progress,
                  SgCollapseResult *result, SgError *err);
 void sg_collapse_result_release(SgCollapseResult *r);
 

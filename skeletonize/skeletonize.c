@@ -159,7 +159,8 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
     sg_progress_begin(&progress, "skeleton: collapse", 0);
     if (!opt.progress)
         progress.enabled = false;
-    if (!sg_collapse(&cx, anchor_cells, anchor_count, dist8, open8, opt.filter_scale, &progress,
+    if (!sg_collapse(&cx, anchor_cells, anchor_count, dist8, open8, opt.filter_scale, opt.threads,
+                     opt.parallel_grain, &progress,
                      &col, err))
         goto done;
     sg_progress_end(&progress);
@@ -227,7 +228,7 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
         for (int a = 0; a < 3; a++)
             node->position[a] = (float)w[a];
         node->radius = (float)(open8[lattice_index3(&cx, best)] / 8.0 * g->voxel_size);
-        node->lifespan = 0;
+        node->lifespan = -1; /* set from its edges below */
     }
     for (size_t v = 0; v < cx.vertex_count; v++) {
         unsigned bits = cx.cells[v];
@@ -277,7 +278,7 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
     }
     double ratio_sum = 0;
     for (size_t i = 0; i < nv; i++) {
-        if (out->nodes[i].lifespan == 0 && ne == 0)
+        if (out->nodes[i].lifespan < 0) /* no edge: it lasted the whole collapse */
             out->nodes[i].lifespan = (int)col.steps;
         const int *p = out->nodes[i].voxel;
         uint16_t here = dist8[lattice_index3(&cx, p)], around = here;

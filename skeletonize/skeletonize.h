@@ -1,11 +1,34 @@
 /* Step 2: the curvilinear skeleton of the medium.
  *
- * The medium's voxels are closed unit cubes of a cubical complex; a
- * directional parallel collapse [CC09], restricted to 1D output by the
- * lifespan/opening rule of [Cha10], thins it to a graph with the medium's
- * components and tunnels, passing through the lights (and optionally the
- * camera). Cavities (solids floating in the air) are broken on purpose so
- * that the result is 1D; the count is reported. */
+ * The medium's voxels are closed unit cubes of a cubical complex (so the
+ * medium is 26-connected); a directional parallel collapse [CC09] removes
+ * free pairs layer by layer, and the lifespan/opening rule of [Cha10]
+ * restricts the result to 1D: after step l, an edge that has belonged to no
+ * square for more than opening(e) steps joins the constraint set (opening
+ * = radius of the largest ball in the medium containing the voxels around
+ * the edge). What is left is a graph: 0-cells are nodes, 1-cells edges.
+ *
+ * Guarantees (tested in tests/test_skeleton.c):
+ * - the collapse is homotopic, so the graph has the medium's components,
+ *   and E - V + components = b1 of the medium (its tunnels);
+ * - cavities: when the collapse stalls with squares left, those squares
+ *   bound regions of space; a square with different regions on its two
+ *   sides lies on a closed surface, and removing it merges the regions:
+ *   b2 drops by one and b1 does not change. One such square is removed per
+ *   cavity (union-find over regions, thinnest air first), so
+ *   cavities_broken = b2 of the medium and the loops are untouched. If a
+ *   stuck 2D part had no such square (a non-collapsible contractible
+ *   complex: never seen), one square is removed anyway and counted in
+ *   forced_breaks, which adds a loop;
+ * - every light (and with camera_constraint the camera) voxel in the
+ *   medium gives a node of its kind standing on that voxel: a corner of the
+ *   voxel is a constrained 0-cell;
+ * - every node stands on a medium voxel (of the up to 8 voxels around its
+ *   lattice vertex, the one farthest from the walls) and sits at its centre;
+ * - the result does not depend on the thread count.
+ * A node's lifespan is the largest, over its edges, of the steps between
+ * the edge losing its last square and joining the constraint set (or the
+ * end of the collapse); an isolated node's is the number of steps. */
 #ifndef SG_SKELETONIZE_H
 #define SG_SKELETONIZE_H
 
@@ -21,10 +44,19 @@
 extern "C" {
 #endif
 
+#define SG_SKELETON_PARALLEL_GRAIN 16384
+
 typedef struct SgSkeletonOptions {
     bool camera_constraint; /* the camera's voxel joins the constraint set */
     int threads;            /* <= 0: every core */
     bool progress;          /* progress line on a terminal (stderr) */
+    uint32_t parallel_grain; /* 0 (default): the collapse runs on one thread;
+                               n > 0: its sub-steps with at least n queued
+                               faces run on the threads (same result). On this
+                               2-core machine, busy with other work, that was
+                               slower (barriers wait for a descheduled thread),
+                               hence off by default; SG_SKELETON_PARALLEL_GRAIN
+                               is the suggested value when cores are idle */
     double filter_scale;    /* the lifespan rule keeps an edge when
                                lifespan > filter_scale x opening; 1 is [Cha10]'s
                                parameter-free rule (default), 0 keeps every

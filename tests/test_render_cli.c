@@ -107,21 +107,22 @@ Test(render_cli, writes_exr_png_metadata_and_error_curve)
     f = fopen(path, "r");
     char line[256];
     cr_assert(fgets(line, sizeof line, f));
-    cr_assert_str_eq(line, "seconds,spp,mse,relmse\n");
+    cr_assert_str_eq(line, "seconds,spp,mse,relmse,mse8\n");
     int rows = 0;
-    double first = 0, last = 0, t, mse, rel;
+    double first = 0, last = 0, first8 = 0, last8 = 0, t, mse, rel, mse8;
     int spp;
-    while (fscanf(f, "%lf,%d,%lf,%lf", &t, &spp, &mse, &rel) == 4) {
+    while (fscanf(f, "%lf,%d,%lf,%lf,%lf", &t, &spp, &mse, &rel, &mse8) == 5) {
         rows++;
         cr_assert_eq(spp, rows);
-        cr_assert(mse > 0 && rel > 0 && t > 0);
+        cr_assert(mse > 0 && rel > 0 && t > 0 && mse8 >= 0 && mse8 <= 255.0 * 255.0);
         if (rows == 1)
-            first = mse;
-        last = mse;
+            first = mse, first8 = mse8;
+        last = mse, last8 = mse8;
     }
     fclose(f);
     cr_assert_eq(rows, 4);
     cr_assert_lt(last, first);
+    cr_assert_lt(last8, first8);
 }
 
 Test(render_cli, same_seed_same_file_for_1_and_2_threads)

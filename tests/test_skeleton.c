@@ -18,6 +18,10 @@ static SgSkeletonOptions quiet_options(int threads)
     sg_skeleton_options_default(&o);
     o.progress = false;
     o.threads = threads;
+    /* every collapse sub-step on the threads, however small, so that the
+     * tests cover the parallel path; deterministic_across_threads compares
+     * it with the sequential one */
+    o.parallel_grain = 1;
     return o;
 }
 
@@ -251,8 +255,8 @@ Test(skeleton, unfiltered_skeleton_is_hairy)
 }
 
 /* Results do not depend on the thread count (distance transform,
- * opening and complex build run on threads), on shapes with loops,
- * cavities and constraints. */
+ * opening, complex build and, with grain 1, every collapse sub-step run on
+ * threads), on shapes with loops, cavities and constraints. */
 Test(skeleton, deterministic_across_threads)
 {
     SgShape shapes[] = {SG_SHAPE_RING_LAMP, SG_SHAPE_THREE_PILLARS, SG_SHAPE_SHELL, SG_SHAPE_TWO_ROOMS};

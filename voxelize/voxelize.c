@@ -394,6 +394,12 @@ static bool find_seed(const SgGrid *solid, const double p[3], const double n[3],
 bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMedium *medium,
                  SgVoxelizeStats *stats, SgError *err)
 {
+    SgVoxelizeStats ignored;
+    if (!stats)
+        stats = &ignored;
+    SgVoxelizeOptions defaults = {0};
+    if (!options)
+        options = &defaults;
     memset(medium, 0, sizeof *medium);
     memset(stats, 0, sizeof *stats);
     if (scene->light_count == 0)

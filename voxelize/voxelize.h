@@ -47,7 +47,7 @@ bool sg_voxelize_grid_for(const SgScene *scene, int resolution, SgGrid *grid, Sg
  * dielectric (glass) triangles are skipped: light passes through them. */
 void sg_voxelize_surface(const SgScene *scene, SgGrid *grid, int threads);
 
-/* Builds the medium of a scene. */
+/* Builds the medium of a scene. options and stats may be NULL. */
 bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMedium *medium,
                  SgVoxelizeStats *stats, SgError *err);
 
