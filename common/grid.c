@@ -1,6 +1,9 @@
 #include "grid.h"
 
+#include "memory.h"
+
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -16,6 +19,12 @@ bool sg_grid_init(SgGrid *grid, int nx, int ny, int nz, const double origin[3],
     double bytes = (double)nx * (double)ny * (double)nz;
     if (bytes > (double)((size_t)1 << 40))
         return sg_fail(err, "grid of %dx%dx%d voxels is too large (%.3g bytes)", nx, ny, nz, bytes);
+    /* calloc of more than the machine has may succeed (overcommit) and the
+     * process be killed later: refuse it here with the size in the message */
+    char what[96];
+    snprintf(what, sizeof what, "a grid of %dx%dx%d voxels", nx, ny, nz);
+    if (!sg_memory_check(bytes, NULL, what, err))
+        return false;
     grid->voxels = calloc((size_t)bytes, 1);
     if (!grid->voxels)
         return sg_fail(err, "out of memory for a %dx%dx%d grid (%.0f MB)", nx, ny, nz, bytes / 1e6);

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <vector>
@@ -17,6 +18,24 @@
 using namespace OIIO;
 
 namespace {
+
+bool reads_back(const char *file, const char *format_name, const ImageSpec &spec, const void *pixels,
+                TypeDesc pixel_type)
+{
+    auto in = ImageInput::create(format_name);
+    if (!in)
+        return false;
+    ImageSpec config, got;
+    if (!in->open(file, got, config))
+        return false;
+    bool same = got.width == spec.width && got.height == spec.height && got.nchannels == spec.nchannels;
+    std::size_t bytes = (std::size_t)spec.width * spec.height * spec.nchannels * pixel_type.size();
+    std::vector<unsigned char> back(same ? bytes : 0);
+    same = same && in->read_image(0, 0, 0, spec.nchannels, pixel_type, back.data()) &&
+           std::memcmp(back.data(), pixels, bytes) == 0;
+    in->close();
+    return same;
+}
 
 // Writes pixels (type `format` in memory is float RGB) through a temp file
 // with an explicit format name, since the temp name has no usable extension.
@@ -41,6 +60,14 @@ bool write_through_temp(const char *path, const char *format_name, const ImageSp
             msg = out->geterror();
         std::remove(tmp);
         return sg_fail(err, "%s: cannot write: %s", path, msg.c_str());
+    }
+    // Writers do not all see a failed write (a full disk while OpenEXR
+    // writes its offset table): the file must read back as written before
+    // it takes the target's name. Both formats are lossless here.
+    if (!reads_back(tmp, format_name, spec, pixels, pixel_type)) {
+        std::remove(tmp);
+        return sg_fail(err, "%s: cannot write: the file does not read back as written (disk full?)",
+                       path);
     }
     return sg_commit_temp(tmp, path, err);
 }

@@ -458,6 +458,10 @@ bool sg_skeleton_parse_ply(SgSkeleton *skeleton, const void *data, size_t size,
     /* Decode elements in file order. */
     for (int i = 0; ok && i < r->element_count; i++) {
         const PlyElement *e = &r->elements[i];
+        /* Rows without properties hold no data: nothing to decode (and a
+         * count of 4 billion must not take a minute to step through). */
+        if (e->property_count == 0)
+            continue;
         for (uint64_t row = 0; ok && row < e->count; row++) {
             double v[F_COUNT] = {0};
             v[F_LIGHT] = -1;

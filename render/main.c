@@ -369,9 +369,8 @@ int main(int argc, char **argv)
         {"sg:scene", a.scene},
         {"sg:cache", a.cache && cache ? a.cache : ""},
     };
-    if (!sg_image_write_exr(a.output, o.width, o.height, image, attrs,
-                            (int)(sizeof attrs / sizeof attrs[0]), &err))
-        goto done;
+    /* The EXR last: it is make's target, so a run cut short before it
+     * (a PNG or the curve written, then killed) is still run again. */
     if (a.png && !sg_image_write_png(a.png, o.width, o.height, image, exposure, &err))
         goto done;
     if (log_open) {
@@ -379,6 +378,9 @@ int main(int argc, char **argv)
         if (!sg_output_commit(&log.out, &err))
             goto done;
     }
+    if (!sg_image_write_exr(a.output, o.width, o.height, image, attrs,
+                            (int)(sizeof attrs / sizeof attrs[0]), &err))
+        goto done;
     if (!a.quiet) {
         double paths = (double)o.width * o.height * sg_renderer_spp(r);
         fprintf(stderr,

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "memory.h"
 #include "rng.h"
 #include "sampling.h"
 #include "threads.h"
@@ -369,6 +370,13 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
     if (!(o->lobe_exponent >= 0.0f && o->lobe_exponent <= 1e5f))
         return sg_fail(err, "%s: lobe exponent must be in [0, 1e5]", path), NULL;
 
+    /* sum (double) + last pass + the caller's image (float) per pixel, and
+     * the renderer's and Embree's copies of the triangles (~150 bytes each):
+     * refuse up front what the machine cannot hold rather than be killed */
+    char what[96];
+    snprintf(what, sizeof what, "a %dx%d image", o->width, o->height);
+    if (!sg_memory_check(48.0 * o->width * o->height + 150.0 * s->triangle_count, path, what, err))
+        return NULL;
     SgRenderer *r = calloc(1, sizeof *r);
     if (!r)
         return sg_fail(err, "%s: out of memory", path), NULL;
@@ -670,7 +678,9 @@ static bool guide_axis(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, Vec3 *ax
     *at_light = d3_length(to_light) < 1e-4 * r->scale;
     double d[3] = {q[0] - (p.x + r->centre[0]), q[1] - (p.y + r->centre[1]), q[2] - (p.z + r->centre[2])};
     double len = d3_length(d);
-    if (!(len > 1e-6 * r->scale))
+    /* a point at the shading point has no direction; one at infinity (a
+     * bad guide) would give a NaN axis that passes the test below */
+    if (!(len > 1e-6 * r->scale) || !isfinite(len))
         return false;
     Vec3 a = v3((float)(d[0] / len), (float)(d[1] / len), (float)(d[2] / len));
     if (v3_dot(a, n) <= 0.0f)

@@ -82,7 +82,10 @@ bool sg_voxelize_grid_for(const SgScene *scene, int resolution, SgGrid *grid, Sg
         double n = ceil(extent[a] / h - 1e-9);
         dims[a] = n < 1 ? 1 : (int)n;
     }
-    return sg_grid_init(grid, dims[0], dims[1], dims[2], scene->bounds_min, h, err);
+    SgError why = {0};
+    if (!sg_grid_init(grid, dims[0], dims[1], dims[2], scene->bounds_min, h, &why))
+        return sg_fail(err, "%s: resolution %d: %s", scene->path, resolution, why.message);
+    return true;
 }
 
 /* ---- surface voxelization ----------------------------------------------- */

@@ -1,0 +1,29 @@
+/* Memory budget: work that cannot fit is refused up front with a clear
+ * message. Linux overcommits, so a large calloc succeeds and the process
+ * is killed later when it touches the pages; a step therefore estimates
+ * its peak from the grid size and checks it here before allocating. */
+#ifndef SG_MEMORY_H
+#define SG_MEMORY_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Bytes this process may plan to use: MemAvailable (/proc/meminfo), else
+ * the physical memory. SG_MEMORY_LIMIT_MB in the environment lowers it
+ * (tests simulate a small machine with it). */
+uint64_t sg_memory_available(void);
+
+/* Fails with "NAME: WHAT needs N MB of memory, more than the M MB
+ * available" when bytes exceeds sg_memory_available(). name may be NULL. */
+bool sg_memory_check(double bytes, const char *name, const char *what, SgError *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
