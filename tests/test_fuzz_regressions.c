@@ -109,16 +109,6 @@ static int feed_folder(const char *name, FuzzTarget target, FileReader reader)
         while ((ent = readdir(dir))) {
             if (ent->d_name[0] == '.')
                 continue;
-#if !defined(__clang__) && defined(__SANITIZE_ADDRESS__)
-            /* OpenVDB loads raw file bytes into bools (its own undefined
-             * behaviour, harmless in practice): gcc's UBSan stops there
-             * unless medium_vdb.cpp is built with -fno-sanitize=bool (clang
-             * builds exempt OpenVDB's templates in the source) */
-            if (strncmp(ent->d_name, "ub-openvdb-", 11) == 0) {
-                cr_log_info("%s/%s skipped under gcc sanitizers", dir_path, ent->d_name);
-                continue;
-            }
-#endif
             char path[1024];
             snprintf(path, sizeof path, "%s/%s", dir_path, ent->d_name);
             size_t size;
