@@ -1,45 +1,9 @@
 /* libFuzzer target: the pbrt-v4 front end of the scene loader (tokenizer,
  * parameter lists, transforms, materials, lights, instancing) must refuse
  * or accept any bytes cleanly, with a one-line message when it refuses. */
-#include <stddef.h>
-#include <stdint.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <unistd.h>
-
-#include "scene.h"
+#include "fuzz_scene_common.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    char path[64];
-    snprintf(path, sizeof path, "/tmp/sg-fuzz-scene-%ld.pbrt", (long)getpid());
-    FILE *f = fopen(path, "wb");
-    if (!f)
-        return 0;
-    fwrite(data, 1, size, f);
-    fclose(f);
-    SgError err = {0};
-    SgScene *scene = sg_scene_load(path, &err);
-    if (scene) {
-        for (uint32_t t = 0; t < scene->triangle_count; t++) {
-            for (int c = 0; c < 3; c++)
-                if (scene->indices[3 * t + c] >= scene->vertex_count)
-                    abort();
-            if (scene->triangle_material[t] >= scene->material_count)
-                abort();
-        }
-        for (uint32_t k = 0; k < scene->light_count; k++)
-            if (scene->lights[k].first_triangle + scene->lights[k].triangle_count >
-                scene->triangle_count)
-                abort();
-        for (uint32_t i = 0; i < scene->warning_count; i++)
-            if (strchr(scene->warnings[i], '\n'))
-                abort();
-        sg_scene_free(scene);
-    } else if (!err.failed || strchr(err.message, '\n')) {
-        abort(); /* a failure must say why, on one line */
-    }
-    unlink(path);
-    return 0;
+    return sg_fuzz_scene_bytes(data, size, "pbrt");
 }
