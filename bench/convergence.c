@@ -247,12 +247,17 @@ static int cmd_analyze(int argc, char **argv, SgError *err)
 
     /* Levels from the baseline only, the same for every mode: the 1-2-5
      * value just above bsdf's mean error at its end (bsdf reaches it within
-     * the run) and the one at least 4x above that (early in the run). */
+     * the run) and the one just above its error at an eighth of the run
+     * (at least the next value of the series). */
     double levels[SG_METRIC_COUNT][2];
+    const SgCurve *bc = &base->mean;
+    double t_end = bc->seconds[bc->count - 1], t_early = fmax(t_end / 8, bc->seconds[0]);
     for (int k = 0; k < SG_METRIC_COUNT; k++) {
-        double end = base->mean.error[k][base->mean.count - 1];
+        double end = bc->error[k][bc->count - 1], early;
+        if (!sg_curve_at(bc, k, t_early, &early))
+            early = end;
         levels[k][1] = sg_nice_level_at_least(end);
-        levels[k][0] = sg_nice_level_at_least(4 * levels[k][1]);
+        levels[k][0] = fmax(sg_nice_level_at_least(early), sg_nice_level_at_least(levels[k][1] * 1.01));
     }
     char line[2048], a[64], b[64], c[64], d[64], e[64];
     snprintf(line, sizeof line, "relmse %.6g %.6g mse8 %.6g %.6g\n", levels[0][0], levels[0][1],

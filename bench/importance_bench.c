@@ -331,7 +331,7 @@ int main(int argc, char **argv)
     double sns = ns_count ? (sg_seconds() - t3) / ns_count * 1e9 : 0;
     free(spts);
 
-    printf("load average at the end: %s", load_average());
+    printf("load average at the end: %s\n", load_average());
     printf("grid %dx%dx%d, %llu medium voxels (%.1f%% labelled), %u nodes, %u edges, "
            "%u components, %u lights, %d threads; scene built in %.2f s\n",
            g->nx, g->ny, g->nz, (unsigned long long)st.medium_voxels,
@@ -341,27 +341,27 @@ int main(int argc, char **argv)
         printf("run walk: chunked, tolerance %g of the distance\n", tolerance);
     else
         printf("run walk: exact (every node tested)\n");
-    printf("%-34s %12s %14s\n", "metric", "value", "target");
-    printf("%-34s %12.2f %14s\n", "build seconds (total)", st.seconds_total,
+    printf("\n| metric | value | target |\n|---|---|---|\n");
+    printf("| %s | %.2f | %s |\n", "build seconds (total)", st.seconds_total,
            d == 1 ? "< 4" : "-");
-    printf("%-34s %12.2f %14s\n", "  CPU seconds (all threads)", cpu, "");
-    printf("%-34s %12.2f %14s\n", "  nearest-node labels (Dijkstra)", st.seconds_labels, "");
-    printf("%-34s %12.2f %14s\n", "  paths + importance points", st.seconds_points, "");
-    printf("%-34s %12.2f %14s\n", "  block table", st.seconds_table, "");
-    printf("%-34s %12.2f %14s\n", "  write", st.seconds_write, "");
-    printf("%-34s %12.1f %14s\n", "cache MB", st.bytes / 1e6, d == 1 ? "< 32 (paper 130)" : "-");
-    printf("%-34s %12llu %14s\n", "  present 8^3 blocks", (unsigned long long)st.blocks, "");
-    printf("%-34s %12.2f %14s\n", "  palette entries per block",
+    printf("| %s | %.2f | %s |\n", "&nbsp;&nbsp;CPU seconds (all threads)", cpu, "");
+    printf("| %s | %.2f | %s |\n", "&nbsp;&nbsp;nearest-node labels (Dijkstra)", st.seconds_labels, "");
+    printf("| %s | %.2f | %s |\n", "&nbsp;&nbsp;paths + importance points", st.seconds_points, "");
+    printf("| %s | %.2f | %s |\n", "&nbsp;&nbsp;block table", st.seconds_table, "");
+    printf("| %s | %.2f | %s |\n", "&nbsp;&nbsp;write", st.seconds_write, "");
+    printf("| %s | %.1f | %s |\n", "cache MB", st.bytes / 1e6, d == 1 ? "< 32 (paper 130)" : "-");
+    printf("| %s | %llu | %s |\n", "&nbsp;&nbsp;present 8^3 blocks", (unsigned long long)st.blocks, "");
+    printf("| %s | %.2f | %s |\n", "&nbsp;&nbsp;palette entries per block",
            (double)st.palette_entries / (st.blocks ? st.blocks : 1), "");
-    printf("%-34s %12.1f %14s\n", "peak RSS MB (scene alone)", rss_before, "");
-    printf("%-34s %12.1f %14s\n", "peak RSS MB (with build)", rss, "");
-    printf("%-34s %12.3f %14s\n", "open + validate seconds", t_open, "");
-    printf("%-34s %12.1f %14s\n", "lookup ns (random point, light)", ns, "");
-    printf("%-34s %12.1f %14s\n", "  lookups answered %", 100.0 * found / LOOKUPS, "");
-    printf("%-34s %12.1f %14s\n", "lookup ns (surface point, light)", sns, "");
-    printf("%-34s %12.1f %14s\n", "  lookups answered %", ns_count ? 100.0 * sfound / ns_count : 0, "");
+    printf("| %s | %.1f | %s |\n", "peak RSS MB (scene alone)", rss_before, "");
+    printf("| %s | %.1f | %s |\n", "peak RSS MB (with build)", rss, "");
+    printf("| %s | %.3f | %s |\n", "open + validate seconds", t_open, "");
+    printf("| %s | %.1f | %s |\n", "lookup ns (random point, light)", ns, "");
+    printf("| %s | %.1f | %s |\n", "&nbsp;&nbsp;lookups answered %", 100.0 * found / LOOKUPS, "");
+    printf("| %s | %.1f | %s |\n", "lookup ns (surface point, light)", sns, "");
+    printf("| %s | %.1f | %s |\n", "&nbsp;&nbsp;lookups answered %", ns_count ? 100.0 * sfound / ns_count : 0, "");
     bool pass = d != 1 || (st.seconds_total < 4 && st.bytes < 32e6);
-    printf("targets: %s\n", d != 1 ? "(quick run: not checked)" : pass ? "met" : "NOT met");
+    printf("\ntargets: %s\n", d != 1 ? "(quick run: not checked)" : pass ? "met" : "NOT met");
     sg_cache_close(c);
     free(pts);
     if (!keep)

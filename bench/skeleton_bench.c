@@ -1,7 +1,7 @@
 /* Skeleton benchmark: the furnished synthetic room (walls, table, sofa,
  * pillar, hanging lamp) at a given grid size, through sg_skeletonize.
  *   skeleton_bench NX NY NZ [THREADS [par]]   (par: parallel collapse too)
- * prints one table row: grid, threads, medium voxels, wall seconds (distance,
+ * prints one markdown table row: grid, threads, medium voxels, wall seconds (distance,
  * collapse, total), CPU seconds of the skeleton (user + system, all
  * threads), peak RSS in MB (VmHWM, the whole process including the
  * 1-byte-per-voxel input grid), nodes, edges, loops, cavities broken, mean
@@ -67,7 +67,7 @@ int main(int argc, char **argv)
     snprintf(grid, sizeof grid, "%dx%dx%d", nx, ny, nz);
     char threads[16];
     snprintf(threads, sizeof threads, "%d%s", opt.threads, opt.parallel_grain ? "+par" : "");
-    printf("%-12s %7s %10" PRIu64 " %8.2f %8.2f %7.2f %6.2f %7.0f %6u %6u %5" PRId64 " %4u %6.3f\n",
+    printf("| %s | %s | %" PRIu64 " | %.2f | %.2f | %.2f | %.2f | %.0f | %u | %u | %" PRId64 " | %u | %.3f |\n",
            grid, threads, st.medium_voxels, st.seconds_distance, st.seconds_collapse,
            st.seconds_total, cpu, peak_rss_mb(), st.nodes, st.edges, st.loops,
            st.cavities_broken, st.mean_centredness);

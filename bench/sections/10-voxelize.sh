@@ -7,11 +7,12 @@ out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 runs=3
 [ "${SG_QUICK:-0}" = 1 ] && runs=1
-printf '%-28s %6s %14s %12s %9s %9s  %s\n' scene res grid medium_vox seconds peak_MB target
+echo "| scene | res | grid | medium voxels | seconds | peak MB | target |"
+echo "|---|---|---|---|---|---|---|"
 row() { # name scene resolution target_seconds
   local name=$1 scene=$2 res=$3 target=$4 best=999 mem=0 line
   if [ ! -e "$scene" ] || ! "$bin/voxelize" "$scene" --key >/dev/null 2>&1; then
-    printf '%-28s %6s  (scene not present: %s)\n' "$name" "$res" "$scene"; return
+    printf '| %s | %s | (scene not present: %s) | | | | |\n' "$name" "$res" "$scene"; return
   fi
   for _ in $(seq $runs); do
     line=$( { /usr/bin/time -f 'TIME %e %M' "$bin/voxelize" "$scene" -o "$out/m.vdb" --resolution "$res" --threads 2; } 2>&1 )
@@ -23,7 +24,7 @@ row() { # name scene resolution target_seconds
   grid=$(sed -nE 's/.*voxelize: ([0-9]+x[0-9]+x[0-9]+) voxels.*/\1/p' <<<"$line")
   medium=$(sed -nE 's/.* medium ([0-9]+) voxels.*/\1/p' <<<"$line")
   verdict=$(awk -v t="$best" -v g="$target" 'BEGIN{print (t<g)?"< "g" s: ok":"< "g" s: MISSED"}')
-  printf '%-28s %6s %14s %12s %9.2f %9.0f  %s\n' "$name" "$res" "$grid" "$medium" "$best" "$((mem/1024))" "$verdict"
+  printf '| %s | %s | %s | %s | %.2f | %.0f | %s |\n' "$name" "$res" "$grid" "$medium" "$best" "$((mem/1024))" "$verdict"
 }
 row "corridor (data/)" data/corridor/corridor.json 96 3
 row "cornell box (data/)" data/cornell-box/cornell-box.json 128 3
@@ -31,4 +32,5 @@ row "sponza 66k tris" data/external/sponza.json 500 3
 row "bathroom 592k tris" data/external/bathroom.json 256 3
 row "bathroom 592k tris" data/external/bathroom.json 384 3
 row "staircase 263k tris" data/external/staircase.json 256 3
+echo
 echo "(best of $runs runs; seconds include loading the meshes and writing the VDB)"

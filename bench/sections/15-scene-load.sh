@@ -6,23 +6,25 @@ set -uo pipefail
 bench=${SG_BENCH_BIN:-build/release/bench}
 runs=5
 [ "${SG_QUICK:-0}" = 1 ] && runs=2
-printf '%-30s %10s %9s %9s %9s  %s\n' scene triangles materials warnings seconds target
+echo "| scene | triangles | materials | warnings | seconds | target |"
+echo "|---|---|---|---|---|---|"
 row() { # name scene
   local name=$1 scene=$2 line
   if [ ! -e "$scene" ]; then
-    printf '%-30s  (scene not present: %s)\n' "$name" "$scene"; return
+    printf '| %s | (scene not present: %s) | | | | |\n' "$name" "$scene"; return
   fi
   if ! line=$("$bench/scene_load" "$scene" "$runs" 2>&1); then
-    printf '%-30s  FAILED: %s\n' "$name" "$line"; return
+    printf '| %s | FAILED: %s | | | | |\n' "$name" "$line"; return
   fi
   local tris mats warns secs verdict
   tris=$(awk '{print $2}' <<<"$line"); mats=$(awk '{print $4}' <<<"$line")
   warns=$(awk '{print $8}' <<<"$line"); secs=$(awk '{print $10}' <<<"$line")
   verdict=$(awk -v t="$secs" 'BEGIN{print (t<1)?"< 1 s: ok":"< 1 s: MISSED"}')
-  printf '%-30s %10s %9s %9s %9s  %s\n' "$name" "$tris" "$mats" "$warns" "$secs" "$verdict"
+  printf '| %s | %s | %s | %s | %s | %s |\n' "$name" "$tris" "$mats" "$warns" "$secs" "$verdict"
 }
 row "staircase.pbrt (774 PLY)" ../shared/scenes/staircase/staircase.pbrt
 row "staircase.json (same PLY)" data/external/staircase.json
 row "bathroom.pbrt (855 PLY)" ../shared/scenes/bathroom/bathroom.pbrt
 row "bathroom.json (same PLY)" data/external/bathroom.json
+echo
 echo "(best of $runs loads, warm file cache; build/release/bench/scene_load SCENE RUNS)"

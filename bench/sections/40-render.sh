@@ -1,12 +1,10 @@
 #!/usr/bin/env bash
-# Render speed and the gain of guiding (issue 5):
-#  1. samples/s of bin/render (bsdf) on Dabrovic Sponza, 320x240, path length 8,
-#     against Embree's tutorial path tracer (embree-tools `pathtracer --benchmark`),
-#     same camera, a light at the same place; run alternately, best of each.
-#  2. per-sample cost of guided over bsdf (needs the precompute: voxelize,
-#     skeletonize, importance).
-#  3. time to reach a given error, guided vs bsdf, on the dark corridor and the
-#     Cornell box, against a long reference render; curves averaged over seeds.
+# Render speed: (1) samples/s of bin/render (bsdf) on Dabrovic Sponza,
+# 320x240, path length 8, against Embree's tutorial path tracer (embree-tools
+# `pathtracer --benchmark`), same camera, a light at the same place, run
+# alternately, best of each; (2) the per-sample cost of each sampling mode
+# (the precompute first: voxelize, skeletonize, importance). Convergence
+# (time to an error level) is in 60-convergence.
 set -uo pipefail
 bin=${SG_BIN:-bin}
 out=$(mktemp -d)
@@ -24,7 +22,8 @@ sponza_obj=../shared/scenes/sponza-dabrovic/sponza.obj
 
 field() { sed -nE "s|.* ([0-9.]+) $1.*|\1|p" <<<"$2" | tail -1; }
 
-echo "-- throughput: Sponza 320x240, path length 8, 1 spp passes, all cores"
+echo "### Throughput: Sponza 320x240, path length 8, 1 spp passes, all cores"
+echo
 if [ ! -e "$sponza_obj" ]; then
   echo "(Sponza not present: $sponza_obj)"
 elif ! command -v pathtracer >/dev/null; then
@@ -45,12 +44,14 @@ else
     best_sg=$(awk -v a="$best_sg" -v b="$sps" 'BEGIN{print (b>a)?b:a}')
     best_sg_rays=$(awk -v a="$best_sg_rays" -v b="$mr" 'BEGIN{print (b>a)?b:a}')
   done
-  printf '%-34s %12s %10s\n' renderer Msamples/s Mrays/s
-  printf '%-34s %12.3f %10.3f\n' "embree pathtracer --benchmark" "$best_pt" "$best_pt_rays"
-  printf '%-34s %12.3f %10.3f\n' "bin/render --sampling bsdf" "$best_sg" "$best_sg_rays"
-  awk -v a="$best_sg" -v b="$best_pt" 'BEGIN{r=a/b; printf "ratio %.2fx: %s (target >= 1)\n", r, (r>=1)?"ok":"MISSED"}'
-  echo "(pathtracer: point light, no Russian roulette, default white-ish OBJ material, so its"
-  echo " paths are longer: compare Mrays/s too. bin/render: small quad light, RR, albedo 0.5.)"
+  echo "| renderer | Msamples/s | Mrays/s |"
+  echo "|---|---|---|"
+  printf '| %s | %.3f | %.3f |\n' "embree \`pathtracer --benchmark\`" "$best_pt" "$best_pt_rays"
+  printf '| %s | %.3f | %.3f |\n' "\`bin/render --sampling bsdf\`" "$best_sg" "$best_sg_rays"
+  echo
+  awk -v a="$best_sg" -v b="$best_pt" 'BEGIN{r=a/b; printf "Ratio of samples/s %.2fx: %s (target >= 1). ", r, (r>=1)?"ok":"MISSED"}'
+  echo "pathtracer: point light, no Russian roulette, default white-ish OBJ material, so its"
+  echo "paths are longer: compare Mrays/s too. bin/render: small quad light, RR, albedo 0.5."
 fi
 
 # ---- precompute for the guided runs ------------------------------------
@@ -67,21 +68,25 @@ precompute() { # scene outdir -> outdir/importance.cache
 }
 
 echo
-echo "-- per-sample cost of guided over bsdf (same spp, runs interleaved, best of each;"
-echo "   the paper paid +25%, target < +10%)"
+echo "### Per-sample cost of each mode"
+echo
+echo "Same spp, runs interleaved, best of each; the paper paid +25% per sample, target < +10% for guided."
+echo
 if [ $have_pipeline = 0 ]; then
   echo "(needs bin/voxelize, bin/skeletonize, bin/importance)"
 else
-  printf '%-14s %-9s %10s %12s %12s %12s\n' scene sampling spp us/sample us/ray rays/sample
+  echo "| scene | sampling | spp | µs/sample | µs/ray | rays/sample | cost per sample vs bsdf | per ray |"
+  echo "|---|---|---|---|---|---|---|---|"
+  verdicts=()
   for sc in "$sponza" data/corridor/corridor.json data/cornell-box/cornell-box.json; do
     [ -e "$sc" ] || continue
     name=$(basename "$sc" .json)
-    if ! precompute "$sc" "$out/$name"; then echo "$name: precompute failed"; continue; fi
+    if ! precompute "$sc" "$out/$name"; then echo "| $name | precompute failed | | | | | | |"; continue; fi
     spp=16; [ "$quick" = 1 ] && spp=8
     declare -A us=() ur=()
-    us[bsdf]=999999; us[guided]=999999; ur[bsdf]=999999; ur[guided]=999999
+    for mode in bsdf skeleton guided; do us[$mode]=999999; ur[$mode]=999999; done
     for _ in $(seq $((runs + 1))); do
-      for mode in bsdf guided; do
+      for mode in bsdf skeleton guided; do
         line=$("$bin/render" "$sc" --cache "$out/$name/importance.cache" --sampling $mode \
                  --spp $spp --max-depth 8 -o "$out/g.exr" 2>&1)
         sps=$(field Msamples/s "$line"); mr=$(field Mrays/s "$line")
@@ -89,54 +94,14 @@ else
         ur[$mode]=$(awk -v a="${ur[$mode]}" -v x="$mr" 'BEGIN{b=1/x; print (b<a)?b:a}')
       done
     done
-    for mode in bsdf guided; do
-      printf '%-14s %-9s %10s %12.4f %12.4f %12.2f\n' "$name" $mode $spp "${us[$mode]}" "${ur[$mode]}" \
-        "$(awk -v a="${us[$mode]}" -v b="${ur[$mode]}" 'BEGIN{print a/b}')"
+    for mode in bsdf skeleton guided; do
+      awk -v n="$name" -v m=$mode -v spp=$spp -v u="${us[$mode]}" -v r="${ur[$mode]}" \
+          -v bu="${us[bsdf]}" -v br="${ur[bsdf]}" \
+        'BEGIN{printf "| %s | %s | %d | %.4f | %.4f | %.2f | %+.1f%% | %+.1f%% |\n", n, m, spp, u, r, u/r, 100*(u/bu-1), 100*(r/br-1)}'
     done
-    awk -v g="${us[guided]}" -v b="${us[bsdf]}" -v gr="${ur[guided]}" -v br="${ur[bsdf]}" -v n="$name" \
-      'BEGIN{c=100*(g/b-1); printf "%s: guided costs %+.1f%% per sample, %+.1f%% per ray: %s (target < +10%% per sample)\n", n, c, 100*(gr/br-1), (c<10)?"ok":"MISSED"}'
+    verdicts+=("$(awk -v g="${us[guided]}" -v b="${us[bsdf]}" -v n="$name" \
+      'BEGIN{c=100*(g/b-1); printf "%s: guided %+.1f%% per sample: %s", n, c, (c<10)?"ok":"MISSED"}')")
   done
-fi
-
-echo
-echo "-- time to error, guided vs bsdf (relMSE against a long bsdf reference; mean over seeds)"
-if [ $have_pipeline = 0 ]; then
-  echo "(needs bin/voxelize, bin/skeletonize, bin/importance)"
-else
-  seeds=3; seconds=20; ref_seconds=180
-  [ "$quick" = 1 ] && { seeds=1; seconds=8; ref_seconds=40; }
-  echo "   relMSE after $seconds s (mean of $seeds seeds); t_bsdf: seconds of the bsdf run; t_guided:"
-  echo "   seconds guided needs to reach bsdf's final error (* = extrapolated); gain = error ratio"
-  printf '%-12s %11s %11s %11s %8s %9s %8s  %s\n' scene bsdf guided skeleton t_bsdf t_guided gain target
-  for sc in data/corridor/corridor.json data/cornell-box/cornell-box.json; do
-    [ -e "$sc" ] || continue
-    name=$(basename "$sc" .json)
-    if ! precompute "$sc" "$out/$name"; then echo "$name: precompute failed"; continue; fi
-    "$bin/render" "$sc" --sampling bsdf --time $ref_seconds --seed 999 -o "$out/$name/ref.exr" --quiet
-    # modes interleaved, so that a change in the machine's load hits all alike
-    for seed in $(seq $seeds); do
-      for mode in bsdf guided skeleton; do
-        "$bin/render" "$sc" --cache "$out/$name/importance.cache" --sampling $mode --time $seconds \
-          --seed $seed -o "$out/$name/$mode.exr" --reference "$out/$name/ref.exr" \
-          --log "$out/$name/$mode-$seed.csv" --quiet
-      done
-    done
-    # average relMSE over seeds at each pass index (passes take about equal time)
-    avg() { paste -d, "$@" | awk -F, -v n=$# 'NR>1{t=0;e=0;ok=1;for(i=0;i<n;i++){if($(4*i+1)==""){ok=0;break};t+=$(4*i+1);e+=$(4*i+4)} if(ok)print t/n, e/n}'; }
-    avg "$out/$name"/bsdf-*.csv > "$out/$name/bsdf.curve"
-    avg "$out/$name"/guided-*.csv > "$out/$name/guided.curve"
-    avg "$out/$name"/skeleton-*.csv > "$out/$name/skeleton.curve"
-    # Unbiased Monte Carlo error falls as 1/time, so the ratio of the errors
-    # after equal time is the speed-up; the time guided needs to reach the
-    # error bsdf ends with is shown too (extrapolated as 1/t if not reached).
-    eb=$(tail -1 "$out/$name/bsdf.curve" | awk '{print $2}')
-    eg=$(tail -1 "$out/$name/guided.curve" | awk '{print $2}')
-    es=$(tail -1 "$out/$name/skeleton.curve" | awk '{print $2}')
-    tb=$(tail -1 "$out/$name/bsdf.curve" | awk '{print $1}')
-    tg=$(awk -v e="$eb" '$2<=e{print $1; exit}' "$out/$name/guided.curve")
-    [ -z "$tg" ] && tg=$(tail -1 "$out/$name/guided.curve" | awk -v e="$eb" '{printf "%.2f*", $1*$2/e}')
-    case $name in corridor) want=3; cmp=">= 3x";; *) want=0.95; cmp=">= 0.95x";; esac
-    awk -v n="$name" -v eb="$eb" -v eg="$eg" -v es="$es" -v tb="$tb" -v tg="$tg" -v w="$want" -v c="$cmp" \
-      'BEGIN{g=eb/eg; printf "%-12s %11.4g %11.4g %11.4g %8.2f %9s %7.2fx  %s: %s\n", n, eb, eg, es, tb, tg, g, c, (g>=w)?"ok":"MISSED"}'
-  done
+  echo
+  for v in "${verdicts[@]}"; do echo "- $v (target < +10%)"; done
 fi

@@ -18,20 +18,22 @@ scenes=(
 # step NAME COMMAND...: runs it, prints "seconds peakMB"
 timed() { /usr/bin/time -f '%e %M' -o "$out/t" "$@" >/dev/null 2>"$out/err" || { echo "fail"; return 1; }
           awk '{printf "%.2f %.0f", $1, $2/1024}' "$out/t"; }
-printf '%-28s %15s %11s %8s %8s %8s %8s %9s %8s\n' scene grid medium_vox vox_s skel_s imp_s total_s peak_MB cache_MB
+echo "| scene | grid@res | medium voxels | voxelize s | skeletonize s | importance s | total s | peak MB | cache MB |"
+echo "|---|---|---|---|---|---|---|---|---|"
 for entry in "${scenes[@]}"; do
   IFS='|' read -r name scene res <<<"$entry"
-  if [ ! -e "$scene" ]; then printf '%-28s  (not present: %s)\n' "$name" "$scene"; continue; fi
-  v=$(timed "$bin/voxelize" "$scene" -o "$out/m.vdb" --resolution "$res") || { printf '%-28s voxelize failed: %s\n' "$name" "$(tail -1 "$out/err")"; continue; }
+  if [ ! -e "$scene" ]; then printf '| %s | (not present: %s) | | | | | | | |\n' "$name" "$scene"; continue; fi
+  v=$(timed "$bin/voxelize" "$scene" -o "$out/m.vdb" --resolution "$res") || { printf '| %s | voxelize failed: %s | | | | | | | |\n' "$name" "$(tail -1 "$out/err")"; continue; }
   grid=$(sed -nE 's/.*voxelize: ([0-9]+x[0-9]+x[0-9]+) voxels.*/\1/p' "$out/err")
   medium=$(sed -nE 's/.* medium ([0-9]+) voxels.*/\1/p' "$out/err")
-  s=$(timed "$bin/skeletonize" "$out/m.vdb" -o "$out/s.ply") || { printf '%-28s skeletonize failed\n' "$name"; continue; }
-  i=$(timed "$bin/importance" "$out/m.vdb" "$out/s.ply" -o "$out/c.cache") || { printf '%-28s importance failed\n' "$name"; continue; }
+  s=$(timed "$bin/skeletonize" "$out/m.vdb" -o "$out/s.ply") || { printf '| %s | skeletonize failed | | | | | | | |\n' "$name"; continue; }
+  i=$(timed "$bin/importance" "$out/m.vdb" "$out/s.ply" -o "$out/c.cache") || { printf '| %s | importance failed | | | | | | | |\n' "$name"; continue; }
   read -r vs vm <<<"$v"; read -r ss sm <<<"$s"; read -r is im <<<"$i"
   total=$(awk -v a="$vs" -v b="$ss" -v c="$is" 'BEGIN{printf "%.2f", a+b+c}')
   peak=$(printf '%s\n' "$vm" "$sm" "$im" | sort -n | tail -1)
   cache=$(awk -v b="$(stat -c %s "$out/c.cache")" 'BEGIN{printf "%.1f", b/1048576}')
-  printf '%-28s %15s %11s %8s %8s %8s %8s %9s %8s\n' "$name" "$grid@$res" "$medium" "$vs" "$ss" "$is" "$total" "$peak" "$cache"
+  printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' "$name" "$grid@$res" "$medium" "$vs" "$ss" "$is" "$total" "$peak" "$cache"
 done
-echo "(paper, table 1: Corridor 93x205x250 13 s, 18 MB; Sponza 210x308x500 30 s, 130 MB, on a 2012 laptop)"
-echo "(peak_MB: the largest resident set of the three steps; cache_MB: importance.cache on disk)"
+echo
+echo "- paper, table 1: Corridor 93x205x250 13 s, 18 MB; Sponza 210x308x500 30 s, 130 MB, on a 2012 laptop"
+echo "- peak MB: the largest resident set of the three steps; cache MB: importance.cache on disk"

@@ -16,7 +16,6 @@
 set -uo pipefail
 bin=${SG_BIN:-bin}
 tool=${SG_BENCH_BIN:-build/release/bench}/convergence
-started=$(date +%s)
 
 # Bump when the references' recipe changes (it is part of their key).
 REFERENCE_VERSION=1
@@ -202,8 +201,8 @@ echo
 echo "### Table 2: seconds to reach a relMSE level"
 echo
 echo "relMSE = mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01), on the linear image."
-echo "Levels per scene from bsdf alone, the same for every mode: the 1-2-5 value just above bsdf's mean"
-echo "error at the end of its run, and the one at least 4x above it. Speed-up = bsdf seconds / mode"
+echo "Levels per scene from bsdf alone, the same for every mode: the 1-2-5 values just above bsdf's mean"
+echo "error at the end of its run and at an eighth of it. Speed-up = bsdf seconds / mode"
 echo "seconds (> 1: faster than bsdf). ~: extrapolated along 1/t from the last half of the curve;"
 echo "< t: already below at the first pass; never: not reached and the curve too flat to extrapolate"
 echo "(log-log slope above -0.5: a biased mode stuck on its bias)."
@@ -240,5 +239,5 @@ if [ ${#notes[@]} -gt 0 ]; then
   echo
 fi
 [ -n "${SG_HEADLINE_FILE:-}" ] && cp "$tables/headline.tsv" "$SG_HEADLINE_FILE" 2>/dev/null
-echo "(section: $(( $(date +%s) - started )) s; load average at the end: $(cut -d' ' -f1-3 /proc/loadavg))"
+echo "Load average at the end of the section: $(cut -d' ' -f1-3 /proc/loadavg)."
 exit 0
