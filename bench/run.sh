@@ -93,27 +93,6 @@ echo "bench: report in $report ($((total / 60)) min $((total % 60)) s)"
 
 # README headline (default and long only): the rows between the markers.
 if [ "$setting" != quick ]; then
-  begin='<!-- bench-headline:begin -->' end='<!-- bench-headline:end -->'
-  if ! grep -qxF "$begin" README.md || ! grep -qxF "$end" README.md; then
-    echo "bench: README.md has no headline markers; not updated"
-  elif [ ! -s "$SG_HEADLINE_FILE" ]; then
-    echo "bench: no convergence results; README.md not updated"
-  else
-    {
-      echo "Latest \`$command\` ($setting setting, ${date%% *}, commit ${commit%% *}, $machine;"
-      echo "full report with the plots and crops: [bench/report.md](bench/report.md)): seconds of rendering to reach"
-      echo "a relMSE level (the 1-2-5 value just above \`bsdf\`'s error at the end of its run), and the"
-      echo "speed-up over \`bsdf\` = bsdf seconds / mode seconds (> 1: faster; ~: extrapolated as 1/t)."
-      echo
-      echo "| scene | image | relMSE level | bsdf s | guided s | guided speed-up | skeleton speed-up |"
-      echo "|---|---|---|---|---|---|---|"
-      awk -F'\t' '{printf "| %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5, $6, $7}' "$SG_HEADLINE_FILE"
-    } >"$stage/headline.md"
-    tmp=README.md.tmp.$$
-    awk -v b="$begin" -v e="$end" -v f="$stage/headline.md" '
-      $0 == b { print; while ((getline l < f) > 0) print l; skip = 1; next }
-      $0 == e { skip = 0 }
-      !skip' README.md >"$tmp" && mv "$tmp" README.md && echo "bench: README.md headline updated"
-    rm -f "$tmp"
-  fi
+  bash bench/headline.sh README.md "$SG_HEADLINE_FILE" \
+    "Latest \`$command\` ($setting setting, ${date%% *}, commit ${commit%% *}, $machine)"
 fi
