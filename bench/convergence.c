@@ -245,10 +245,9 @@ static int cmd_analyze(int argc, char **argv, SgError *err)
         goto done;
     }
 
-    /* Levels from the baseline only, the same for every mode: the 1-2-5
-     * value just above bsdf's mean error at its end (bsdf reaches it within
-     * the run) and the one just above its error at an eighth of the run
-     * (at least the next value of the series). */
+    /* Levels from the baseline only, the same for every mode: bsdf's mean
+     * error at the end of its run and at an eighth of it, each rounded up
+     * to two significant digits (so bsdf reaches them just before). */
     double levels[SG_METRIC_COUNT][2];
     const SgCurve *bc = &base->mean;
     double t_end = bc->seconds[bc->count - 1], t_early = fmax(t_end / 8, bc->seconds[0]);
@@ -256,8 +255,10 @@ static int cmd_analyze(int argc, char **argv, SgError *err)
         double end = bc->error[k][bc->count - 1], early;
         if (!sg_curve_at(bc, k, t_early, &early))
             early = end;
-        levels[k][1] = sg_nice_level_at_least(end);
-        levels[k][0] = fmax(sg_nice_level_at_least(early), sg_nice_level_at_least(levels[k][1] * 1.01));
+        levels[k][1] = sg_level_at_least(end);
+        levels[k][0] = sg_level_at_least(early);
+        if (!(levels[k][0] > levels[k][1])) /* a flat curve: still two levels */
+            levels[k][0] = sg_level_at_least(1.5 * levels[k][1]);
     }
     char line[2048], a[64], b[64], c[64], d[64], e[64];
     snprintf(line, sizeof line, "relmse %.6g %.6g mse8 %.6g %.6g\n", levels[0][0], levels[0][1],
@@ -458,8 +459,8 @@ static int cmd_strip(int argc, char **argv, SgError *err)
         sg_fail(err, "strip: crop %d,%d,%d,%d outside the %dx%d image", cx, cy, cw, ch, w, h);
         goto done;
     }
-    if (scale < 1) /* tiles of about 128 pixels: big enough to see noise */
-        scale = cw >= 128 ? 1 : (128 + cw - 1) / cw;
+    if (scale < 1) /* tiles of about 160 pixels: big enough to see noise, small files */
+        scale = cw >= 160 ? 1 : (160 + cw / 2) / cw;
     const int gap = 4, tiles = count + 1;
     int tw = cw * scale, th = ch * scale;
     int sw = tiles * tw + (tiles - 1) * gap;

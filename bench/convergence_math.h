@@ -73,8 +73,9 @@ typedef struct SgReach {
 /* First time the curve is at or below `level`. */
 SgReach sg_curve_time_to_level(const SgCurve *c, int metric, double level);
 
-/* Smallest value of the 1-2-5 series (1, 2, 5, 10, 20, ...) >= x > 0. */
-double sg_nice_level_at_least(double x);
+/* Smallest number of two significant digits >= x > 0 (0.00214 -> 0.0022,
+ * 2437 -> 2500): a readable level that a curve through x still reaches. */
+double sg_level_at_least(double x);
 
 /* "3.21", "~41.2" (extrapolated), "< 0.02" (before the first point),
  * "> 600" (beyond the extrapolation limit), "never" (flat tail), "-" (no
@@ -383,19 +384,14 @@ SgReach sg_curve_time_to_level(const SgCurve *c, int metric, double level)
     return r;
 }
 
-double sg_nice_level_at_least(double x)
+double sg_level_at_least(double x)
 {
     if (!(x > 0) || !isfinite(x))
         return NAN;
-    double decade = pow(10.0, floor(log10(x)));
-    static const double steps[] = {1, 2, 5, 10};
-    for (int k = 0; k < 4; k++) {
-        double v = steps[k] * decade;
-        /* tolerate the rounding of pow/log10 around exact series values */
-        if (v >= x * (1 - 1e-12))
-            return v;
-    }
-    return 10 * decade;
+    double unit = pow(10.0, floor(log10(x)) - 1);
+    /* tolerate the rounding of pow/log10 around exact two-digit values */
+    double v = ceil(x / unit * (1 - 1e-12)) * unit;
+    return v;
 }
 
 /* Seconds with three significant figures, at most two decimals. */

@@ -19,8 +19,8 @@ block=$(mktemp)
 trap 'rm -f "$block"' EXIT
 {
   echo "$caption; the full report with plots and equal-time crops is [bench/report.md](bench/report.md)."
-  echo "Seconds of rendering to reach a relMSE level (the 1-2-5 value just above \`bsdf\`'s error at the"
-  echo "end of its run) and the speed-up over \`bsdf\` = bsdf seconds / mode seconds (> 1: faster than"
+  echo "Seconds of rendering to reach a relMSE level (\`bsdf\`'s error at the end of its run, rounded up)"
+  echo "and the speed-up over \`bsdf\` = bsdf seconds / mode seconds (> 1: faster than"
   echo "bsdf; ~: extrapolated as 1/t; \`skeleton\` is the paper's biased rule)."
   echo
   echo "| scene | image | relMSE level | bsdf s | guided s | guided speed-up | skeleton speed-up |"

@@ -157,16 +157,20 @@ Test(bench_convergence, ratio_to_bsdf_carries_the_marks)
     cr_assert_str_eq(buf, "-");
 }
 
-Test(bench_convergence, nice_levels_follow_the_1_2_5_series)
+Test(bench_convergence, levels_round_up_to_two_significant_digits)
 {
-    cr_assert_float_eq(sg_nice_level_at_least(0.0021), 0.005, 1e-15);
-    cr_assert_float_eq(sg_nice_level_at_least(0.002), 0.002, 1e-15);
-    cr_assert_float_eq(sg_nice_level_at_least(0.0019), 0.002, 1e-15);
-    cr_assert_float_eq(sg_nice_level_at_least(3e-4), 5e-4, 1e-18);
-    cr_assert_float_eq(sg_nice_level_at_least(7.0), 10.0, 1e-12);
-    cr_assert_float_eq(sg_nice_level_at_least(40.0), 50.0, 1e-12);
-    cr_assert_float_eq(sg_nice_level_at_least(100.0), 100.0, 1e-12);
-    cr_assert(isnan(sg_nice_level_at_least(0.0)));
+    cr_assert_float_eq(sg_level_at_least(0.0021), 0.0021, 1e-15);
+    cr_assert_float_eq(sg_level_at_least(0.00214), 0.0022, 1e-15);
+    cr_assert_float_eq(sg_level_at_least(2437.0), 2500.0, 1e-9);
+    cr_assert_float_eq(sg_level_at_least(3322.47), 3400.0, 1e-9);
+    cr_assert_float_eq(sg_level_at_least(99.1), 100.0, 1e-9);
+    cr_assert_float_eq(sg_level_at_least(7.0), 7.0, 1e-12);
+    cr_assert_float_eq(sg_level_at_least(2.6e-4), 2.6e-4, 1e-18);
+    for (double x = 1e-6; x < 1e6; x *= 1.37) {
+        double v = sg_level_at_least(x);
+        cr_assert(v >= x && v <= x * 1.1 + 1e-300, "%g -> %g", x, v);
+    }
+    cr_assert(isnan(sg_level_at_least(0.0)));
 }
 
 Test(bench_convergence, reference_error_from_two_halves_matches_its_true_error)

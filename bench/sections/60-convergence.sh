@@ -201,8 +201,8 @@ echo
 echo "### Table 2: seconds to reach a relMSE level"
 echo
 echo "relMSE = mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01), on the linear image."
-echo "Levels per scene from bsdf alone, the same for every mode: the 1-2-5 values just above bsdf's mean"
-echo "error at the end of its run and at an eighth of it. Speed-up = bsdf seconds / mode"
+echo "Levels per scene from bsdf alone, the same for every mode: bsdf's mean error at the end of its run"
+echo "and at an eighth of it, rounded up to two digits. Speed-up = bsdf seconds / mode"
 echo "seconds (> 1: faster than bsdf). ~: extrapolated along 1/t from the last half of the curve;"
 echo "< t: already below at the first pass; never: not reached and the curve too flat to extrapolate"
 echo "(log-log slope above -0.5: a biased mode stuck on its bias)."
