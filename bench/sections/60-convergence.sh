@@ -116,7 +116,7 @@ plot() { # name dir size levels-file ref-relmse png
   local name=$1 dir=$2 size=$3 ref_rel=$5 png=$6 l1 l2
   read -r _ l1 l2 _ <"$4"
   gnuplot 2>"$dir/gnuplot.log" <<EOF || notes+=("$name: gnuplot failed: $(tail -1 "$dir/gnuplot.log")")
-set terminal pngcairo size 560,360 font ",9"
+set terminal pngcairo size 560,400 font ",9"
 set output "$png.tmp"
 set logscale xy
 set format y "%.0e"
@@ -124,7 +124,7 @@ set grid xtics ytics mxtics mytics lc rgb "#dddddd"
 set xlabel "seconds of rendering"
 set ylabel "relMSE against the reference"
 set title "$name, ${size}: mean of $seeds seed(s)"
-set key bottom left
+set key outside below horizontal maxrows 2 width 1
 plot "$dir/runs/bsdf.mean.dat" u 1:3 w l lw 2 lc rgb "#1f77b4" t "bsdf", \
      "$dir/runs/skeleton.mean.dat" u 1:3 w l lw 2 lc rgb "#ff7f0e" t "skeleton (biased)", \
      "$dir/runs/guided.mean.dat" u 1:3 w l lw 2 lc rgb "#2ca02c" t "guided", \
