@@ -599,7 +599,8 @@ static bool guide_axis(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, Vec3 *ax
      * bad guide) would give a NaN axis that passes the test below */
     if (!(len > 1e-6 * r->scale) || !isfinite(len))
         return false;
-    Vec3 a = v3((float)(d[0] / len), (float)(d[1] / len), (float)(d[2] / len));
+    double inv = 1.0 / len;
+    Vec3 a = v3((float)(d[0] * inv), (float)(d[1] * inv), (float)(d[2] * inv));
     if (v3_dot(a, n) <= 0.0f)
         return false; /* below the surface: back to BSDF sampling */
     *axis = a;
@@ -769,14 +770,22 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             float u0 = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
             Vec3 wi = bounce_sample(&bs, u0, u1, u2);
             float cos_x = v3_dot(wi, n);
-            float pdf = bounce_pdf(&bs, wi);
+            float pdf, pdf_bsdf = 0.0f, pdf_lobe = 0.0f;
+            if (bs.kind == 2 || (learn && guided)) {
+                /* the mixture's two parts, which the learner needs too */
+                pdf_bsdf = sg_pdf_glossy(&lobe, wi);
+                pdf_lobe = sg_pdf_folded_lobe(axis, n, r->opt.lobe_exponent, wi);
+                pdf = bs.kind == 2 ? alpha * pdf_bsdf + (1.0f - alpha) * pdf_lobe : pdf_bsdf;
+            } else {
+                pdf = bounce_pdf(&bs, wi);
+            }
             if (!(cos_x > 0.0f) || !(pdf > 0.0f))
                 break; /* below the surface: f = 0, the path ends */
             if (learn && guided) {
                 PendingRecord *pr = &pending[pending_count++];
                 pr->region = region;
-                pr->pdf_bsdf = bs.kind == 0 ? pdf : sg_pdf_glossy(&lobe, wi);
-                pr->pdf_lobe = sg_pdf_folded_lobe(axis, n, r->opt.lobe_exponent, wi);
+                pr->pdf_bsdf = pdf_bsdf;
+                pr->pdf_lobe = pdf_lobe;
                 pr->pdf = pdf;
                 pr->beta = beta;
                 pr->radiance = radiance;
