@@ -5,7 +5,12 @@
 #include <string.h>
 
 /* BSDF alone first: with equal estimates the cheaper, safer choice wins. */
-const float sg_mixture_candidates[SG_MIXTURE_CANDIDATES] = {1.0f, 0.9f, 0.8f, 0.7f, 0.6f};
+const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES] = {
+    {1.0f, 16.0f}, {0.8f, 4.0f}, {0.8f, 16.0f}, {0.8f, 64.0f}, {0.6f, 4.0f}, {0.6f, 16.0f}, {0.6f, 64.0f}};
+const float sg_mixture_exponents[SG_MIXTURE_EXPONENTS] = {4.0f, 16.0f, 64.0f};
+
+/* Which of sg_mixture_exponents each candidate's lobe has. */
+static const int candidate_exponent[SG_MIXTURE_CANDIDATES] = {1, 0, 1, 2, 0, 1, 2};
 
 /* Samples a region needs before its own estimate is trusted, and after
  * which it stops learning. */
@@ -18,7 +23,8 @@ const float sg_mixture_candidates[SG_MIXTURE_CANDIDATES] = {1.0f, 0.9f, 0.8f, 0.
  * the sequential sum after the pass is only additions. */
 typedef struct StoredRecord {
     uint32_t region;
-    float estimate;
+    float estimate;                    /* v */
+    float weight;                      /* w: the bounce's weight in the image */
     float term[SG_MIXTURE_CANDIDATES]; /* v^2 p / p_k */
 } StoredRecord;
 
@@ -28,10 +34,18 @@ typedef struct RecordBuffer {
 } RecordBuffer;
 
 typedef struct RegionStats {
-    double moment[SG_MIXTURE_CANDIDATES]; /* sums of v^2 p / p_k */
-    double sum;                           /* sum of v */
+    double moment[SG_MIXTURE_CANDIDATES]; /* sums of w v^2 p / p_k */
+    double weight, weighted;              /* sums of w and of w v */
     uint64_t samples;
+    /* what the region adds to its level's totals under its current choice */
+    double variance, cost;
 } RegionStats;
+
+/* One level of regions (fine or coarse): sums over its regions of the
+ * image variance and the cost of their current choices. */
+typedef struct Totals {
+    double variance, cost;
+} Totals;
 
 /* Cost of a guided bounce relative to a BSDF one (cache query, densities
  * of the lobe), measured on the corridor and the Cornell box. */
@@ -46,7 +60,7 @@ struct SgMixtureLearner {
     Vec3 lo;
     float inv_size;
     uint32_t region_count, coarse_count;
-    float initial_alpha;
+    int initial;
     /* per fine region, all the renderer reads at a bounce (one byte, so
      * that the table stays in cache): the candidate in use (STATE_INITIAL:
      * none yet) and STATE_SETTLED once the region stops learning */
@@ -55,6 +69,9 @@ struct SgMixtureLearner {
     int8_t *coarse_choice; /* per coarse region */
     RegionStats *stats;    /* per fine region */
     RegionStats *coarse;   /* per coarse region */
+    Totals fine_totals, coarse_totals, global_totals;
+    RegionStats global;    /* the whole scene: answers where a coarse region cannot yet */
+    int8_t global_choice;
     uint32_t *touched;     /* fine regions, then coarse ones, with new records */
     uint8_t *is_touched, *coarse_touched;
     uint32_t *coarse_of;   /* fine region -> coarse region */
@@ -64,11 +81,12 @@ struct SgMixtureLearner {
 };
 
 SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest, uint32_t tiles,
-                                            float initial_alpha, SgError *err)
+                                            int initial, SgError *err)
 {
     float ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
     float longest = fmaxf(ext[0], fmaxf(ext[1], ext[2]));
-    if (!(longest > 0.0f) || !isfinite(longest) || cells_longest < 1 || cells_longest > 1024)
+    if (!(longest > 0.0f) || !isfinite(longest) || cells_longest < 1 || cells_longest > 1024 || initial < 0 ||
+        initial >= SG_MIXTURE_CANDIDATES)
         return sg_fail(err, "mixture learner: bad bounds or cell count"), NULL;
     SgMixtureLearner *l = calloc(1, sizeof *l);
     if (!l)
@@ -85,7 +103,7 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->inv_size = 1.0f / size;
     l->region_count = (uint32_t)(cells * 6);
     l->coarse_count = (uint32_t)(coarse * 6);
-    l->initial_alpha = initial_alpha;
+    l->initial = initial;
     l->tiles = tiles;
     l->choice = malloc(l->region_count);
     l->state = malloc(l->region_count);
@@ -121,8 +139,9 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->view.stride_z = l->cells[0] * l->cells[1];
     l->view.state = l->state;
     for (int k = 0; k < 8; k++)
-        l->view.alpha_of_state[k] = k < SG_MIXTURE_CANDIDATES ? sg_mixture_candidates[k] : initial_alpha;
+        l->view.of_state[k] = sg_mixture_candidates[k < SG_MIXTURE_CANDIDATES ? k : initial];
     memset(l->coarse_choice, -1, l->coarse_count);
+    l->global_choice = -1;
     return l;
 }
 
@@ -163,15 +182,9 @@ uint32_t sg_mixture_region(const SgMixtureLearner *l, Vec3 p, Vec3 n)
     return (uint32_t)(cell * 6 + bin);
 }
 
-static float state_alpha(const SgMixtureLearner *l, uint8_t state)
+SgMixtureCandidate sg_mixture_choice(const SgMixtureLearner *l, uint32_t region)
 {
-    state &= 7;
-    return state == STATE_INITIAL ? l->initial_alpha : sg_mixture_candidates[state];
-}
-
-float sg_mixture_alpha(const SgMixtureLearner *l, uint32_t region)
-{
-    return region < l->region_count ? state_alpha(l, l->state[region]) : l->initial_alpha;
+    return l->view.of_state[region < l->region_count ? l->state[region] & 7 : STATE_INITIAL];
 }
 
 bool sg_mixture_learning(const SgMixtureLearner *l, uint32_t region)
@@ -186,6 +199,8 @@ static void refresh_state(SgMixtureLearner *l, uint32_t region)
     int k = l->choice[region];
     if (k < 0)
         k = l->coarse_choice[l->coarse_of[region]];
+    if (k < 0)
+        k = l->global_choice;
     l->state[region] = (uint8_t)((k < 0 ? STATE_INITIAL : k) |
                                  (l->stats[region].samples >= SETTLED_SAMPLES ? STATE_SETTLED : 0));
 }
@@ -205,6 +220,7 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     }
     StoredRecord *st = &b->data[b->count++];
     st->region = rec->region;
+    st->weight = rec->weight;
     float v = rec->estimate;
     if (!(v > 0.0f) || !isfinite(v)) {
         st->estimate = 0.0f;
@@ -212,9 +228,19 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     }
     st->estimate = v;
     float weight = v * v * rec->pdf;
+    /* the folded lobe's density at each exponent: cos^4, ^16, ^64 by squaring */
+    float lobe[SG_MIXTURE_EXPONENTS];
+    float c1 = fminf(fmaxf(rec->cos_axis, 0.0f), 1.0f), c2 = fminf(fmaxf(rec->cos_mirror, 0.0f), 1.0f);
+    for (int e = 0; e < SG_MIXTURE_EXPONENTS; e++) {
+        for (int s = 0; s < 2; s++) { /* 4 = 2^2, then 2 more squarings per step */
+            c1 *= c1;
+            c2 *= c2;
+        }
+        lobe[e] = (sg_mixture_exponents[e] + 1.0f) * (0.5f / 3.14159265f) * (c1 + c2);
+    }
     for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++) {
-        float a = sg_mixture_candidates[k];
-        float p = a * rec->pdf_bsdf + (1.0f - a) * rec->pdf_lobe;
+        float a = sg_mixture_candidates[k].alpha;
+        float p = a * rec->pdf_bsdf + (1.0f - a) * lobe[candidate_exponent[k]];
         /* p = 0: that candidate could never have drawn this direction,
          * which carries light: it would be biased */
         st->term[k] = p > 0.0f ? weight / p : INFINITY;
@@ -224,29 +250,64 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
 static void add_record(RegionStats *st, const StoredRecord *rec)
 {
     st->samples++;
+    double w = rec->weight;
+    if (!(w > 0.0) || !isfinite(w))
+        return;
+    st->weight += w; /* a bounce that brought nothing back still counts */
     if (rec->estimate == 0.0f)
         return;
-    st->sum += rec->estimate;
+    st->weighted += w * rec->estimate;
     for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++)
-        st->moment[k] += rec->term[k];
+        st->moment[k] += w * rec->term[k];
 }
 
-/* The candidate with the least variance times cost, or -1 if too few samples. */
-static int best_candidate(const RegionStats *st)
+/* The region's share of the image variance under candidate k: its bounces'
+ * weighted variance, summed (so a region many paths cross counts more). */
+static double region_variance(const RegionStats *st, int k)
+{
+    double mean2 = st->weight > 0.0 ? st->weighted * st->weighted / st->weight : 0.0;
+    return fmax(0.0, st->moment[k] - mean2);
+}
+
+static double region_cost(const RegionStats *st, int k)
+{
+    return (double)st->samples * (k == 0 ? 1.0 : GUIDED_COST);
+}
+
+/* The candidate that makes the image's variance times render time least,
+ * the other regions' choices given: (V_rest + V_k) (T_rest + T_k), where
+ * V_rest, T_rest are the level's totals without this region. Or -1 with
+ * too few samples. A region whose bounces weigh little in the image cannot
+ * pay for the guide's cost however much it would lower its own variance. */
+static int best_candidate(const RegionStats *st, const Totals *t)
 {
     if (st->samples < MIN_SAMPLES)
         return -1;
-    double n = (double)st->samples, mean = st->sum / n;
+    double v_rest = fmax(0.0, t->variance - st->variance), t_rest = fmax(0.0, t->cost - st->cost);
     int best = 0;
-    double best_cost = fmax(0.0, st->moment[0] / n - mean * mean);
-    for (int k = 1; k < SG_MIXTURE_CANDIDATES; k++) {
-        double cost = fmax(0.0, st->moment[k] / n - mean * mean) * GUIDED_COST;
-        if (cost < best_cost) {
+    double best_score = INFINITY;
+    for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++) {
+        double score = (v_rest + region_variance(st, k)) * (t_rest + region_cost(st, k));
+        if (score < best_score) {
             best = k;
-            best_cost = cost;
+            best_score = score;
         }
     }
     return best;
+}
+
+/* Re-chooses a region and keeps its level's totals current. */
+static int choose(RegionStats *st, Totals *t)
+{
+    int k = best_candidate(st, t);
+    int counted = k < 0 ? 0 : k;
+    t->variance -= st->variance;
+    t->cost -= st->cost;
+    st->variance = region_variance(st, counted);
+    st->cost = region_cost(st, counted);
+    t->variance += st->variance;
+    t->cost += st->cost;
+    return k;
 }
 
 void sg_mixture_update(SgMixtureLearner *l)
@@ -260,6 +321,7 @@ void sg_mixture_update(SgMixtureLearner *l)
             uint32_t c = l->coarse_of[rec->region];
             add_record(&l->stats[rec->region], rec);
             add_record(&l->coarse[c], rec);
+            add_record(&l->global, rec);
             if (!l->is_touched[rec->region]) {
                 l->is_touched[rec->region] = 1;
                 l->touched[fine++] = rec->region;
@@ -271,15 +333,21 @@ void sg_mixture_update(SgMixtureLearner *l)
         }
         b->count = 0;
     }
+    int8_t g = (int8_t)choose(&l->global, &l->global_totals);
+    if (g != l->global_choice) {
+        l->global_choice = g; /* rare: every region that follows it looks again */
+        for (uint32_t i = 0; i < l->region_count; i++)
+            refresh_state(l, i);
+    }
     for (uint32_t i = 0; i < fine; i++) {
         l->is_touched[l->touched[i]] = 0;
-        l->choice[l->touched[i]] = (int8_t)best_candidate(&l->stats[l->touched[i]]);
+        l->choice[l->touched[i]] = (int8_t)choose(&l->stats[l->touched[i]], &l->fine_totals);
         refresh_state(l, l->touched[i]);
     }
     for (uint32_t i = 0; i < coarse; i++) {
         uint32_t c = coarse_list[i];
         l->coarse_touched[c] = 0;
-        int8_t k = (int8_t)best_candidate(&l->coarse[c]);
+        int8_t k = (int8_t)choose(&l->coarse[c], &l->coarse_totals);
         if (k == l->coarse_choice[c])
             continue;
         l->coarse_choice[c] = k;
@@ -312,7 +380,7 @@ double sg_mixture_guided_fraction(const SgMixtureLearner *l)
     for (uint32_t i = 0; i < l->region_count; i++) {
         double n = (double)l->stats[i].samples;
         all += n;
-        if (n > 0.0 && sg_mixture_alpha(l, i) < 1.0f)
+        if (n > 0.0 && sg_mixture_choice(l, i).alpha < 1.0f)
             guided += n;
     }
     return all > 0.0 ? guided / all : 0.0;

@@ -265,7 +265,7 @@ static bool setup_learner(SgRenderer *r, const char *path, SgError *err)
         }
     SgError e;
     r->learner = sg_mixture_learner_create(lo, hi, 32, (uint32_t)(r->tiles_x * r->tiles_y),
-                                           SG_MIXTURE_INITIAL_ALPHA, &e);
+                                           SG_MIXTURE_INITIAL, &e);
     if (!r->learner)
         return sg_fail(err, "%s: %s", path, e.message);
     return true;
@@ -610,7 +610,7 @@ static bool guide_axis(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, Vec3 *ax
 /* A guided bounce waiting for the rest of its path, for the learner. */
 typedef struct PendingRecord {
     uint32_t region;
-    float pdf_bsdf, pdf_lobe, pdf;
+    float pdf_bsdf, cos_axis, cos_mirror, pdf;
     Vec3 beta;     /* path throughput before the bounce */
     Vec3 radiance; /* radiance gathered before the bounce */
 } PendingRecord;
@@ -699,15 +699,15 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             Vec3 axis;
             /* guided: the region's learned alpha; where it is the BSDF
              * alone the guide is asked only by paths that learn */
-            float alpha = r->opt.alpha;
+            SgMixtureCandidate mix = {r->opt.alpha, r->opt.lobe_exponent};
             uint32_t region = SG_NO_REGION;
             bool learn = false;
             if (mode == SG_SAMPLING_GUIDED && r->learner) {
-                region = sg_mixture_lookup(sg_mixture_view(r->learner), h.p, n, &alpha, &learn);
+                region = sg_mixture_lookup(sg_mixture_view(r->learner), h.p, n, &mix, &learn);
                 learn = learn && learn_tile >= 0 && pending_count < MAX_PENDING;
             }
             bool guided = mode == SG_SAMPLING_SKELETON ||
-                          (mode == SG_SAMPLING_GUIDED && (alpha < 1.0f || learn));
+                          (mode == SG_SAMPLING_GUIDED && (mix.alpha < 1.0f || learn));
             guided = guided && guide_axis(r, h.p, n, rng, &axis);
             Vec3 origin = offset_origin(r, h.p, n);
 
@@ -759,7 +759,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     if (!lit) /* the paper: lobe only where not directly lit */
                         bs = (BounceSampler){1, {lobe, axis, r->opt.lobe_exponent, 0.0f}};
                 } else {
-                    bs = (BounceSampler){alpha < 1.0f ? 2 : 0, {lobe, axis, r->opt.lobe_exponent, alpha}};
+                    bs = (BounceSampler){mix.alpha < 1.0f ? 2 : 0, {lobe, axis, mix.exponent, mix.alpha}};
                 }
             }
             if (nee_pdf > 0.0f) {
@@ -774,8 +774,8 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             if (bs.kind == 2 || (learn && guided)) {
                 /* the mixture's two parts, which the learner needs too */
                 pdf_bsdf = sg_pdf_glossy(&lobe, wi);
-                pdf_lobe = sg_pdf_folded_lobe(axis, n, r->opt.lobe_exponent, wi);
-                pdf = bs.kind == 2 ? alpha * pdf_bsdf + (1.0f - alpha) * pdf_lobe : pdf_bsdf;
+                pdf_lobe = sg_pdf_folded_lobe(axis, n, mix.exponent, wi);
+                pdf = bs.kind == 2 ? mix.alpha * pdf_bsdf + (1.0f - mix.alpha) * pdf_lobe : pdf_bsdf;
             } else {
                 pdf = bounce_pdf(&bs, wi);
             }
@@ -785,7 +785,8 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 PendingRecord *pr = &pending[pending_count++];
                 pr->region = region;
                 pr->pdf_bsdf = pdf_bsdf;
-                pr->pdf_lobe = pdf_lobe;
+                pr->cos_axis = v3_dot(wi, axis);
+                pr->cos_mirror = v3_dot(wi, v3_sub(axis, v3_scale(n, 2.0f * v3_dot(axis, n))));
                 pr->pdf = pdf;
                 pr->beta = beta;
                 pr->radiance = radiance;
@@ -819,7 +820,8 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                       pr->beta.y > 0.0f ? after.y / pr->beta.y : 0.0f,
                       pr->beta.z > 0.0f ? after.z / pr->beta.z : 0.0f);
         float v = luminance(est);
-        SgMixtureRecord rec = {pr->region, pr->pdf_bsdf, pr->pdf_lobe, pr->pdf, v};
+        float t = luminance(pr->beta);
+        SgMixtureRecord rec = {pr->region, pr->pdf_bsdf, pr->cos_axis, pr->cos_mirror, pr->pdf, v, t * t};
         sg_mixture_record(r->learner, (uint32_t)learn_tile, &rec);
     }
     return radiance;

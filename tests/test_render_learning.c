@@ -13,28 +13,29 @@
 #include "rng.h"
 #include "support_render.h"
 
-static SgMixtureLearner *unit_learner(void)
+static SgMixtureLearner *unit_learner_from(int initial)
 {
     SgError err = {0};
     /* 8 fine cells a side over the unit cube, 2 tiles */
-    SgMixtureLearner *l = sg_mixture_learner_create(v3(0, 0, 0), v3(1, 1, 1), 8, 2, 1.0f, &err);
+    SgMixtureLearner *l = sg_mixture_learner_create(v3(0, 0, 0), v3(1, 1, 1), 8, 2, initial, &err);
     cr_assert_not_null(l, "%s", err.message);
     return l;
 }
 
+static SgMixtureLearner *unit_learner(void) { return unit_learner_from(0); }
+
 /* Bounces drawn by BSDF sampling (alpha 1, p = pdf_bsdf) in one region: a
  * share `lit` of them land in a small bright cone carrying value
- * f cos L = g; `lobe_on_light` is the lobe's density there. */
-static void feed(SgMixtureLearner *l, uint32_t region, int count, double lit, float lobe_on_light,
-                 uint64_t seed)
+ * f cos L = g, at cosine `cos_light` from the lobe's axis; the others miss
+ * it at cosine 0.3. */
+static void feed(SgMixtureLearner *l, uint32_t region, int count, double lit, float cos_light, uint64_t seed)
 {
     SgRng rng;
     sg_rng_seed(&rng, seed, 7);
     const float pdf_bsdf = 0.3f, g = 2.0f;
     for (int i = 0; i < count; i++) {
         bool hit = sg_rng_float(&rng) < lit;
-        SgMixtureRecord rec = {region, pdf_bsdf, hit ? lobe_on_light : 0.02f, pdf_bsdf,
-                               hit ? g / pdf_bsdf : 0.0f};
+        SgMixtureRecord rec = {region, pdf_bsdf, hit ? cos_light : 0.3f, 0.0f, pdf_bsdf, hit ? g / pdf_bsdf : 0.0f, 1.0f};
         sg_mixture_record(l, (uint32_t)(i & 1), &rec);
     }
     sg_mixture_update(l);
@@ -45,11 +46,12 @@ Test(render_learning, the_lobe_wins_where_the_light_comes_along_the_guide)
     SgMixtureLearner *l = unit_learner();
     uint32_t r = sg_mixture_region(l, v3(0.3f, 0.3f, 0.3f), v3(0, 1, 0));
     cr_assert_neq(r, SG_NO_REGION);
-    cr_assert_float_eq(sg_mixture_alpha(l, r), 1.0f, 0.0f); /* nothing learned yet */
-    feed(l, r, 4000, 0.05, 8.0f, 1);
-    /* the lobe puts 27x the BSDF's density on the light: the smallest alpha wins */
-    cr_assert_float_eq(sg_mixture_alpha(l, r), sg_mixture_candidates[SG_MIXTURE_CANDIDATES - 1], 0.0f,
-                       "alpha %g", sg_mixture_alpha(l, r));
+    cr_assert_float_eq(sg_mixture_choice(l, r).alpha, 1.0f, 0.0f); /* nothing learned yet */
+    feed(l, r, 4000, 0.05, 0.995f, 1);
+    /* the light right on the axis: the narrowest lobe with the most weight wins
+     * (its density there is 75x the BSDF's) */
+    SgMixtureCandidate c = sg_mixture_choice(l, r);
+    cr_assert(c.alpha == 0.6f && c.exponent == 64.0f, "alpha %g exponent %g", c.alpha, c.exponent);
     cr_assert_eq(sg_mixture_region_samples(l, r), 4000);
     sg_mixture_learner_free(l);
 }
@@ -58,53 +60,65 @@ Test(render_learning, the_bsdf_wins_where_the_guide_points_away)
 {
     SgMixtureLearner *l = unit_learner();
     uint32_t r = sg_mixture_region(l, v3(0.7f, 0.3f, 0.3f), v3(0, 0, -1));
-    feed(l, r, 4000, 0.3, 0.01f, 2);
-    cr_assert_float_eq(sg_mixture_alpha(l, r), 1.0f, 0.0f, "alpha %g", sg_mixture_alpha(l, r));
+    feed(l, r, 4000, 0.3, 0.0f, 2);
+    cr_assert_float_eq(sg_mixture_choice(l, r).alpha, 1.0f, 0.0f, "alpha %g", sg_mixture_choice(l, r).alpha);
     sg_mixture_learner_free(l);
 }
 
 Test(render_learning, a_small_gain_does_not_pay_for_the_guide)
 {
-    /* the lobe only slightly denser on the light than the BSDF: the variance
-     * falls by less than guiding costs, so the BSDF stays */
+    /* the lobe's wide version only slightly denser on the light than the
+     * BSDF (1.4x at cosine 0.85 for exponent 4, less for the others): the
+     * variance falls by less than guiding costs, so the BSDF stays */
     SgMixtureLearner *l = unit_learner();
     uint32_t r = sg_mixture_region(l, v3(0.3f, 0.7f, 0.3f), v3(1, 0, 0));
-    feed(l, r, 20000, 0.3, 0.33f, 3);
-    cr_assert_float_eq(sg_mixture_alpha(l, r), 1.0f, 0.0f, "alpha %g", sg_mixture_alpha(l, r));
+    feed(l, r, 20000, 0.3, 0.85f, 3);
+    cr_assert_float_eq(sg_mixture_choice(l, r).alpha, 1.0f, 0.0f, "alpha %g", sg_mixture_choice(l, r).alpha);
     sg_mixture_learner_free(l);
 }
 
 Test(render_learning, sparse_regions_take_their_coarse_region_s_choice)
 {
-    SgMixtureLearner *l = unit_learner();
+    /* before anything is learned: a mixture (so that `far` below keeps to
+     * the BSDF only by following the whole scene's choice) */
+    SgMixtureLearner *l = unit_learner_from(SG_MIXTURE_INITIAL);
+    uint32_t far = sg_mixture_region(l, v3(0.9f, 0.1f, 0.1f), v3(0, 1, 0));
+    cr_assert_lt(sg_mixture_choice(l, far).alpha, 1.0f);
     /* fine cells are 1/8; coarse ones 4 fine cells: (0.05..0.45) share one */
     uint32_t busy = sg_mixture_region(l, v3(0.05f, 0.05f, 0.05f), v3(0, 1, 0));
     uint32_t sparse = sg_mixture_region(l, v3(0.4f, 0.4f, 0.4f), v3(0, 1, 0));
     uint32_t other_side = sg_mixture_region(l, v3(0.4f, 0.4f, 0.4f), v3(0, -1, 0));
-    uint32_t far = sg_mixture_region(l, v3(0.9f, 0.9f, 0.9f), v3(0, 1, 0));
-    cr_assert(busy != sparse && sparse != other_side && far != sparse);
-    feed(l, busy, 4000, 0.05, 8.0f, 4);
-    feed(l, sparse, 10, 0.05, 8.0f, 5);
-    float lobe = sg_mixture_candidates[SG_MIXTURE_CANDIDATES - 1];
-    cr_assert_float_eq(sg_mixture_alpha(l, busy), lobe, 0.0f);
-    cr_assert_float_eq(sg_mixture_alpha(l, sparse), lobe, 0.0f, "sparse region: %g", sg_mixture_alpha(l, sparse));
+    uint32_t away = sg_mixture_region(l, v3(0.6f, 0.6f, 0.6f), v3(0, 1, 0));
+    cr_assert(busy != sparse && sparse != other_side && far != sparse && away != far);
+    /* the lobe wins at `busy`; the BSDF wins at `away` (another coarse
+     * cell), where bounces bring back more light in all: the scene as a
+     * whole keeps to the BSDF */
+    feed(l, busy, 4000, 0.05, 0.995f, 4);
+    feed(l, away, 4000, 0.6, 0.0f, 5);
+    feed(l, sparse, 10, 0.05, 0.995f, 6);
+    float lobe = sg_mixture_candidates[SG_MIXTURE_CANDIDATES - 1].alpha;
+    cr_assert_float_eq(sg_mixture_choice(l, busy).alpha, lobe, 0.0f);
+    cr_assert_float_eq(sg_mixture_choice(l, away).alpha, 1.0f, 0.0f);
+    cr_assert_float_eq(sg_mixture_choice(l, sparse).alpha, lobe, 0.0f, "sparse region: %g",
+                       sg_mixture_choice(l, sparse).alpha);
     /* a region with no samples at all in the same coarse cell also follows it */
     uint32_t empty = sg_mixture_region(l, v3(0.3f, 0.1f, 0.2f), v3(0, 1, 0));
     cr_assert_eq(sg_mixture_region_samples(l, empty), 0);
-    cr_assert_float_eq(sg_mixture_alpha(l, empty), lobe, 0.0f);
-    /* the other side of a wall and another coarse cell learn apart */
-    cr_assert_float_eq(sg_mixture_alpha(l, other_side), 1.0f, 0.0f);
-    cr_assert_float_eq(sg_mixture_alpha(l, far), 1.0f, 0.0f);
+    cr_assert_float_eq(sg_mixture_choice(l, empty).alpha, lobe, 0.0f);
+    /* the other side of a wall and a coarse cell with no samples follow the
+     * whole scene's choice */
+    cr_assert_float_eq(sg_mixture_choice(l, other_side).alpha, 1.0f, 0.0f);
+    cr_assert_float_eq(sg_mixture_choice(l, far).alpha, 1.0f, 0.0f);
     /* and the inline view agrees with the functions */
-    float a;
+    SgMixtureCandidate a;
     bool learning;
     uint32_t r = sg_mixture_lookup(sg_mixture_view(l), v3(0.4f, 0.4f, 0.4f), v3(0, 1, 0), &a, &learning);
     cr_assert_eq(r, sparse);
-    cr_assert_float_eq(a, lobe, 0.0f);
+    cr_assert_float_eq(a.alpha, lobe, 0.0f);
     cr_assert(learning);
     r = sg_mixture_lookup(sg_mixture_view(l), v3(2, 0.5f, 0.5f), v3(0, 1, 0), &a, &learning);
-    cr_assert_eq(r, SG_NO_REGION);
-    cr_assert_float_eq(a, 1.0f, 0.0f);
+    cr_assert_eq(r, SG_NO_REGION); /* outside the grid: the initial choice */
+    cr_assert_float_eq(a.alpha, sg_mixture_candidates[SG_MIXTURE_INITIAL].alpha, 0.0f);
     sg_mixture_learner_free(l);
 }
 
@@ -113,7 +127,7 @@ Test(render_learning, a_region_with_enough_samples_settles)
     SgMixtureLearner *l = unit_learner();
     uint32_t r = sg_mixture_region(l, v3(0.3f, 0.3f, 0.3f), v3(0, 1, 0));
     cr_assert(sg_mixture_learning(l, r));
-    feed(l, r, 5000, 0.05, 8.0f, 6);
+    feed(l, r, 5000, 0.05, 0.995f, 6);
     cr_assert_not(sg_mixture_learning(l, r));
     sg_mixture_learner_free(l);
 }
