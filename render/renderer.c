@@ -59,7 +59,6 @@ struct SgRenderer {
     uint32_t *light_tris;   /* triangle ids grouped by light */
     double *light_tri_cdf;  /* per light, cumulative area fractions */
     double *follow_cdf;     /* guide: cumulative follow probability per light */
-    double *light_centre;   /* 3 per light, local coordinates (SgLight.position) */
     /* Guided mode with a learned alpha: per-region choice of the mixture. */
     SgMixtureLearner *learner;
     int tiles_x, tiles_y;
@@ -152,13 +151,6 @@ static bool setup_lights(SgRenderer *r, const SgScene *s, SgError *err)
     r->lights = calloc(r->light_count, sizeof *r->lights);
     r->light_cdf = calloc(r->light_count, sizeof *r->light_cdf);
     r->follow_cdf = calloc(r->light_count, sizeof *r->follow_cdf);
-    r->light_centre = calloc(3 * r->light_count, sizeof *r->light_centre);
-    if (!r->light_centre)
-        return sg_fail(err, "%s: out of memory for the light table", s->path);
-    for (uint32_t l = 0; l < s->light_count; l++) {
-        for (int i = 0; i < 3; i++)
-            r->light_centre[3 * l + i] = s->lights[l].position[i] - r->centre[i];
-    }
     uint32_t total_tris = 0;
     for (uint32_t l = 0; l < s->light_count; l++)
         total_tris += s->lights[l].triangle_count;
@@ -426,7 +418,6 @@ void sg_renderer_free(SgRenderer *r)
     free(r->light_tris);
     free(r->light_tri_cdf);
     free(r->follow_cdf);
-    free(r->light_centre);
     sg_mixture_learner_free(r->learner);
     free(r->sum);
     free(r->last);
