@@ -842,15 +842,22 @@ static uint64_t mix64(uint64_t x)
 #define LEARN_WARMUP_PASSES 2
 #define LEARN_STRIDE_MAX 64
 
+/* At most this many learning paths per pass (~20 MB of records), whatever
+ * the image size: a large image learns from a share of its pixels. */
+#define LEARN_PATHS_MAX 131072
+
 static bool learns(const PassCtx *pc, size_t pix)
 {
-    int pass = pc->r->spp;
-    if (pass < LEARN_WARMUP_PASSES)
-        return true;
+    const SgRenderer *r = pc->r;
+    uint64_t pixels = (uint64_t)r->opt.width * (uint64_t)r->opt.height;
     uint64_t stride = 1;
-    while (stride < LEARN_STRIDE_MAX && (int)(stride * 2) <= pass)
+    while (pixels / stride > LEARN_PATHS_MAX)
         stride *= 2;
-    return mix64(pc->pass_key ^ (pix * 0x9e3779b97f4a7c15ULL)) % stride == 0;
+    int pass = r->spp;
+    if (pass >= LEARN_WARMUP_PASSES)
+        for (int p = 2; p <= pass && stride < LEARN_STRIDE_MAX; p *= 2)
+            stride *= 2;
+    return stride == 1 || mix64(pc->pass_key ^ (pix * 0x9e3779b97f4a7c15ULL)) % stride == 0;
 }
 
 static void render_tile(void *vctx, uint64_t index, int thread)
