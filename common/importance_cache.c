@@ -30,6 +30,8 @@ struct SgImportanceCache {
     const uint8_t *voxel_bits;
     uint64_t voxel_bits_size;
     int bx, by, bz;
+    double inv_voxel_size;
+    bool one_component; /* every node in one component: no need to read the node */
 };
 
 static bool range_ok(const SgCacheRange *r, uint64_t header_size, uint64_t file_size)
@@ -179,6 +181,8 @@ SgImportanceCache *sg_cache_open_memory(const void *data, size_t size, const cha
         free(c);
         return NULL;
     }
+    c->inv_voxel_size = 1.0 / c->header.voxel_size;
+    c->one_component = c->header.component_count == 1;
     return c;
 }
 
@@ -299,10 +303,11 @@ bool sg_cache_nearest_node(const SgImportanceCache *c, const double p[3], uint32
     for (int a = 0; a < 3; a++) {
         if (!isfinite(p[a]))
             return false;
-        v[a] = (p[a] - c->header.origin[a]) / c->header.voxel_size;
+        v[a] = (p[a] - c->header.origin[a]) * c->inv_voxel_size;
         if (!(v[a] > -2.0 && v[a] < (double)(1 << 21)))
             return false;
-        ijk[a] = (int)floor(v[a]);
+        int i = (int)v[a]; /* floor without the libm call: v > -2 */
+        ijk[a] = i - (v[a] < (double)i);
     }
     uint32_t n = voxel_node(c, ijk[0], ijk[1], ijk[2]);
     if (n == SG_CACHE_NONE) {
@@ -339,7 +344,7 @@ bool sg_cache_importance_point(const SgImportanceCache *c, const double p[3], ui
     if (light >= c->header.light_count || !sg_cache_nearest_node(c, p, &n))
         return false;
     uint32_t comp = c->lights[light].component;
-    if (comp == SG_CACHE_NONE || c->nodes[n].component != comp)
+    if (comp == SG_CACHE_NONE || (!c->one_component && c->nodes[n].component != comp))
         return false;
     const float *q = c->points + ((size_t)n * c->header.light_count + light) * 3;
     point[0] = q[0];

@@ -38,8 +38,9 @@ static const char *usage =
     "                    REF (measuring time is not counted; mse8: the paper's MSE of the\n"
     "                    8-bit PNG values at --exposure)\n"
     "  --max-depth N     maximum path length (default: the scene's render.max_depth, else 8)\n"
-    "  --exponent P      cosine-power exponent of the lobe (default 8; skeleton: 4, the paper's)\n"
-    "  --alpha A         guided: probability of BSDF sampling in the mixture, (0, 1] (default 0.75)\n"
+    "  --exponent P      cosine-power exponent of the lobe (default 16; skeleton: 4, the paper's)\n"
+    "  --alpha A         guided: probability of BSDF sampling in the mixture, (0, 1]; default:\n"
+    "                    learned per region of the scene while rendering (docs/render.md)\n"
     "  --size WxH        image size (default: the scene's image size, else 320x240)\n"
     "  --quiet           no summary line\n";
 
@@ -348,14 +349,18 @@ int main(int argc, char **argv)
     sg_progress_end(&progress);
 
     sg_renderer_image(r, image);
-    char spp_s[32], sec_s[32], seed_s[32], nonfinite_s[32], depth_s[32], exp_s[32], alpha_s[32];
+    char spp_s[32], sec_s[32], seed_s[32], nonfinite_s[32], depth_s[32], exp_s[32], alpha_s[64];
     snprintf(spp_s, sizeof spp_s, "%d", sg_renderer_spp(r));
     snprintf(sec_s, sizeof sec_s, "%.3f", render_seconds);
     format_u64(seed_s, sizeof seed_s, a.seed);
     format_u64(nonfinite_s, sizeof nonfinite_s, sg_renderer_nonfinite(r));
     snprintf(depth_s, sizeof depth_s, "%d", o.max_depth);
     snprintf(exp_s, sizeof exp_s, "%g", o.lobe_exponent);
-    snprintf(alpha_s, sizeof alpha_s, "%g", o.alpha);
+    if (o.sampling == SG_SAMPLING_GUIDED && o.alpha == SG_ALPHA_LEARNED)
+        snprintf(alpha_s, sizeof alpha_s, "learned (lobe in %.0f%% of bounces)",
+                 100.0 * fmax(0.0, sg_renderer_guided_fraction(r)));
+    else
+        snprintf(alpha_s, sizeof alpha_s, "%g", o.alpha);
     SgImageAttribute attrs[] = {
         {"spp", spp_s},
         {"seconds", sec_s},
@@ -384,9 +389,10 @@ int main(int argc, char **argv)
     if (!a.quiet) {
         double paths = (double)o.width * o.height * sg_renderer_spp(r);
         fprintf(stderr,
-                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s, seed %s, %s NaN/inf samples\n",
+                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s, seed %s, %s NaN/inf samples\n",
                 o.width, o.height, sg_renderer_spp(r), render_seconds, paths / render_seconds * 1e-6,
                 (double)sg_renderer_rays(r) / render_seconds * 1e-6, sg_sampling_name(o.sampling),
+                o.sampling == SG_SAMPLING_GUIDED ? ", alpha " : "", o.sampling == SG_SAMPLING_GUIDED ? alpha_s : "",
                 seed_s, nonfinite_s);
     }
     status = 0;

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "memory.h"
+#include "mixture_learning.h"
 #include "rng.h"
 #include "sampling.h"
 #include "threads.h"
@@ -58,16 +59,9 @@ struct SgRenderer {
     uint32_t *light_tris;   /* triangle ids grouped by light */
     double *light_tri_cdf;  /* per light, cumulative area fractions */
     double *follow_cdf;     /* guide: cumulative follow probability per light */
-    double *light_centre;   /* 3 per light, local coordinates (SgLight.position) */
-    /* Guided mode: a coarse grid over the scene's bounds whose cells are
-     * marked where every probe of the guide found the light itself in view
-     * (so the mixture would not be used there anyway): vertices in them skip
-     * the cache query. A rule on the position alone: unbiased whatever it
-     * marks; it only saves time in well-lit regions. */
-    uint8_t *bsdf_cells;
-    int cells[3];
-    Vec3 cells_min;
-    float cell_inv_size;
+    /* Guided mode with a learned alpha: per-region choice of the mixture. */
+    SgMixtureLearner *learner;
+    int tiles_x, tiles_y;
 
     /* camera in local coordinates */
     Vec3 cam_pos, cam_forward, cam_right, cam_up;
@@ -109,8 +103,8 @@ void sg_render_options_default(SgRenderOptions *o, const SgScene *scene)
     o->height = scene && scene->has_camera && scene->camera.height > 0 ? scene->camera.height : 240;
     o->max_depth = scene && scene->render.max_depth > 0 ? scene->render.max_depth : 8;
     o->sampling = SG_SAMPLING_BSDF;
-    o->lobe_exponent = 8.0f;
-    o->alpha = 0.75f;
+    o->lobe_exponent = 16.0f;
+    o->alpha = SG_ALPHA_LEARNED;
 }
 
 static float luminance(Vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
@@ -157,13 +151,6 @@ static bool setup_lights(SgRenderer *r, const SgScene *s, SgError *err)
     r->lights = calloc(r->light_count, sizeof *r->lights);
     r->light_cdf = calloc(r->light_count, sizeof *r->light_cdf);
     r->follow_cdf = calloc(r->light_count, sizeof *r->follow_cdf);
-    r->light_centre = calloc(3 * r->light_count, sizeof *r->light_centre);
-    if (!r->light_centre)
-        return sg_fail(err, "%s: out of memory for the light table", s->path);
-    for (uint32_t l = 0; l < s->light_count; l++) {
-        for (int i = 0; i < 3; i++)
-            r->light_centre[3 * l + i] = s->lights[l].position[i] - r->centre[i];
-    }
     uint32_t total_tris = 0;
     for (uint32_t l = 0; l < s->light_count; l++)
         total_tris += s->lights[l].triangle_count;
@@ -257,98 +244,23 @@ static void setup_camera(SgRenderer *r, const SgScene *s)
     r->aspect = (float)r->opt.width / (float)r->opt.height;
 }
 
-/* Is the guide's importance point at world position w the light itself,
- * for every light it follows? 1 yes, 0 no, -1 no answer for any light. */
-static int probe_at_light(const SgRenderer *r, const double w[3])
+/* The learner's grid covers the triangles' bounds (local coordinates):
+ * 32 cells along the longest side, a few thousand regions in a room. */
+static bool setup_learner(SgRenderer *r, const char *path, SgError *err)
 {
-    int answer = -1;
-    double prev = 0.0;
-    for (uint32_t l = 0; l < r->light_count; l++) {
-        double weight = r->follow_cdf[l] - prev;
-        prev = r->follow_cdf[l];
-        if (weight <= 0.0)
-            continue;
-        double q[3];
-        if (!r->opt.guide.importance_point(r->opt.guide.ctx, w, l, q))
-            continue;
-        double d[3] = {q[0] - (r->light_centre[3 * l] + r->centre[0]),
-                       q[1] - (r->light_centre[3 * l + 1] + r->centre[1]),
-                       q[2] - (r->light_centre[3 * l + 2] + r->centre[2])};
-        if (d3_length(d) >= 1e-4 * r->scale)
-            return 0;
-        answer = 1;
-    }
-    return answer;
-}
-
-static bool setup_bsdf_cells(SgRenderer *r, const SgScene *s, SgError *err)
-{
-    (void)s;
-    if (!r->opt.guide.importance_point || !r->light_count)
-        return true;
-    const int longest = 32;
-    double lo[3], hi[3], extent = 0.0;
-    for (int i = 0; i < 3; i++) {
-        lo[i] = INFINITY;
-        hi[i] = -INFINITY;
-    }
+    Vec3 lo = v3(INFINITY, INFINITY, INFINITY), hi = v3(-INFINITY, -INFINITY, -INFINITY);
     for (uint32_t t = 0; t < r->triangle_count; t++)
         for (int k = 0; k < 3; k++) {
             Vec3 v = r->vertices[r->indices[3 * t + k]];
-            float c[3] = {v.x, v.y, v.z};
-            for (int i = 0; i < 3; i++) {
-                lo[i] = fmin(lo[i], c[i]);
-                hi[i] = fmax(hi[i], c[i]);
-            }
+            lo = v3(fminf(lo.x, v.x), fminf(lo.y, v.y), fminf(lo.z, v.z));
+            hi = v3(fmaxf(hi.x, v.x), fmaxf(hi.y, v.y), fmaxf(hi.z, v.z));
         }
-    for (int i = 0; i < 3; i++)
-        extent = fmax(extent, hi[i] - lo[i]);
-    double size = extent / longest;
-    size_t total = 1;
-    for (int i = 0; i < 3; i++) {
-        r->cells[i] = (int)ceil((hi[i] - lo[i]) / size) + 1;
-        total *= (size_t)r->cells[i];
-    }
-    r->cells_min = v3((float)lo[0], (float)lo[1], (float)lo[2]);
-    r->cell_inv_size = (float)(1.0 / size);
-    r->bsdf_cells = calloc(total, 1);
-    if (!r->bsdf_cells)
-        return sg_fail(err, "%s: out of memory for the guide's cell grid", s->path);
-    /* 9 probes per cell: the centre and 8 points halfway to the corners */
-    for (int z = 0; z < r->cells[2]; z++)
-        for (int y = 0; y < r->cells[1]; y++)
-            for (int x = 0; x < r->cells[0]; x++) {
-                int verdict = -1;
-                for (int k = 0; k < 9 && verdict != 0; k++) {
-                    double f[3] = {0.5, 0.5, 0.5};
-                    if (k < 8)
-                        for (int i = 0; i < 3; i++)
-                            f[i] = (k >> i & 1) ? 0.75 : 0.25;
-                    double w[3] = {lo[0] + (x + f[0]) * size + r->centre[0],
-                                   lo[1] + (y + f[1]) * size + r->centre[1],
-                                   lo[2] + (z + f[2]) * size + r->centre[2]};
-                    int a = probe_at_light(r, w);
-                    if (a >= 0)
-                        verdict = a;
-                }
-                r->bsdf_cells[((size_t)z * r->cells[1] + y) * r->cells[0] + x] = verdict == 1;
-            }
+    SgError e;
+    r->learner = sg_mixture_learner_create(lo, hi, 32, (uint32_t)(r->tiles_x * r->tiles_y),
+                                           SG_MIXTURE_INITIAL, &e);
+    if (!r->learner)
+        return sg_fail(err, "%s: %s", path, e.message);
     return true;
-}
-
-static bool in_bsdf_cell(const SgRenderer *r, Vec3 p)
-{
-    if (!r->bsdf_cells)
-        return false;
-    int c[3];
-    float v[3] = {(p.x - r->cells_min.x) * r->cell_inv_size, (p.y - r->cells_min.y) * r->cell_inv_size,
-                  (p.z - r->cells_min.z) * r->cell_inv_size};
-    for (int i = 0; i < 3; i++) {
-        if (!(v[i] >= 0.0f && v[i] < (float)r->cells[i]))
-            return false;
-        c[i] = (int)v[i];
-    }
-    return r->bsdf_cells[((size_t)c[2] * r->cells[1] + c[1]) * r->cells[0] + c[0]] != 0;
 }
 
 SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgError *err)
@@ -365,7 +277,7 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
     if (o->sampling != SG_SAMPLING_BSDF && !o->guide.importance_point)
         return sg_fail(err, "%s: %s sampling needs an importance cache", path,
                        sg_sampling_name(o->sampling)), NULL;
-    if (o->sampling == SG_SAMPLING_GUIDED && !(o->alpha > 0.0f && o->alpha <= 1.0f))
+    if (o->sampling == SG_SAMPLING_GUIDED && o->alpha != SG_ALPHA_LEARNED && !(o->alpha > 0.0f && o->alpha <= 1.0f))
         return sg_fail(err, "%s: the mixture weight alpha must be in (0, 1] to stay unbiased", path), NULL;
     if (!(o->lobe_exponent >= 0.0f && o->lobe_exponent <= 1e5f))
         return sg_fail(err, "%s: lobe exponent must be in [0, 1e5]", path), NULL;
@@ -381,6 +293,8 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
     if (!r)
         return sg_fail(err, "%s: out of memory", path), NULL;
     r->opt = *o;
+    r->tiles_x = (o->width + TILE - 1) / TILE;
+    r->tiles_y = (o->height + TILE - 1) / TILE;
     double extent = 0.0;
     for (int i = 0; i < 3; i++) {
         r->centre[i] = 0.5 * (s->bounds_min[i] + s->bounds_max[i]);
@@ -455,7 +369,8 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         return NULL;
     }
     setup_camera(r, s);
-    if (o->sampling == SG_SAMPLING_GUIDED && !setup_bsdf_cells(r, s, err)) {
+    if (o->sampling == SG_SAMPLING_GUIDED && o->alpha == SG_ALPHA_LEARNED && r->light_count &&
+        !setup_learner(r, path, err)) {
         sg_renderer_free(r);
         return NULL;
     }
@@ -503,8 +418,7 @@ void sg_renderer_free(SgRenderer *r)
     free(r->light_tris);
     free(r->light_tri_cdf);
     free(r->follow_cdf);
-    free(r->light_centre);
-    free(r->bsdf_cells);
+    sg_mixture_learner_free(r->learner);
     free(r->sum);
     free(r->last);
     free(r);
@@ -658,7 +572,7 @@ typedef struct PathStats {
 
 /* Direction toward the guide's importance point, or false. */
 
-static bool guide_axis(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, Vec3 *axis, bool *at_light)
+static bool guide_axis(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, Vec3 *axis)
 {
     float u = sg_rng_float(rng); /* drawn always: keeps the streams aligned */
     if (!r->light_count || r->follow_cdf[r->light_count - 1] <= 0.0)
@@ -670,27 +584,37 @@ static bool guide_axis(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, Vec3 *ax
     double q[3];
     if (!r->opt.guide.importance_point(r->opt.guide.ctx, world, l, q))
         return false;
-    /* the importance point of a node that sees the light is the light's
-     * position (stored as float by the cache) */
-    double to_light[3] = {q[0] - (r->light_centre[3 * l] + r->centre[0]),
-                          q[1] - (r->light_centre[3 * l + 1] + r->centre[1]),
-                          q[2] - (r->light_centre[3 * l + 2] + r->centre[2])};
-    *at_light = d3_length(to_light) < 1e-4 * r->scale;
     double d[3] = {q[0] - (p.x + r->centre[0]), q[1] - (p.y + r->centre[1]), q[2] - (p.z + r->centre[2])};
     double len = d3_length(d);
     /* a point at the shading point has no direction; one at infinity (a
      * bad guide) would give a NaN axis that passes the test below */
     if (!(len > 1e-6 * r->scale) || !isfinite(len))
         return false;
-    Vec3 a = v3((float)(d[0] / len), (float)(d[1] / len), (float)(d[2] / len));
+    double inv = 1.0 / len;
+    Vec3 a = v3((float)(d[0] * inv), (float)(d[1] * inv), (float)(d[2] * inv));
     if (v3_dot(a, n) <= 0.0f)
         return false; /* below the surface: back to BSDF sampling */
     *axis = a;
     return true;
 }
 
-static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st, bool first_pass)
+/* A guided bounce waiting for the rest of its path, for the learner. */
+typedef struct PendingRecord {
+    uint32_t region;
+    float pdf_bsdf, cos_axis, cos_mirror, pdf;
+    Vec3 beta;     /* path throughput before the bounce */
+    Vec3 radiance; /* radiance gathered before the bounce */
+} PendingRecord;
+
+#define MAX_PENDING 32
+
+/* Where the path learns (`learn_tile` >= 0): every guided bounce becomes a
+ * record of its one-sample estimate, known once the path has ended. */
+static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st, bool first_pass,
+                       int learn_tile)
 {
+    PendingRecord pending[MAX_PENDING];
+    int pending_count = 0;
     Vec3 radiance = v3(0, 0, 0);
     Vec3 beta = v3(1, 1, 1);
     /* What beta would be under BSDF sampling (the product of albedos):
@@ -764,15 +688,18 @@ static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStat
                                                m->diffuse_weight);
             BounceSampler bs = {0, {lobe, n, r->opt.lobe_exponent, 1.0f}};
             Vec3 axis;
-            bool at_light = false;
-            bool guided = mode != SG_SAMPLING_BSDF && !(mode == SG_SAMPLING_GUIDED && in_bsdf_cell(r, h.p)) &&
-                          guide_axis(r, h.p, n, rng, &axis, &at_light);
-            /* Where the importance point is the light itself the light is in
-             * view and next-event estimation already samples it: the guided
-             * mode keeps to the BSDF there (a rule on the position alone,
-             * so it stays unbiased). The paper's rule has its own test. */
-            if (mode == SG_SAMPLING_GUIDED && at_light)
-                guided = false;
+            /* guided: the region's learned alpha; where it is the BSDF
+             * alone the guide is asked only by paths that learn */
+            SgMixtureCandidate mix = {r->opt.alpha, r->opt.lobe_exponent};
+            uint32_t region = SG_NO_REGION;
+            bool learn = false;
+            if (mode == SG_SAMPLING_GUIDED && r->learner) {
+                region = sg_mixture_lookup(sg_mixture_view(r->learner), h.p, n, &mix, &learn);
+                learn = learn && learn_tile >= 0 && pending_count < MAX_PENDING;
+            }
+            bool guided = mode == SG_SAMPLING_SKELETON ||
+                          (mode == SG_SAMPLING_GUIDED && (mix.alpha < 1.0f || learn));
+            guided = guided && guide_axis(r, h.p, n, rng, &axis);
             Vec3 origin = offset_origin(r, h.p, n);
 
             /* next-event estimation */
@@ -823,7 +750,7 @@ static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStat
                     if (!lit) /* the paper: lobe only where not directly lit */
                         bs = (BounceSampler){1, {lobe, axis, r->opt.lobe_exponent, 0.0f}};
                 } else {
-                    bs = (BounceSampler){2, {lobe, axis, r->opt.lobe_exponent, r->opt.alpha}};
+                    bs = (BounceSampler){mix.alpha < 1.0f ? 2 : 0, {lobe, axis, mix.exponent, mix.alpha}};
                 }
             }
             if (nee_pdf > 0.0f) {
@@ -834,9 +761,27 @@ static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStat
             float u0 = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
             Vec3 wi = bounce_sample(&bs, u0, u1, u2);
             float cos_x = v3_dot(wi, n);
-            float pdf = bounce_pdf(&bs, wi);
+            float pdf, pdf_bsdf = 0.0f, pdf_lobe = 0.0f;
+            if (bs.kind == 2 || (learn && guided)) {
+                /* the mixture's two parts, which the learner needs too */
+                pdf_bsdf = sg_pdf_glossy(&lobe, wi);
+                pdf_lobe = sg_pdf_folded_lobe(axis, n, mix.exponent, wi);
+                pdf = bs.kind == 2 ? mix.alpha * pdf_bsdf + (1.0f - mix.alpha) * pdf_lobe : pdf_bsdf;
+            } else {
+                pdf = bounce_pdf(&bs, wi);
+            }
             if (!(cos_x > 0.0f) || !(pdf > 0.0f))
                 break; /* below the surface: f = 0, the path ends */
+            if (learn && guided) {
+                PendingRecord *pr = &pending[pending_count++];
+                pr->region = region;
+                pr->pdf_bsdf = pdf_bsdf;
+                pr->cos_axis = v3_dot(wi, axis);
+                pr->cos_mirror = v3_dot(wi, v3_sub(axis, v3_scale(n, 2.0f * v3_dot(axis, n))));
+                pr->pdf = pdf;
+                pr->beta = beta;
+                pr->radiance = radiance;
+            }
             Vec3 f = eval_bsdf(m, &lobe, wi);
             beta = v3_mul(beta, v3_scale(f, cos_x / pdf));
             rr_beta = v3_mul(rr_beta, v3_add(m->kd, m->ks));
@@ -858,6 +803,18 @@ static Vec3 trace_path(const SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStat
         if (!(v3_max_component(beta) > 0.0f))
             break;
     }
+    for (int i = 0; i < pending_count; i++) {
+        const PendingRecord *pr = &pending[i];
+        /* the bounce's one-sample estimate: what came after, per unit throughput */
+        Vec3 after = v3_sub(radiance, pr->radiance);
+        Vec3 est = v3(pr->beta.x > 0.0f ? after.x / pr->beta.x : 0.0f,
+                      pr->beta.y > 0.0f ? after.y / pr->beta.y : 0.0f,
+                      pr->beta.z > 0.0f ? after.z / pr->beta.z : 0.0f);
+        float v = luminance(est);
+        float t = luminance(pr->beta);
+        SgMixtureRecord rec = {pr->region, pr->pdf_bsdf, pr->cos_axis, pr->cos_mirror, pr->pdf, v, t * t};
+        sg_mixture_record(r->learner, (uint32_t)learn_tile, &rec);
+    }
     return radiance;
 }
 
@@ -876,6 +833,31 @@ static uint64_t mix64(uint64_t x)
     x *= 0x94d049bb133111ebULL;
     x ^= x >> 31;
     return x;
+}
+
+/* Which paths teach the learner: all in the first passes, then a share
+ * that halves as the passes double (1/2, 1/4, ... down to 1/64), chosen by
+ * a hash of pixel and pass so that every pixel takes turns. Learning costs
+ * a cache query at every bounce; what it learns matters most early. */
+#define LEARN_WARMUP_PASSES 2
+#define LEARN_STRIDE_MAX 64
+
+/* At most this many learning paths per pass (~20 MB of records), whatever
+ * the image size: a large image learns from a share of its pixels. */
+#define LEARN_PATHS_MAX 131072
+
+static bool learns(const PassCtx *pc, size_t pix)
+{
+    const SgRenderer *r = pc->r;
+    uint64_t pixels = (uint64_t)r->opt.width * (uint64_t)r->opt.height;
+    uint64_t stride = 1;
+    while (pixels / stride > LEARN_PATHS_MAX)
+        stride *= 2;
+    int pass = r->spp;
+    if (pass >= LEARN_WARMUP_PASSES)
+        for (int p = 2; p <= pass && stride < LEARN_STRIDE_MAX; p *= 2)
+            stride *= 2;
+    return stride == 1 || mix64(pc->pass_key ^ (pix * 0x9e3779b97f4a7c15ULL)) % stride == 0;
 }
 
 static void render_tile(void *vctx, uint64_t index, int thread)
@@ -897,7 +879,8 @@ static void render_tile(void *vctx, uint64_t index, int thread)
             float sy = (1.0f - 2.0f * ((float)y + jy) / (float)hgt) * r->tan_half_fov;
             Vec3 dir = v3_normalize(v3_add(r->cam_forward,
                                            v3_add(v3_scale(r->cam_right, sx), v3_scale(r->cam_up, sy))));
-            Vec3 L = trace_path(r, r->cam_pos, dir, &rng, &st, pc->first_pass);
+            int learn_tile = r->learner && learns(pc, pix) ? (int)index : -1;
+            Vec3 L = trace_path(r, r->cam_pos, dir, &rng, &st, pc->first_pass, learn_tile);
             if (!isfinite(L.x) || !isfinite(L.y) || !isfinite(L.z)) {
                 nonfinite++;
                 L = v3(0, 0, 0);
@@ -922,6 +905,8 @@ void sg_renderer_pass(SgRenderer *r)
                   mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1), r->spp == 0};
     int tiles_y = (r->opt.height + TILE - 1) / TILE;
     sg_parallel_for((uint64_t)pc.tiles_x * tiles_y, r->opt.threads, render_tile, &pc);
+    if (r->learner)
+        sg_mixture_update(r->learner);
     r->spp++;
 }
 
@@ -937,6 +922,11 @@ void sg_renderer_image(const SgRenderer *r, float *rgb)
 
 const float *sg_renderer_last_pass(const SgRenderer *r) { return r->last; }
 uint64_t sg_renderer_nonfinite(const SgRenderer *r) { return atomic_load(&((SgRenderer *)r)->nonfinite); }
+double sg_renderer_guided_fraction(const SgRenderer *r)
+{
+    return r->learner ? sg_mixture_guided_fraction(r->learner) : -1.0;
+}
+
 uint64_t sg_renderer_rays(const SgRenderer *r) { return atomic_load(&((SgRenderer *)r)->rays); }
 
 double sg_renderer_backface_fraction(const SgRenderer *r)

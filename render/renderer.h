@@ -41,6 +41,8 @@ typedef struct SgGuide {
     double query_offset;
 } SgGuide;
 
+#define SG_ALPHA_LEARNED (-1.0f)
+
 typedef struct SgRenderOptions {
     int width, height;
     int max_depth;        /* maximum path length in segments from the camera */
@@ -48,13 +50,15 @@ typedef struct SgRenderOptions {
     uint64_t seed;
     int threads;          /* <= 0: every core */
     float lobe_exponent;  /* p_skel of the cosine-power lobe toward the importance point */
-    float alpha;          /* guided: probability of BSDF sampling in the mixture, (0, 1] */
+    /* guided: probability of BSDF sampling in the mixture, in (0, 1]; or
+     * SG_ALPHA_LEARNED: chosen per region of the scene from the second
+     * moments of the bounces traced so far (render/mixture_learning.h) */
+    float alpha;
     SgGuide guide;
 } SgRenderOptions;
 
 /* Defaults: image size and depth from the scene (320x240, 8 when not
- * given), bsdf sampling, seed 0, every core, p_skel 8, alpha 0.75
- * (best of a sweep on the corridor: docs/render.md). */
+ * given), bsdf sampling, seed 0, every core, lobe exponent 16, alpha learned. */
 void sg_render_options_default(SgRenderOptions *o, const SgScene *scene);
 
 typedef struct SgRenderer SgRenderer;
@@ -76,6 +80,9 @@ uint64_t sg_renderer_nonfinite(const SgRenderer *r);
 /* Fraction of the first pass's camera rays that hit the back of a surface:
  * near 1 means the camera is inside a solid. */
 double sg_renderer_backface_fraction(const SgRenderer *r);
+/* Guided with a learned alpha: the share of the learner's bounces that
+ * fall where the mixture now uses the lobe (alpha < 1); -1 otherwise. */
+double sg_renderer_guided_fraction(const SgRenderer *r);
 /* Rays traced so far (camera, bounce and shadow rays). */
 uint64_t sg_renderer_rays(const SgRenderer *r);
 

@@ -1,0 +1,387 @@
+#include "mixture_learning.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* BSDF alone first: with equal estimates the cheaper, safer choice wins. */
+const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES] = {
+    {1.0f, 16.0f}, {0.8f, 4.0f}, {0.8f, 16.0f}, {0.8f, 64.0f}, {0.6f, 4.0f}, {0.6f, 16.0f}, {0.6f, 64.0f}};
+const float sg_mixture_exponents[SG_MIXTURE_EXPONENTS] = {4.0f, 16.0f, 64.0f};
+
+/* Which of sg_mixture_exponents each candidate's lobe has. */
+static const int candidate_exponent[SG_MIXTURE_CANDIDATES] = {1, 0, 1, 2, 0, 1, 2};
+
+/* Samples a region needs before its own estimate is trusted, and after
+ * which it stops learning. */
+#define MIN_SAMPLES 256u
+#define SETTLED_SAMPLES 4096
+#define STATE_INITIAL 7
+#define STATE_SETTLED 8
+
+/* A record as kept: its terms computed by the thread that made it, so that
+ * the sequential sum after the pass is only additions. */
+typedef struct StoredRecord {
+    uint32_t region;
+    float estimate;                    /* v */
+    float weight;                      /* w: the bounce's weight in the image */
+    float term[SG_MIXTURE_CANDIDATES]; /* v^2 p / p_k */
+} StoredRecord;
+
+typedef struct RecordBuffer {
+    StoredRecord *data;
+    size_t count, capacity;
+} RecordBuffer;
+
+typedef struct RegionStats {
+    double moment[SG_MIXTURE_CANDIDATES]; /* sums of w v^2 p / p_k */
+    double weight, weighted;              /* sums of w and of w v */
+    uint64_t samples;
+    /* what the region adds to its level's totals under its current choice */
+    double variance, cost;
+} RegionStats;
+
+/* One level of regions (fine or coarse): sums over its regions of the
+ * image variance and the cost of their current choices. */
+typedef struct Totals {
+    double variance, cost;
+} Totals;
+
+/* Cost of a guided bounce relative to a BSDF one (cache query, densities
+ * of the lobe), measured on the corridor and the Cornell box. */
+#define GUIDED_COST 1.25
+/* A coarse region is this many fine cells on a side: it answers for the
+ * fine regions that have too few samples of their own. */
+#define COARSE 4
+
+struct SgMixtureLearner {
+    int cells[3];          /* fine grid */
+    int coarse_cells[3];
+    Vec3 lo;
+    float inv_size;
+    uint32_t region_count, coarse_count;
+    int initial;
+    /* per fine region, all the renderer reads at a bounce (one byte, so
+     * that the table stays in cache): the candidate in use (STATE_INITIAL:
+     * none yet) and STATE_SETTLED once the region stops learning */
+    uint8_t *state;
+    int8_t *choice;        /* per fine region: candidate index, -1 too few samples */
+    int8_t *coarse_choice; /* per coarse region */
+    RegionStats *stats;    /* per fine region */
+    RegionStats *coarse;   /* per coarse region */
+    Totals fine_totals, coarse_totals, global_totals;
+    RegionStats global;    /* the whole scene: answers where a coarse region cannot yet */
+    int8_t global_choice;
+    uint32_t *touched;     /* fine regions, then coarse ones, with new records */
+    uint8_t *is_touched, *coarse_touched;
+    uint32_t *coarse_of;   /* fine region -> coarse region */
+    uint32_t tiles;
+    RecordBuffer *buffers; /* per tile */
+    SgMixtureView view;
+};
+
+SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest, uint32_t tiles,
+                                            int initial, SgError *err)
+{
+    float ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+    float longest = fmaxf(ext[0], fmaxf(ext[1], ext[2]));
+    if (!(longest > 0.0f) || !isfinite(longest) || cells_longest < 1 || cells_longest > 1024 || initial < 0 ||
+        initial >= SG_MIXTURE_CANDIDATES)
+        return sg_fail(err, "mixture learner: bad bounds or cell count"), NULL;
+    SgMixtureLearner *l = calloc(1, sizeof *l);
+    if (!l)
+        return sg_fail(err, "mixture learner: out of memory"), NULL;
+    float size = longest / (float)cells_longest;
+    size_t cells = 1, coarse = 1;
+    for (int i = 0; i < 3; i++) {
+        l->cells[i] = (int)ceilf(ext[i] / size) + 1;
+        l->coarse_cells[i] = (l->cells[i] + COARSE - 1) / COARSE;
+        cells *= (size_t)l->cells[i];
+        coarse *= (size_t)l->coarse_cells[i];
+    }
+    l->lo = lo;
+    l->inv_size = 1.0f / size;
+    l->region_count = (uint32_t)(cells * 6);
+    l->coarse_count = (uint32_t)(coarse * 6);
+    l->initial = initial;
+    l->tiles = tiles;
+    l->choice = malloc(l->region_count);
+    l->state = malloc(l->region_count);
+    l->coarse_choice = malloc(l->coarse_count);
+    l->touched = malloc(sizeof *l->touched * ((size_t)l->region_count + l->coarse_count));
+    l->is_touched = calloc(l->region_count, 1);
+    l->coarse_touched = calloc(l->coarse_count, 1);
+    l->stats = calloc(l->region_count, sizeof *l->stats);
+    l->coarse = calloc(l->coarse_count, sizeof *l->coarse);
+    l->coarse_of = malloc(sizeof *l->coarse_of * l->region_count);
+    l->buffers = calloc(tiles ? tiles : 1, sizeof *l->buffers);
+    if (!l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched || !l->coarse_touched || !l->stats ||
+        !l->coarse || !l->coarse_of || !l->buffers) {
+        sg_mixture_learner_free(l);
+        return sg_fail(err, "mixture learner: out of memory for %u regions", (unsigned)(cells * 6)), NULL;
+    }
+    for (int z = 0; z < l->cells[2]; z++)
+        for (int y = 0; y < l->cells[1]; y++)
+            for (int x = 0; x < l->cells[0]; x++) {
+                size_t fine = ((size_t)z * l->cells[1] + y) * l->cells[0] + x;
+                size_t c = ((size_t)(z / COARSE) * l->coarse_cells[1] + y / COARSE) * l->coarse_cells[0] +
+                           x / COARSE;
+                for (int bin = 0; bin < 6; bin++)
+                    l->coarse_of[fine * 6 + bin] = (uint32_t)(c * 6 + bin);
+            }
+    memset(l->choice, -1, l->region_count);
+    memset(l->state, STATE_INITIAL, l->region_count);
+    l->view.lo = lo;
+    l->view.inv_size = l->inv_size;
+    for (int i = 0; i < 3; i++)
+        l->view.cells[i] = (float)l->cells[i];
+    l->view.stride_y = l->cells[0];
+    l->view.stride_z = l->cells[0] * l->cells[1];
+    l->view.state = l->state;
+    for (int k = 0; k < 8; k++)
+        l->view.of_state[k] = sg_mixture_candidates[k < SG_MIXTURE_CANDIDATES ? k : initial];
+    memset(l->coarse_choice, -1, l->coarse_count);
+    l->global_choice = -1;
+    return l;
+}
+
+void sg_mixture_learner_free(SgMixtureLearner *l)
+{
+    if (!l)
+        return;
+    if (l->buffers)
+        for (uint32_t t = 0; t < l->tiles; t++)
+            free(l->buffers[t].data);
+    free(l->buffers);
+    free(l->choice);
+    free(l->state);
+    free(l->coarse_choice);
+    free(l->touched);
+    free(l->is_touched);
+    free(l->coarse_touched);
+    free(l->stats);
+    free(l->coarse);
+    free(l->coarse_of);
+    free(l);
+}
+
+uint32_t sg_mixture_region(const SgMixtureLearner *l, Vec3 p, Vec3 n)
+{
+    float v[3] = {(p.x - l->lo.x) * l->inv_size, (p.y - l->lo.y) * l->inv_size, (p.z - l->lo.z) * l->inv_size};
+    int c[3];
+    for (int i = 0; i < 3; i++) {
+        if (!(v[i] >= 0.0f && v[i] < (float)l->cells[i]))
+            return SG_NO_REGION;
+        c[i] = (int)v[i];
+    }
+    float a[3] = {fabsf(n.x), fabsf(n.y), fabsf(n.z)};
+    int axis = a[0] >= a[1] && a[0] >= a[2] ? 0 : (a[1] >= a[2] ? 1 : 2);
+    float s = axis == 0 ? n.x : (axis == 1 ? n.y : n.z);
+    uint32_t bin = (uint32_t)(2 * axis + (s < 0.0f));
+    size_t cell = ((size_t)c[2] * l->cells[1] + c[1]) * l->cells[0] + c[0];
+    return (uint32_t)(cell * 6 + bin);
+}
+
+SgMixtureCandidate sg_mixture_choice(const SgMixtureLearner *l, uint32_t region)
+{
+    return l->view.of_state[region < l->region_count ? l->state[region] & 7 : STATE_INITIAL];
+}
+
+bool sg_mixture_learning(const SgMixtureLearner *l, uint32_t region)
+{
+    return region < l->region_count && !(l->state[region] & STATE_SETTLED);
+}
+
+const SgMixtureView *sg_mixture_view(const SgMixtureLearner *l) { return &l->view; }
+
+static void refresh_state(SgMixtureLearner *l, uint32_t region)
+{
+    int k = l->choice[region];
+    if (k < 0)
+        k = l->coarse_choice[l->coarse_of[region]];
+    if (k < 0)
+        k = l->global_choice;
+    l->state[region] = (uint8_t)((k < 0 ? STATE_INITIAL : k) |
+                                 (l->stats[region].samples >= SETTLED_SAMPLES ? STATE_SETTLED : 0));
+}
+
+void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord *rec)
+{
+    if (tile >= l->tiles || rec->region >= l->region_count)
+        return;
+    RecordBuffer *b = &l->buffers[tile];
+    if (b->count == b->capacity) {
+        size_t cap = b->capacity ? 2 * b->capacity : 1024;
+        StoredRecord *d = realloc(b->data, cap * sizeof *d);
+        if (!d)
+            return;
+        b->data = d;
+        b->capacity = cap;
+    }
+    StoredRecord *st = &b->data[b->count++];
+    st->region = rec->region;
+    st->weight = rec->weight;
+    float v = rec->estimate;
+    if (!(v > 0.0f) || !isfinite(v)) {
+        st->estimate = 0.0f;
+        return;
+    }
+    st->estimate = v;
+    float weight = v * v * rec->pdf;
+    /* the folded lobe's density at each exponent: cos^4, ^16, ^64 by squaring */
+    float lobe[SG_MIXTURE_EXPONENTS];
+    float c1 = fminf(fmaxf(rec->cos_axis, 0.0f), 1.0f), c2 = fminf(fmaxf(rec->cos_mirror, 0.0f), 1.0f);
+    for (int e = 0; e < SG_MIXTURE_EXPONENTS; e++) {
+        for (int s = 0; s < 2; s++) { /* 4 = 2^2, then 2 more squarings per step */
+            c1 *= c1;
+            c2 *= c2;
+        }
+        lobe[e] = (sg_mixture_exponents[e] + 1.0f) * (0.5f / 3.14159265f) * (c1 + c2);
+    }
+    for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++) {
+        float a = sg_mixture_candidates[k].alpha;
+        float p = a * rec->pdf_bsdf + (1.0f - a) * lobe[candidate_exponent[k]];
+        /* p = 0: that candidate could never have drawn this direction,
+         * which carries light: it would be biased */
+        st->term[k] = p > 0.0f ? weight / p : INFINITY;
+    }
+}
+
+static void add_record(RegionStats *st, const StoredRecord *rec)
+{
+    st->samples++;
+    double w = rec->weight;
+    if (!(w > 0.0) || !isfinite(w))
+        return;
+    st->weight += w; /* a bounce that brought nothing back still counts */
+    if (rec->estimate == 0.0f)
+        return;
+    st->weighted += w * rec->estimate;
+    for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++)
+        st->moment[k] += w * rec->term[k];
+}
+
+/* The region's share of the image variance under candidate k: its bounces'
+ * weighted variance, summed (so a region many paths cross counts more). */
+static double region_variance(const RegionStats *st, int k)
+{
+    double mean2 = st->weight > 0.0 ? st->weighted * st->weighted / st->weight : 0.0;
+    return fmax(0.0, st->moment[k] - mean2);
+}
+
+static double region_cost(const RegionStats *st, int k)
+{
+    return (double)st->samples * (k == 0 ? 1.0 : GUIDED_COST);
+}
+
+/* The candidate that makes the image's variance times render time least,
+ * the other regions' choices given: (V_rest + V_k) (T_rest + T_k), where
+ * V_rest, T_rest are the level's totals without this region. Or -1 with
+ * too few samples. A region whose bounces weigh little in the image cannot
+ * pay for the guide's cost however much it would lower its own variance. */
+static int best_candidate(const RegionStats *st, const Totals *t)
+{
+    if (st->samples < MIN_SAMPLES)
+        return -1;
+    double v_rest = fmax(0.0, t->variance - st->variance), t_rest = fmax(0.0, t->cost - st->cost);
+    int best = 0;
+    double best_score = INFINITY;
+    for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++) {
+        double score = (v_rest + region_variance(st, k)) * (t_rest + region_cost(st, k));
+        if (score < best_score) {
+            best = k;
+            best_score = score;
+        }
+    }
+    return best;
+}
+
+/* Re-chooses a region and keeps its level's totals current. */
+static int choose(RegionStats *st, Totals *t)
+{
+    int k = best_candidate(st, t);
+    int counted = k < 0 ? 0 : k;
+    t->variance -= st->variance;
+    t->cost -= st->cost;
+    st->variance = region_variance(st, counted);
+    st->cost = region_cost(st, counted);
+    t->variance += st->variance;
+    t->cost += st->cost;
+    return k;
+}
+
+void sg_mixture_update(SgMixtureLearner *l)
+{
+    uint32_t fine = 0, coarse = 0;
+    uint32_t *coarse_list = l->touched + l->region_count;
+    for (uint32_t t = 0; t < l->tiles; t++) {
+        RecordBuffer *b = &l->buffers[t];
+        for (size_t i = 0; i < b->count; i++) {
+            const StoredRecord *rec = &b->data[i];
+            uint32_t c = l->coarse_of[rec->region];
+            add_record(&l->stats[rec->region], rec);
+            add_record(&l->coarse[c], rec);
+            add_record(&l->global, rec);
+            if (!l->is_touched[rec->region]) {
+                l->is_touched[rec->region] = 1;
+                l->touched[fine++] = rec->region;
+            }
+            if (!l->coarse_touched[c]) {
+                l->coarse_touched[c] = 1;
+                coarse_list[coarse++] = c;
+            }
+        }
+        b->count = 0;
+    }
+    int8_t g = (int8_t)choose(&l->global, &l->global_totals);
+    if (g != l->global_choice) {
+        l->global_choice = g; /* rare: every region that follows it looks again */
+        for (uint32_t i = 0; i < l->region_count; i++)
+            refresh_state(l, i);
+    }
+    for (uint32_t i = 0; i < fine; i++) {
+        l->is_touched[l->touched[i]] = 0;
+        l->choice[l->touched[i]] = (int8_t)choose(&l->stats[l->touched[i]], &l->fine_totals);
+        refresh_state(l, l->touched[i]);
+    }
+    for (uint32_t i = 0; i < coarse; i++) {
+        uint32_t c = coarse_list[i];
+        l->coarse_touched[c] = 0;
+        int8_t k = (int8_t)choose(&l->coarse[c], &l->coarse_totals);
+        if (k == l->coarse_choice[c])
+            continue;
+        l->coarse_choice[c] = k;
+        /* the fine regions it answers for: its cells, same normal bin */
+        uint32_t cell = c / 6, bin = c % 6;
+        int cx = (int)(cell % (uint32_t)l->coarse_cells[0]);
+        int cy = (int)(cell / (uint32_t)l->coarse_cells[0] % (uint32_t)l->coarse_cells[1]);
+        int cz = (int)(cell / ((uint32_t)l->coarse_cells[0] * (uint32_t)l->coarse_cells[1]));
+        for (int z = cz * COARSE; z < (cz + 1) * COARSE && z < l->cells[2]; z++)
+            for (int y = cy * COARSE; y < (cy + 1) * COARSE && y < l->cells[1]; y++)
+                for (int x = cx * COARSE; x < (cx + 1) * COARSE && x < l->cells[0]; x++) {
+                    size_t f = ((size_t)z * l->cells[1] + y) * l->cells[0] + x;
+                    if (l->choice[f * 6 + bin] < 0)
+                        refresh_state(l, (uint32_t)(f * 6 + bin));
+                }
+    }
+}
+
+uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region)
+{
+    return region < l->region_count ? l->stats[region].samples : 0;
+}
+
+uint32_t sg_mixture_region_count(const SgMixtureLearner *l) { return l->region_count; }
+
+double sg_mixture_guided_fraction(const SgMixtureLearner *l)
+{
+    /* weighted by the bounces each region has seen */
+    double all = 0.0, guided = 0.0;
+    for (uint32_t i = 0; i < l->region_count; i++) {
+        double n = (double)l->stats[i].samples;
+        all += n;
+        if (n > 0.0 && sg_mixture_choice(l, i).alpha < 1.0f)
+            guided += n;
+    }
+    return all > 0.0 ? guided / all : 0.0;
+}

@@ -1,0 +1,146 @@
+/* The guided mode's mixture, learned per region of the scene.
+ *
+ * The one-sample mixture draws a bounce from the BSDF with probability
+ * alpha and from a cosine-power lobe toward the skeleton's importance point
+ * otherwise. Which mixture is best depends on the place: where light
+ * arrives along the skeleton's direction the lobe wins (narrow far from the
+ * light, wide near it), where the guide points at a wall the BSDF does:
+ * the paper's future work ("blend the two sampling approaches", strength
+ * chosen by region), learned while rendering.
+ *
+ * Regions are cells of a uniform grid over the scene's bounds, split by the
+ * dominant axis of the shading normal (6 bins), so that the two sides of a
+ * thin wall learn apart. Coarse regions (4x4x4 cells) answer for fine ones
+ * with too few samples, the whole scene for coarse ones.
+ *
+ * For each candidate (alpha, exponent) the learner estimates from the
+ * bounces traced so far the variance it would give: a bounce drawn from the
+ * current density p, with one-sample estimate v (its contribution over p),
+ * adds
+ *     w v^2 p / (alpha_k p_bsdf + (1 - alpha_k) p_lobe_k)
+ * to candidate k's sum, an unbiased estimate of that candidate's second
+ * moment whichever density drew the sample; minus w times the squared mean
+ * of v (the same for all) it is the region's share of the image's
+ * variance, w being the bounce's weight in its pixel (its squared
+ * throughput). A region takes the candidate that makes the whole image's
+ * variance times render time least, the other regions' choices given,
+ * counting a guided bounce as GUIDED_COST BSDF ones: so a region whose
+ * bounces weigh little in the image cannot pay for the cache query however
+ * much it would lower its own variance.
+ *
+ * Unbiased: a pass uses only the choices made after the previous passes,
+ * which are fixed before it starts, so each pass is an unbiased estimate.
+ * Deterministic for any thread count: records are kept per image tile and
+ * summed in tile order after the pass. */
+#ifndef SG_MIXTURE_LEARNING_H
+#define SG_MIXTURE_LEARNING_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "error.h"
+#include "vecmath.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SG_NO_REGION UINT32_MAX
+#define SG_MIXTURE_CANDIDATES 7
+#define SG_MIXTURE_EXPONENTS 3
+
+/* A choice of mixture: BSDF probability and lobe exponent. */
+typedef struct SgMixtureCandidate {
+    float alpha, exponent;
+} SgMixtureCandidate;
+
+/* Candidate 0 is the BSDF alone; the others pair alpha 0.8 or 0.6 with a
+ * wide, middle or narrow lobe (exponents 4, 16, 64: the paper's adaptive
+ * strength, "small near direct lighting, strong far away"). */
+extern const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES];
+extern const float sg_mixture_exponents[SG_MIXTURE_EXPONENTS];
+/* Where a region (and its coarse region) has too few samples yet: a mild
+ * mixture, so that the first passes already try the lobe and learn its
+ * worth from its own samples (better on the corridor and the window test
+ * than starting from the BSDF alone; the Cornell box pays ~2% for it). */
+#define SG_MIXTURE_INITIAL 2
+
+/* One guided bounce as the learner sees it. */
+typedef struct SgMixtureRecord {
+    uint32_t region;
+    float pdf_bsdf;  /* BSDF sampler's density of the direction taken */
+    float cos_axis;  /* its cosine with the lobe's axis, and with the axis */
+    float cos_mirror; /* mirrored across the surface (the folded lobe's two halves) */
+    float pdf;       /* density of the mixture that drew it */
+    float estimate;  /* v: the bounce's one-sample estimate (luminance) */
+    float weight;    /* w: its weight in the pixel, the squared throughput before it */
+} SgMixtureRecord;
+
+typedef struct SgMixtureLearner SgMixtureLearner;
+
+/* A grid of `cells_longest` cells along the longest side of [lo, hi]
+ * (local coordinates), `tiles` record buffers (one per image tile).
+ * Candidate `initial` is used where a region has too few samples. */
+SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest, uint32_t tiles,
+                                            int initial, SgError *err);
+void sg_mixture_learner_free(SgMixtureLearner *l);
+
+/* The region of point p with shading normal n, or SG_NO_REGION outside. */
+uint32_t sg_mixture_region(const SgMixtureLearner *l, Vec3 p, Vec3 n);
+/* The mixture to use in a region (SG_NO_REGION: the initial one). */
+SgMixtureCandidate sg_mixture_choice(const SgMixtureLearner *l, uint32_t region);
+/* What a bounce reads from the learner, inline (it runs at every bounce):
+ * the region of p with normal n, its alpha and whether it still learns. */
+typedef struct SgMixtureView {
+    Vec3 lo;
+    float inv_size;
+    float cells[3];
+    int stride_y, stride_z;        /* in cells */
+    const uint8_t *state;          /* per region: candidate (low 3 bits), 8 = settled */
+    SgMixtureCandidate of_state[8];
+} SgMixtureView;
+
+const SgMixtureView *sg_mixture_view(const SgMixtureLearner *l);
+
+static inline uint32_t sg_mixture_lookup(const SgMixtureView *v, Vec3 p, Vec3 n, SgMixtureCandidate *choice,
+                                         bool *learning)
+{
+    float x = (p.x - v->lo.x) * v->inv_size, y = (p.y - v->lo.y) * v->inv_size,
+          z = (p.z - v->lo.z) * v->inv_size;
+    if (!(x >= 0.0f && y >= 0.0f && z >= 0.0f && x < v->cells[0] && y < v->cells[1] && z < v->cells[2])) {
+        *choice = v->of_state[7];
+        *learning = false;
+        return SG_NO_REGION;
+    }
+    float ax = n.x < 0.0f ? -n.x : n.x, ay = n.y < 0.0f ? -n.y : n.y, az = n.z < 0.0f ? -n.z : n.z;
+    uint32_t bin = ax >= ay && ax >= az ? (n.x < 0.0f) : ay >= az ? 2u + (n.y < 0.0f) : 4u + (n.z < 0.0f);
+    uint32_t region = (((uint32_t)z * (uint32_t)v->stride_z + (uint32_t)y * (uint32_t)v->stride_y + (uint32_t)x) * 6u) + bin;
+    uint8_t st = v->state[region];
+    *choice = v->of_state[st & 7];
+    *learning = !(st & 8);
+    return region;
+}
+/* Does the region still learn? One with enough samples is settled: its
+ * choice stays, and paths no longer pay for the cache query there when it
+ * is the BSDF alone. */
+bool sg_mixture_learning(const SgMixtureLearner *l, uint32_t region);
+/* Adds a record to a tile's buffer; only the thread rendering that tile
+ * calls it. A record that does not fit in memory is dropped (learning is
+ * only an aid; the estimate stays unbiased). */
+void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord *rec);
+/* After a pass: sums every tile's records in tile order, re-chooses the
+ * alpha of each region that got samples, empties the buffers. */
+void sg_mixture_update(SgMixtureLearner *l);
+
+/* A region's sample count, for tests and reports. */
+uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region);
+uint32_t sg_mixture_region_count(const SgMixtureLearner *l);
+/* Share of the bounces seen so far that fall in regions whose choice now
+ * uses the lobe (alpha < 1). */
+double sg_mixture_guided_fraction(const SgMixtureLearner *l);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
