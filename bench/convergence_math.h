@@ -447,15 +447,17 @@ void sg_ratio_format(SgReach base, SgReach mode, char *buf, size_t size)
      * on mode the other way */
     int b = sg_reach_bound(base), m = -sg_reach_bound(mode);
     double ratio = base.seconds / mode.seconds;
+    char r[32]; /* two decimals, two significant digits below 0.1 */
+    snprintf(r, sizeof r, ratio >= 0.1 ? "%.2f" : "%.2g", ratio);
     if (b != 0 && m != 0 && b != m)
         snprintf(buf, size, "-");
     else if (b + m < 0)
-        snprintf(buf, size, "< %.2f", ratio);
+        snprintf(buf, size, "< %s", r);
     else if (b + m > 0)
-        snprintf(buf, size, "> %.2f", ratio);
+        snprintf(buf, size, "> %s", r);
     else {
         bool approx = base.kind == SG_REACH_EXTRAPOLATED || mode.kind == SG_REACH_EXTRAPOLATED;
-        snprintf(buf, size, "%s%.2f", approx ? "~" : "", ratio);
+        snprintf(buf, size, "%s%s", approx ? "~" : "", r);
     }
 }
 

@@ -151,6 +151,9 @@ Test(bench_convergence, ratio_to_bsdf_carries_the_marks)
     sg_ratio_format((SgReach){SG_REACH_BEFORE_FIRST, 0.5}, (SgReach){SG_REACH_BEFORE_FIRST, 0.5}, buf,
                     sizeof buf);
     cr_assert_str_eq(buf, "-");
+    sg_ratio_format((SgReach){SG_REACH_INTERPOLATED, 0.5}, (SgReach){SG_REACH_EXTRAPOLATED, 200.0}, buf,
+                    sizeof buf);
+    cr_assert_str_eq(buf, "~0.0025");
     sg_ratio_format(base, (SgReach){SG_REACH_NEVER, 0}, buf, sizeof buf);
     cr_assert_str_eq(buf, "0 (never)");
     sg_ratio_format(base, (SgReach){SG_REACH_NONE, 0}, buf, sizeof buf);

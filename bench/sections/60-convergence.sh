@@ -191,7 +191,7 @@ echo "the first $ref_seconds s long) averaged; their own error is estimated from
 echo
 echo "### References"
 echo
-echo "| scene | size | spp | seconds | own relMSE / mse8 | lowest level relMSE / mse8 | own / level (worst) | verdict | |"
+echo "| scene | size | spp | seconds | own relMSE / mse8 | lowest level relMSE / mse8 | own / level (worst) | verdict | this run |"
 echo "|---|---|---|---|---|---|---|---|---|"
 cat "$tables/reference.md" 2>/dev/null
 echo
