@@ -3,7 +3,7 @@
 #   make test       install missing packages, build, run every test
 #   make demo       install missing packages, build, run the pipeline on data/corridor
 #   make scene SCENE=path/to/scene.json   build out/NAME/ (only steps whose inputs changed)
-#   make bench      speed and error benchmarks (see bench/)
+#   make bench      speed and error benchmarks, writes bench/report.md (bench-quick, bench-long)
 #   make SANITIZE=1 ...  the same with AddressSanitizer + UBSan in build/asan
 
 SHELL := /bin/bash
@@ -68,7 +68,7 @@ TEST_SUPPORT_OBJ := $(TEST_SUPPORT_SRC:%.c=$(BUILD)/%.o)
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
-.PHONY: all test check-tests demo scene bench bench-quick deps bench-deps fuzz fuzz-run clean distclean FORCE
+.PHONY: all test check-tests demo scene bench bench-quick bench-long deps bench-deps fuzz fuzz-run clean distclean FORCE
 .DEFAULT_GOAL := all
 
 all: $(PROGRAMS)
@@ -109,6 +109,10 @@ bench: bench-deps $(PROGRAMS) $(BENCH_BIN)
 
 bench-quick: bench-deps $(PROGRAMS) $(BENCH_BIN)
 	@SG_QUICK=1 SG_BIN=$(abspath $(BIN)) SG_BENCH_BIN=$(abspath $(BUILD)/bench) bash bench/run.sh
+
+# publication-quality numbers: 60 s runs, 5 seeds, 4x the pixels (about 3 hours)
+bench-long: bench-deps $(PROGRAMS) $(BENCH_BIN)
+	@SG_LONG=1 SG_BIN=$(abspath $(BIN)) SG_BENCH_BIN=$(abspath $(BUILD)/bench) bash bench/run.sh
 
 # make fuzz: every tests/fuzz/fuzz_*.c is a libFuzzer target; each runs for
 # FUZZ_SECONDS from its seed corpus tests/fuzz/corpus/NAME/ (new inputs go

@@ -374,8 +374,8 @@ done:
 
 /* The square of side s where the relative squared error of x against ref
  * sums highest (a summed-area table, so every position is O(1)). */
-static bool worst_square(const float *x, const float *ref, int w, int h, int s, int *bx, int *by,
-                         SgError *err)
+static bool worst_square(const float *x, const float *ref, int w, int h, int s, double eps, int *bx,
+                         int *by, SgError *err)
 {
     size_t stride = (size_t)w + 1;
     double *sat = calloc(stride * ((size_t)h + 1), sizeof *sat);
@@ -387,7 +387,7 @@ static bool worst_square(const float *x, const float *ref, int w, int h, int s, 
             for (int c = 0; c < 3; c++) {
                 size_t i = ((size_t)y * w + xx) * 3 + c;
                 double d = (double)x[i] - ref[i];
-                e += d * d / ((double)ref[i] * ref[i] + 0.01);
+                e += d * d / ((double)ref[i] * ref[i] + eps);
             }
             sat[(y + 1) * stride + xx + 1] =
                 e + sat[y * stride + xx + 1] + sat[(y + 1) * stride + xx] - sat[y * stride + xx];
@@ -452,7 +452,7 @@ static int cmd_strip(int argc, char **argv, SgError *err)
         cw = ch = (w < h ? w : h) / 2;
         if (cw < 1)
             cw = ch = 1;
-        if (!worst_square(img[0], ref, w, h, cw, &cx, &cy, err))
+        if (!worst_square(img[0], ref, w, h, cw, 0.01 / exp2(2.0 * exposure), &cx, &cy, err))
             goto done;
     }
     if (cx + cw > w || cy + ch > h) {

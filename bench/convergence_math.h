@@ -94,7 +94,7 @@ int sg_srgb_byte(float linear);
 /* A reference made of two independent halves a and b (same spp) is
  * r = (a + b) / 2; (a - b)^2 / 4 estimates its squared error per value
  * without bias. Returns the reference's own relMSE (render's definition:
- * mean of e^2 / (r^2 + 0.01)) and 8-bit MSE (at `scale` = 2^exposure; the
+ * mean of e^2 / (r^2 + 0.01) on the image times `scale`) and 8-bit MSE (at `scale` = 2^exposure; the
  * byte difference of the halves, halved: a first-order estimate). Writes r
  * into `ref` (may be NULL). n counts floats. */
 void sg_reference_from_halves(const float *a, const float *b, size_t n, float scale, float *ref,
@@ -474,10 +474,11 @@ void sg_reference_from_halves(const float *a, const float *b, size_t n, float sc
                               double *relmse, double *mse8)
 {
     double rs = 0, s8 = 0;
+    double eps = 0.01 / ((double)scale * scale); /* render's relMSE: on the exposed image */
     for (size_t i = 0; i < n; i++) {
         double r = 0.5 * ((double)a[i] + b[i]);
         double half = 0.5 * ((double)a[i] - b[i]);
-        rs += half * half / (r * r + 0.01);
+        rs += half * half / (r * r + eps);
         double d8 = sg_srgb_byte(a[i] * scale) - sg_srgb_byte(b[i] * scale);
         s8 += 0.25 * d8 * d8;
         if (ref)

@@ -35,8 +35,9 @@ static const char *usage =
     "  --png FILE.png    8-bit sRGB image of the render times 2^exposure\n"
     "  --exposure STOPS  PNG exposure (default: the scene's render.exposure, else 0)\n"
     "  --reference REF --log CSV  after every pass append seconds,spp,mse,relmse,mse8 against\n"
-    "                    REF (measuring time is not counted; mse8: the paper's MSE of the\n"
-    "                    8-bit PNG values at --exposure)\n"
+    "                    REF (measuring time is not counted; relmse: mean (x-r)^2/(r^2+0.01)\n"
+    "                    on the image times 2^exposure; mse8: the paper's MSE of the 8-bit\n"
+    "                    PNG values at --exposure)\n"
     "  --max-depth N     maximum path length (default: the scene's render.max_depth, else 8)\n"
     "  --exponent P      cosine-power exponent of the lobe (default 16; skeleton: 4, the paper's)\n"
     "  --alpha A         guided: probability of BSDF sampling in the mixture, (0, 1]; default:\n"
@@ -173,11 +174,15 @@ static int error_srgb_byte(float linear)
 static void error_metrics(const float *x, const float *ref, size_t n, float scale, double *mse,
                           double *relmse, double *mse8)
 {
+    /* relMSE's 0.01 keeps black pixels finite; it is taken on the image as
+     * exposed (x 2^exposure), so that a dark scene shown at +6 stops is
+     * measured relatively too, not as 100x its plain MSE */
+    double eps = 0.01 / ((double)scale * scale);
     double s = 0.0, rs = 0.0, s8 = 0.0;
     for (size_t i = 0; i < n; i++) {
         double d = (double)x[i] - ref[i];
         s += d * d;
-        rs += d * d / ((double)ref[i] * ref[i] + 0.01);
+        rs += d * d / ((double)ref[i] * ref[i] + eps);
         double d8 = error_srgb_byte(x[i] * scale) - error_srgb_byte(ref[i] * scale);
         s8 += d8 * d8;
     }

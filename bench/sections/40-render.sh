@@ -82,7 +82,10 @@ else
     [ -e "$sc" ] || continue
     name=$(basename "$sc" .json)
     if ! precompute "$sc" "$out/$name"; then echo "| $name | precompute failed | | | | | | |"; continue; fi
-    spp=16; [ "$quick" = 1 ] && spp=8
+    # 64 spp: the guided mode learns its mixture in the first passes (every
+    # path in the first two, then fewer); 60-convergence's µs/sample over
+    # 12 s runs is the steady state
+    spp=64; [ "$quick" = 1 ] && spp=16
     declare -A us=() ur=()
     for mode in bsdf skeleton guided; do us[$mode]=999999; ur[$mode]=999999; done
     for _ in $(seq $((runs + 1))); do

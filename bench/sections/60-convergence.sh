@@ -200,7 +200,8 @@ echo "independent): a curve cannot go below the reference's own error, drawn das
 echo
 echo "### Table 2: seconds to reach a relMSE level"
 echo
-echo "relMSE = mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01), on the linear image."
+echo "relMSE = mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01), on the linear image times"
+echo "2^exposure (the scene's PNG exposure), so that dark scenes are measured relatively too."
 echo "Levels per scene from bsdf alone, the same for every mode: bsdf's mean error at the end of its run"
 echo "and at an eighth of it, rounded up to two digits. Speed-up = bsdf seconds / mode"
 echo "seconds (> 1: faster than bsdf). ~: extrapolated along 1/t from the last half of the curve;"
