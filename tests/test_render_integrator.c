@@ -252,8 +252,11 @@ Test(render_integrator, same_seed_same_image_for_any_thread_count)
         SgError err = {0};
         SgRenderer *r = sg_renderer_create(s, &o, &err);
         cr_assert_not_null(r, "%s", err.message);
-        for (int p = 0; p < 4; p++)
+        /* 12 passes: the learned mixture changes after every one of them
+         * (all paths learn in the first two, then every 2nd, 4th, 8th) */
+        for (int p = 0; p < 12; p++)
             sg_renderer_pass(r);
+        cr_assert_geq(sg_renderer_guided_fraction(r), 0.0, "the mixture is learned in this test");
         img[k] = malloc(n * sizeof(float));
         sg_renderer_image(r, img[k]);
         sg_renderer_free(r);
