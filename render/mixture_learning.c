@@ -57,8 +57,6 @@ typedef struct Totals {
 struct SgMixtureLearner {
     int cells[3];          /* fine grid */
     int coarse_cells[3];
-    Vec3 lo;
-    float inv_size;
     uint32_t region_count, coarse_count;
     int initial;
     /* per fine region, all the renderer reads at a bounce (one byte, so
@@ -99,8 +97,6 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
         cells *= (size_t)l->cells[i];
         coarse *= (size_t)l->coarse_cells[i];
     }
-    l->lo = lo;
-    l->inv_size = 1.0f / size;
     l->region_count = (uint32_t)(cells * 6);
     l->coarse_count = (uint32_t)(coarse * 6);
     l->initial = initial;
@@ -132,7 +128,7 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     memset(l->choice, -1, l->region_count);
     memset(l->state, STATE_INITIAL, l->region_count);
     l->view.lo = lo;
-    l->view.inv_size = l->inv_size;
+    l->view.inv_size = 1.0f / size;
     for (int i = 0; i < 3; i++)
         l->view.cells[i] = (float)l->cells[i];
     l->view.stride_y = l->cells[0];
@@ -167,19 +163,9 @@ void sg_mixture_learner_free(SgMixtureLearner *l)
 
 uint32_t sg_mixture_region(const SgMixtureLearner *l, Vec3 p, Vec3 n)
 {
-    float v[3] = {(p.x - l->lo.x) * l->inv_size, (p.y - l->lo.y) * l->inv_size, (p.z - l->lo.z) * l->inv_size};
-    int c[3];
-    for (int i = 0; i < 3; i++) {
-        if (!(v[i] >= 0.0f && v[i] < (float)l->cells[i]))
-            return SG_NO_REGION;
-        c[i] = (int)v[i];
-    }
-    float a[3] = {fabsf(n.x), fabsf(n.y), fabsf(n.z)};
-    int axis = a[0] >= a[1] && a[0] >= a[2] ? 0 : (a[1] >= a[2] ? 1 : 2);
-    float s = axis == 0 ? n.x : (axis == 1 ? n.y : n.z);
-    uint32_t bin = (uint32_t)(2 * axis + (s < 0.0f));
-    size_t cell = ((size_t)c[2] * l->cells[1] + c[1]) * l->cells[0] + c[0];
-    return (uint32_t)(cell * 6 + bin);
+    SgMixtureCandidate choice;
+    bool learning;
+    return sg_mixture_lookup(&l->view, p, n, &choice, &learning);
 }
 
 SgMixtureCandidate sg_mixture_choice(const SgMixtureLearner *l, uint32_t region)

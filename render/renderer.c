@@ -61,6 +61,7 @@ struct SgRenderer {
     double *follow_cdf;     /* guide: cumulative follow probability per light */
     /* Guided mode with a learned alpha: per-region choice of the mixture. */
     SgMixtureLearner *learner;
+    const SgMixtureView *mixture_view; /* the learner's, read at every bounce */
     int tiles_x, tiles_y;
 
     /* camera in local coordinates */
@@ -260,6 +261,7 @@ static bool setup_learner(SgRenderer *r, const char *path, SgError *err)
                                            SG_MIXTURE_INITIAL, &e);
     if (!r->learner)
         return sg_fail(err, "%s: %s", path, e.message);
+    r->mixture_view = sg_mixture_view(r->learner);
     return true;
 }
 
@@ -694,7 +696,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             uint32_t region = SG_NO_REGION;
             bool learn = false;
             if (mode == SG_SAMPLING_GUIDED && r->learner) {
-                region = sg_mixture_lookup(sg_mixture_view(r->learner), h.p, n, &mix, &learn);
+                region = sg_mixture_lookup(r->mixture_view, h.p, n, &mix, &learn);
                 learn = learn && learn_tile >= 0 && pending_count < MAX_PENDING;
             }
             bool guided = mode == SG_SAMPLING_SKELETON ||
@@ -761,12 +763,13 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             float u0 = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
             Vec3 wi = bounce_sample(&bs, u0, u1, u2);
             float cos_x = v3_dot(wi, n);
-            float pdf, pdf_bsdf = 0.0f, pdf_lobe = 0.0f;
+            float pdf, pdf_bsdf = 0.0f;
             if (bs.kind == 2 || (learn && guided)) {
-                /* the mixture's two parts, which the learner needs too */
+                /* the BSDF's part, which the learner needs too */
                 pdf_bsdf = sg_pdf_glossy(&lobe, wi);
-                pdf_lobe = sg_pdf_folded_lobe(axis, n, mix.exponent, wi);
-                pdf = bs.kind == 2 ? mix.alpha * pdf_bsdf + (1.0f - mix.alpha) * pdf_lobe : pdf_bsdf;
+                pdf = bs.kind == 2 ? mix.alpha * pdf_bsdf +
+                                         (1.0f - mix.alpha) * sg_pdf_folded_lobe(axis, n, mix.exponent, wi)
+                                   : pdf_bsdf;
             } else {
                 pdf = bounce_pdf(&bs, wi);
             }

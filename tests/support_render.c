@@ -158,3 +158,11 @@ void sgt_scale_offset(SgScene *s, double scale, const double offset[3])
         s->camera.look_at[i] = s->camera.look_at[i] * scale + offset[i];
     }
 }
+
+bool sgt_fixed_point_guide(void *ctx, const double p[3], uint32_t light, double q[3])
+{
+    (void)p;
+    (void)light;
+    memcpy(q, ((SgtFixedPoint *)ctx)->point, sizeof(double) * 3);
+    return true;
+}

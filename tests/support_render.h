@@ -24,4 +24,11 @@ void sgt_finish(SgScene *s);
 /* Transforms every position by p * scale + offset (camera too). */
 void sgt_scale_offset(SgScene *s, double scale, const double offset[3]);
 
+/* A guide stand-in (SgImportanceFn) whose importance point is always the
+ * same world position: ctx is an SgtFixedPoint. */
+typedef struct SgtFixedPoint {
+    double point[3];
+} SgtFixedPoint;
+bool sgt_fixed_point_guide(void *ctx, const double p[3], uint32_t light, double q[3]);
+
 #endif

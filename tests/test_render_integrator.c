@@ -10,19 +10,6 @@
 #include "../render/renderer.h"
 #include "support_render.h"
 
-/* Guide stand-in: always points at one fixed world position. */
-typedef struct FixedPoint {
-    double point[3];
-} FixedPoint;
-
-static bool fixed_point_guide(void *ctx, const double p[3], uint32_t light, double q[3])
-{
-    (void)p;
-    (void)light;
-    memcpy(q, ((FixedPoint *)ctx)->point, sizeof(double) * 3);
-    return true;
-}
-
 typedef struct Stats {
     double mean[3];
     double std_error; /* of the luminance-free channel-0 mean over every sample */
@@ -98,9 +85,9 @@ static void furnace_case(SgSampling mode, double scale)
     o.max_depth = 64; /* truncation error 0.5^64 */
     o.sampling = mode;
     o.seed = 5;
-    FixedPoint fp = {{0.9 * scale + offset[0] * (scale != 1.0), -0.8 * scale + offset[1] * (scale != 1.0),
+    SgtFixedPoint fp = {{0.9 * scale + offset[0] * (scale != 1.0), -0.8 * scale + offset[1] * (scale != 1.0),
                       1.7 * scale + offset[2] * (scale != 1.0)}};
-    o.guide.importance_point = fixed_point_guide;
+    o.guide.importance_point = sgt_fixed_point_guide;
     o.guide.ctx = &fp;
     o.lobe_exponent = 8;
     const int spp = 64;
@@ -167,8 +154,8 @@ static void plane_case(SgSampling mode, SgMaterialType floor_type)
     sg_render_options_default(&o, s);
     o.sampling = mode;
     o.seed = 11;
-    FixedPoint fp = {{0.3, h, -0.2}};
-    o.guide.importance_point = fixed_point_guide;
+    SgtFixedPoint fp = {{0.3, h, -0.2}};
+    o.guide.importance_point = sgt_fixed_point_guide;
     o.guide.ctx = &fp;
     Stats st = render_stats(s, &o, 256, 0, 0, o.width, o.height);
     double expected = rho * le * 4.0 * corner_form_factor(a, a, h);
@@ -214,8 +201,8 @@ Test(render_integrator, guided_agrees_with_bsdf_in_dark_room)
     SgScene *s = two_rooms();
     SgRenderOptions o;
     sg_render_options_default(&o, s);
-    FixedPoint door = {{2.0, 1.0, 1.7}};
-    o.guide.importance_point = fixed_point_guide;
+    SgtFixedPoint door = {{2.0, 1.0, 1.7}};
+    o.guide.importance_point = sgt_fixed_point_guide;
     o.guide.ctx = &door;
     o.max_depth = 8;
     o.seed = 1;
@@ -239,8 +226,8 @@ Test(render_integrator, same_seed_same_image_for_any_thread_count)
     SgScene *s = two_rooms();
     SgRenderOptions o;
     sg_render_options_default(&o, s);
-    FixedPoint door = {{2.0, 1.0, 1.7}};
-    o.guide.importance_point = fixed_point_guide;
+    SgtFixedPoint door = {{2.0, 1.0, 1.7}};
+    o.guide.importance_point = sgt_fixed_point_guide;
     o.guide.ctx = &door;
     o.sampling = SG_SAMPLING_GUIDED;
     o.seed = 42;
@@ -288,8 +275,8 @@ Test(render_integrator, refuses_bad_options)
     o.sampling = SG_SAMPLING_GUIDED; /* no guide */
     cr_assert_null(sg_renderer_create(s, &o, &err));
     cr_assert(strstr(err.message, "cache") != NULL, "%s", err.message);
-    FixedPoint fp = {{0, 0, 0}};
-    o.guide.importance_point = fixed_point_guide;
+    SgtFixedPoint fp = {{0, 0, 0}};
+    o.guide.importance_point = sgt_fixed_point_guide;
     o.guide.ctx = &fp;
     o.alpha = 0.0f; /* a pure lobe would be biased */
     err = (SgError){0};

@@ -134,18 +134,6 @@ Test(render_learning, a_region_with_enough_samples_settles)
 
 /* ---- rendered: two rooms and a window ------------------------------------ */
 
-typedef struct FixedPoint {
-    double point[3];
-} FixedPoint;
-
-static bool fixed_point_guide(void *ctx, const double p[3], uint32_t light, double q[3])
-{
-    (void)p;
-    (void)light;
-    memcpy(q, ((FixedPoint *)ctx)->point, sizeof(double) * 3);
-    return true;
-}
-
 /* Two rooms joined by a small window: the light on room A's ceiling is
  * out of sight from room B, which the camera looks into; B's light comes
  * through the window, from A's lit floor and walls. */
@@ -215,9 +203,9 @@ static double variance_with(SgSampling mode, float alpha, const double guide_poi
     SgScene *s = window_rooms();
     SgRenderOptions o;
     sg_render_options_default(&o, s);
-    FixedPoint fp;
+    SgtFixedPoint fp;
     memcpy(fp.point, guide_point, sizeof fp.point);
-    o.guide.importance_point = fixed_point_guide;
+    o.guide.importance_point = sgt_fixed_point_guide;
     o.guide.ctx = &fp;
     o.sampling = mode;
     o.alpha = alpha;
