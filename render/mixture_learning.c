@@ -7,10 +7,10 @@
 /* BSDF alone first: with equal estimates the cheaper, safer choice wins. */
 const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES] = {
     {1.0f, 16.0f}, {0.8f, 4.0f}, {0.8f, 16.0f}, {0.8f, 64.0f}, {0.6f, 4.0f}, {0.6f, 16.0f}, {0.6f, 64.0f}};
-const float sg_mixture_exponents[SG_MIXTURE_EXPONENTS] = {4.0f, 16.0f, 64.0f};
-
-/* Which of sg_mixture_exponents each candidate's lobe has. */
-static const int candidate_exponent[SG_MIXTURE_CANDIDATES] = {1, 0, 1, 2, 0, 1, 2};
+/* The candidates' lobe exponents, each a power of 4 of the one before, so
+ * that a record computes cos^e for all of them by squaring. */
+#define EXPONENTS 3
+static const float exponents[EXPONENTS] = {4.0f, 16.0f, 64.0f};
 
 /* Samples a region needs before its own estimate is trusted, and after
  * which it stops learning. */
@@ -75,6 +75,7 @@ struct SgMixtureLearner {
     uint32_t *coarse_of;   /* fine region -> coarse region */
     uint32_t tiles;
     RecordBuffer *buffers; /* per tile */
+    int exponent_of[SG_MIXTURE_CANDIDATES]; /* index in exponents[] of each candidate's lobe */
     SgMixtureView view;
 };
 
@@ -100,6 +101,10 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->region_count = (uint32_t)(cells * 6);
     l->coarse_count = (uint32_t)(coarse * 6);
     l->initial = initial;
+    for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++)
+        for (int e = 0; e < EXPONENTS; e++)
+            if (sg_mixture_candidates[k].exponent == exponents[e])
+                l->exponent_of[k] = e;
     l->tiles = tiles;
     l->choice = malloc(l->region_count);
     l->state = malloc(l->region_count);
@@ -215,18 +220,18 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     st->estimate = v;
     float weight = v * v * rec->pdf;
     /* the folded lobe's density at each exponent: cos^4, ^16, ^64 by squaring */
-    float lobe[SG_MIXTURE_EXPONENTS];
+    float lobe[EXPONENTS];
     float c1 = fminf(fmaxf(rec->cos_axis, 0.0f), 1.0f), c2 = fminf(fmaxf(rec->cos_mirror, 0.0f), 1.0f);
-    for (int e = 0; e < SG_MIXTURE_EXPONENTS; e++) {
+    for (int e = 0; e < EXPONENTS; e++) {
         for (int s = 0; s < 2; s++) { /* 4 = 2^2, then 2 more squarings per step */
             c1 *= c1;
             c2 *= c2;
         }
-        lobe[e] = (sg_mixture_exponents[e] + 1.0f) * (0.5f / 3.14159265f) * (c1 + c2);
+        lobe[e] = (exponents[e] + 1.0f) * (0.5f / 3.14159265f) * (c1 + c2);
     }
     for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++) {
         float a = sg_mixture_candidates[k].alpha;
-        float p = a * rec->pdf_bsdf + (1.0f - a) * lobe[candidate_exponent[k]];
+        float p = a * rec->pdf_bsdf + (1.0f - a) * lobe[l->exponent_of[k]];
         /* p = 0: that candidate could never have drawn this direction,
          * which carries light: it would be biased */
         st->term[k] = p > 0.0f ? weight / p : INFINITY;
@@ -357,7 +362,6 @@ uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region)
     return region < l->region_count ? l->stats[region].samples : 0;
 }
 
-uint32_t sg_mixture_region_count(const SgMixtureLearner *l) { return l->region_count; }
 
 double sg_mixture_guided_fraction(const SgMixtureLearner *l)
 {

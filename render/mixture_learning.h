@@ -48,7 +48,6 @@ extern "C" {
 
 #define SG_NO_REGION UINT32_MAX
 #define SG_MIXTURE_CANDIDATES 7
-#define SG_MIXTURE_EXPONENTS 3
 
 /* A choice of mixture: BSDF probability and lobe exponent. */
 typedef struct SgMixtureCandidate {
@@ -59,7 +58,6 @@ typedef struct SgMixtureCandidate {
  * wide, middle or narrow lobe (exponents 4, 16, 64: the paper's adaptive
  * strength, "small near direct lighting, strong far away"). */
 extern const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES];
-extern const float sg_mixture_exponents[SG_MIXTURE_EXPONENTS];
 /* Where a region (and its coarse region) has too few samples yet: a mild
  * mixture, so that the first passes already try the lobe and learn its
  * worth from its own samples (better on the corridor and the window test
@@ -135,7 +133,6 @@ void sg_mixture_update(SgMixtureLearner *l);
 
 /* A region's sample count, for tests and reports. */
 uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region);
-uint32_t sg_mixture_region_count(const SgMixtureLearner *l);
 /* Share of the bounces seen so far that fall in regions whose choice now
  * uses the lobe (alpha < 1). */
 double sg_mixture_guided_fraction(const SgMixtureLearner *l);

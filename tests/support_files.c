@@ -1,5 +1,7 @@
 #include "support_files.h"
 
+#include <criterion/criterion.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -90,4 +92,21 @@ int sg_test_count_lines(const char *text)
 bool sg_test_have_shared_scenes(void)
 {
     return sg_test_exists("../shared/scenes/README.md");
+}
+
+void sg_test_put(SgTestText *t, const char *fmt, ...)
+{
+    va_list ap;
+    for (;;) {
+        va_start(ap, fmt);
+        int n = vsnprintf(t->data ? t->data + t->size : NULL, t->data ? t->cap - t->size : 0, fmt, ap);
+        va_end(ap);
+        if (t->data && (size_t)n < t->cap - t->size) {
+            t->size += (size_t)n;
+            return;
+        }
+        t->cap = t->cap ? 2 * t->cap + (size_t)n : 4096 + (size_t)n;
+        t->data = realloc(t->data, t->cap);
+        cr_assert_not_null(t->data);
+    }
 }

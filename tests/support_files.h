@@ -21,4 +21,12 @@ int sg_test_count_lines(const char *text);
 /* True when ../shared/scenes exists (third-party scenes for some tests). */
 bool sg_test_have_shared_scenes(void);
 
+/* A growing text (scenes written as JSON by the tests); free data when done. */
+typedef struct SgTestText {
+    char *data;
+    size_t size, cap;
+} SgTestText;
+/* Appends printf-style; fails the test if memory runs out. */
+void sg_test_put(SgTestText *t, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+
 #endif

@@ -18,7 +18,6 @@
  *     its tangent plane, NaN or far away, grazing directions. */
 #include <criterion/criterion.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -35,33 +34,10 @@ static bool sanitized(void) { return getenv("SG_SANITIZED") != NULL; }
 
 /* ---- scenes as JSON, built in C --------------------------------------- */
 
-typedef struct Text {
-    char *data;
-    size_t size, cap;
-} Text;
-
-static void put(Text *t, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void put(Text *t, const char *fmt, ...)
-{
-    va_list ap;
-    for (;;) {
-        va_start(ap, fmt);
-        int n = vsnprintf(t->data ? t->data + t->size : NULL, t->data ? t->cap - t->size : 0, fmt, ap);
-        va_end(ap);
-        if (t->data && (size_t)n < t->cap - t->size) {
-            t->size += (size_t)n;
-            return;
-        }
-        t->cap = t->cap ? 2 * t->cap + (size_t)n : 4096 + (size_t)n;
-        t->data = realloc(t->data, t->cap);
-        cr_assert_not_null(t->data);
-    }
-}
-
 /* A scene under construction: every coordinate goes through
  * p -> scale * p + shift, so that one scene can be built at any unit. */
 typedef struct Json {
-    Text meshes, lights;
+    SgTestText meshes, lights;
     double scale, shift[3];
     int mesh_count, light_count;
 } Json;
@@ -72,25 +48,25 @@ static Json json_new(double scale, double shift)
     return j;
 }
 
-static void put_point(Text *t, const Json *j, const double p[3])
+static void put_point(SgTestText *t, const Json *j, const double p[3])
 {
-    put(t, "%.17g, %.17g, %.17g", j->scale * p[0] + j->shift[0], j->scale * p[1] + j->shift[1],
+    sg_test_put(t, "%.17g, %.17g, %.17g", j->scale * p[0] + j->shift[0], j->scale * p[1] + j->shift[1],
         j->scale * p[2] + j->shift[2]);
 }
 
 /* One mesh of triangles over its own vertices. */
 static void add_mesh(Json *j, const double (*v)[3], int nv, const int *tri, int nt, const char *material)
 {
-    Text *t = &j->meshes;
-    put(t, "%s\n    { \"vertices\": [", j->mesh_count++ ? "," : "");
+    SgTestText *t = &j->meshes;
+    sg_test_put(t, "%s\n    { \"vertices\": [", j->mesh_count++ ? "," : "");
     for (int i = 0; i < nv; i++) {
-        put(t, i ? ", " : "");
+        sg_test_put(t, i ? ", " : "");
         put_point(t, j, v[i]);
     }
-    put(t, "], \"triangles\": [");
+    sg_test_put(t, "], \"triangles\": [");
     for (int i = 0; i < 3 * nt; i++)
-        put(t, "%s%d", i ? ", " : "", tri[i]);
-    put(t, "], \"material\": \"%s\" }", material);
+        sg_test_put(t, "%s%d", i ? ", " : "", tri[i]);
+    sg_test_put(t, "], \"material\": \"%s\" }", material);
 }
 
 /* Quads c0 c1 c2 c3 (normal (c1 - c0) x (c2 - c0)) as one mesh. */
@@ -110,32 +86,32 @@ static void add_quads(Json *j, const double (*q)[4][3], int n, const char *mater
 
 static void add_light(Json *j, const double q[4][3], double radiance)
 {
-    Text *t = &j->lights;
-    put(t, "%s\n    { \"type\": \"quad\", \"corners\": [", j->light_count++ ? "," : "");
+    SgTestText *t = &j->lights;
+    sg_test_put(t, "%s\n    { \"type\": \"quad\", \"corners\": [", j->light_count++ ? "," : "");
     for (int c = 0; c < 4; c++) {
-        put(t, "%s[", c ? ", " : "");
+        sg_test_put(t, "%s[", c ? ", " : "");
         put_point(t, j, q[c]);
-        put(t, "]");
+        sg_test_put(t, "]");
     }
-    put(t, "], \"radiance\": [%g, %g, %g] }", radiance, radiance, radiance);
+    sg_test_put(t, "], \"radiance\": [%g, %g, %g] }", radiance, radiance, radiance);
 }
 
 /* Writes dir/name with the camera at pos looking at `at`; frees j. */
 static const char *json_write(Json *j, const char *dir, const char *name, const double pos[3],
                               const double at[3], int width, int height)
 {
-    Text t = {0};
-    put(&t, "{ \"meshes\": [%s ],\n", j->meshes.data ? j->meshes.data : "");
-    put(&t, "  \"materials\": { \"white\": { \"type\": \"diffuse\", \"albedo\": [0.7, 0.7, 0.7] },\n"
+    SgTestText t = {0};
+    sg_test_put(&t, "{ \"meshes\": [%s ],\n", j->meshes.data ? j->meshes.data : "");
+    sg_test_put(&t, "  \"materials\": { \"white\": { \"type\": \"diffuse\", \"albedo\": [0.7, 0.7, 0.7] },\n"
             "                 \"grey\": { \"type\": \"diffuse\", \"albedo\": [0.4, 0.4, 0.4] } },\n");
-    put(&t, "  \"lights\": [%s ],\n", j->lights.data ? j->lights.data : "");
-    put(&t, "  \"camera\": { \"position\": [");
+    sg_test_put(&t, "  \"lights\": [%s ],\n", j->lights.data ? j->lights.data : "");
+    sg_test_put(&t, "  \"camera\": { \"position\": [");
     put_point(&t, j, pos);
-    put(&t, "], \"look_at\": [");
+    sg_test_put(&t, "], \"look_at\": [");
     put_point(&t, j, at);
-    put(&t, "], \"up\": [0, 1, 0], \"fov\": 70 },\n");
-    put(&t, "  \"image\": { \"width\": %d, \"height\": %d },\n", width, height);
-    put(&t, "  \"render\": { \"max_depth\": 6 } }\n");
+    sg_test_put(&t, "], \"up\": [0, 1, 0], \"fov\": 70 },\n");
+    sg_test_put(&t, "  \"image\": { \"width\": %d, \"height\": %d },\n", width, height);
+    sg_test_put(&t, "  \"render\": { \"max_depth\": 6 } }\n");
     const char *path = sg_test_write(dir, name, t.data);
     free(t.data);
     free(j->meshes.data);

@@ -2,7 +2,6 @@
  * bad input. */
 #include <criterion/criterion.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -92,28 +91,6 @@ Test(voxelize, touching_counts_as_overlap)
 
 /* ---- scenes written as JSON with inline geometry ------------------------- */
 
-typedef struct Text {
-    char *data;
-    size_t size, cap;
-} Text;
-
-static void put(Text *t, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void put(Text *t, const char *fmt, ...)
-{
-    va_list ap;
-    for (;;) {
-        va_start(ap, fmt);
-        int n = vsnprintf(t->data + t->size, t->cap - t->size, fmt, ap);
-        va_end(ap);
-        if (t->data && (size_t)n < t->cap - t->size) {
-            t->size += (size_t)n;
-            return;
-        }
-        t->cap = t->cap ? 2 * t->cap + (size_t)n : 4096 + (size_t)n;
-        t->data = realloc(t->data, t->cap);
-    }
-}
-
 typedef struct Rotation {
     double m[3][3];
 } Rotation;
@@ -136,22 +113,22 @@ static void rotate(const Rotation *r, const double p[3], double out[3])
 }
 
 /* One mesh entry: quads given as 4 corners each, rotated and scaled. */
-static void put_quads(Text *t, const double (*quads)[4][3], int count, const Rotation *r,
+static void put_quads(SgTestText *t, const double (*quads)[4][3], int count, const Rotation *r,
                       double scale, const char *extra)
 {
-    put(t, "{ \"vertices\": [");
+    sg_test_put(t, "{ \"vertices\": [");
     for (int q = 0; q < count; q++)
         for (int c = 0; c < 4; c++) {
             double p[3];
             rotate(r, quads[q][c], p);
-            put(t, "%s%.17g, %.17g, %.17g", q || c ? ", " : "", scale * p[0], scale * p[1],
+            sg_test_put(t, "%s%.17g, %.17g, %.17g", q || c ? ", " : "", scale * p[0], scale * p[1],
                 scale * p[2]);
         }
-    put(t, "], \"triangles\": [");
+    sg_test_put(t, "], \"triangles\": [");
     for (int q = 0; q < count; q++)
-        put(t, "%s%d, %d, %d, %d, %d, %d", q ? ", " : "", 4 * q, 4 * q + 1, 4 * q + 2, 4 * q,
+        sg_test_put(t, "%s%d, %d, %d, %d, %d, %d", q ? ", " : "", 4 * q, 4 * q + 1, 4 * q + 2, 4 * q,
             4 * q + 2, 4 * q + 3);
-    put(t, "]%s }", extra);
+    sg_test_put(t, "]%s }", extra);
 }
 
 /* The six faces of the box [lo, hi]. */
@@ -201,19 +178,19 @@ static void voxelize_ok(const SgScene *s, int resolution, SgMedium *m, SgVoxeliz
  * rotated off the grid axes; the light is in the x > y half. */
 static char *split_room_json(const Rotation *r, double scale)
 {
-    Text t = {0};
+    SgTestText t = {0};
     double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1}, walls[6][4][3];
     box_quads(lo, hi, walls);
     double wall[1][4][3] = {{{0, 0, 0}, {1, 1, 0}, {1, 1, 1}, {0, 0, 1}}};
     double light[1][4][3];
     light_quad(0.75, 0.02, 0.5, 0.1, light[0]);
-    put(&t, "{ \"meshes\": [");
+    sg_test_put(&t, "{ \"meshes\": [");
     put_quads(&t, (const double(*)[4][3])walls, 6, r, scale, "");
-    put(&t, ", ");
+    sg_test_put(&t, ", ");
     put_quads(&t, (const double(*)[4][3])wall, 1, r, scale, "");
-    put(&t, ", ");
+    sg_test_put(&t, ", ");
     put_quads(&t, (const double(*)[4][3])light, 1, r, scale, ", \"emission\": [5, 5, 5]");
-    put(&t, "] }");
+    sg_test_put(&t, "] }");
     return t.data;
 }
 
@@ -258,20 +235,20 @@ Test(voxelize, thin_wall_does_not_leak)
 Test(voxelize, sealed_rooms_keep_only_the_lit_one)
 {
     const char *dir = sg_test_tmpdir();
-    Text t = {0};
+    SgTestText t = {0};
     double a_lo[3] = {0, 0, 0}, a_hi[3] = {1, 1, 1}, b_lo[3] = {2, 0, 0}, b_hi[3] = {3, 1, 1};
     double a[6][4][3], b[6][4][3], light[1][4][3];
     box_quads(a_lo, a_hi, a);
     box_quads(b_lo, b_hi, b);
     light_quad(0.5, 0.01, 0.5, 0.2, light[0]);
     Rotation id = rotation(0, 0, 1, 0);
-    put(&t, "{ \"meshes\": [");
+    sg_test_put(&t, "{ \"meshes\": [");
     put_quads(&t, (const double(*)[4][3])a, 6, &id, 1, "");
-    put(&t, ", ");
+    sg_test_put(&t, ", ");
     put_quads(&t, (const double(*)[4][3])b, 6, &id, 1, "");
-    put(&t, ", ");
+    sg_test_put(&t, ", ");
     put_quads(&t, (const double(*)[4][3])light, 1, &id, 1, ", \"emission\": [1, 1, 1]");
-    put(&t, "] }");
+    sg_test_put(&t, "] }");
     SgScene *s = load_text(dir, "rooms.json", t.data);
     free(t.data);
     SgMedium m;
