@@ -19,7 +19,8 @@ static const char *usage =
     "usage: render SCENE [--cache importance.cache] [--sampling bsdf|skeleton|guided]\n"
     "              [--spp N | --time SECONDS] [--seed N] [--threads N] -o image.exr\n"
     "              [--png image.png] [--exposure STOPS] [--reference ref.exr --log curve.csv]\n"
-    "              [--max-depth N] [--exponent P] [--alpha A] [--size WxH] [--quiet]\n"
+    "              [--max-depth N] [--exponent P] [--alpha A] [--roulette learned|albedo]\n"
+    "              [--size WxH] [--quiet]\n"
     "\n"
     "Path traces SCENE.json (Embree 3) with next-event estimation and MIS.\n"
     "  --cache FILE      importance cache from bin/importance for this scene's geometry\n"
@@ -42,12 +43,15 @@ static const char *usage =
     "  --exponent P      cosine-power exponent of the lobe (default 16; skeleton: 4, the paper's)\n"
     "  --alpha A         guided: probability of BSDF sampling in the mixture, (0, 1]; default:\n"
     "                    learned per region of the scene while rendering (docs/render.md)\n"
+    "  --roulette R      how paths are cut short: learned (default; guided with a learned alpha:\n"
+    "                    by expected contribution against the pixel's, docs/render.md) or\n"
+    "                    albedo (survival = product of albedos after 2 bounces, as bsdf)\n"
     "  --size WxH        image size (default: the scene's image size, else 320x240)\n"
     "  --quiet           no summary line\n";
 
 typedef struct Args {
     const char *scene, *cache, *output, *png, *reference, *log;
-    const char *sampling;
+    const char *sampling, *roulette;
     long spp;
     double time;
     uint64_t seed;
@@ -73,6 +77,7 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
     } while (0)
         if (!strcmp(s, "--cache")) { NEED_VALUE(); a->cache = v; }
         else if (!strcmp(s, "--sampling")) { NEED_VALUE(); a->sampling = v; }
+        else if (!strcmp(s, "--roulette")) { NEED_VALUE(); a->roulette = v; }
         else if (!strcmp(s, "-o") || !strcmp(s, "--output")) { NEED_VALUE(); a->output = v; }
         else if (!strcmp(s, "--png")) { NEED_VALUE(); a->png = v; }
         else if (!strcmp(s, "--reference")) { NEED_VALUE(); a->reference = v; }
@@ -244,6 +249,10 @@ int main(int argc, char **argv)
         sg_fail(&err, "--sampling: '%s' is not bsdf, skeleton or guided", a.sampling);
         goto done;
     }
+    if (a.roulette && !sg_roulette_parse(a.roulette, &o.roulette)) {
+        sg_fail(&err, "--roulette: '%s' is not learned or albedo", a.roulette);
+        goto done;
+    }
     if (o.sampling == SG_SAMPLING_SKELETON && !a.has_exponent)
         o.lobe_exponent = 4.0f; /* the paper's p_skel for its corridor */
     if (o.sampling != SG_SAMPLING_BSDF && !a.cache) {
@@ -366,6 +375,10 @@ int main(int argc, char **argv)
                  100.0 * fmax(0.0, sg_renderer_guided_fraction(r)));
     else
         snprintf(alpha_s, sizeof alpha_s, "%g", o.alpha);
+    /* the learned roulette needs the learner: elsewhere paths are cut by albedo */
+    const char *roulette = sg_roulette_name(o.sampling == SG_SAMPLING_GUIDED && o.alpha == SG_ALPHA_LEARNED
+                                                ? o.roulette
+                                                : SG_ROULETTE_ALBEDO);
     SgImageAttribute attrs[] = {
         {"spp", spp_s},
         {"seconds", sec_s},
@@ -374,6 +387,7 @@ int main(int argc, char **argv)
         {"sg:max_depth", depth_s},
         {"sg:lobe_exponent", exp_s},
         {"sg:alpha", alpha_s},
+        {"sg:roulette", roulette},
         {"sg:nonfinite_samples", nonfinite_s},
         {"sg:clamping", "none"},
         {"sg:scene", a.scene},
@@ -394,11 +408,12 @@ int main(int argc, char **argv)
     if (!a.quiet) {
         double paths = (double)o.width * o.height * sg_renderer_spp(r);
         fprintf(stderr,
-                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s, seed %s, %s NaN/inf samples\n",
+                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s, roulette %s, seed "
+                "%s, %s NaN/inf samples\n",
                 o.width, o.height, sg_renderer_spp(r), render_seconds, paths / render_seconds * 1e-6,
                 (double)sg_renderer_rays(r) / render_seconds * 1e-6, sg_sampling_name(o.sampling),
                 o.sampling == SG_SAMPLING_GUIDED ? ", alpha " : "", o.sampling == SG_SAMPLING_GUIDED ? alpha_s : "",
-                seed_s, nonfinite_s);
+                roulette, seed_s, nonfinite_s);
     }
     status = 0;
 

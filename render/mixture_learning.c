@@ -16,6 +16,8 @@ static const float exponents[EXPONENTS] = {4.0f, 16.0f, 64.0f};
  * which it stops learning. */
 #define MIN_SAMPLES 256u
 #define SETTLED_SAMPLES 4096
+/* Vertices a region needs before its outgoing radiance is used. */
+#define RADIANCE_MIN_SAMPLES 64u
 #define STATE_INITIAL 7
 #define STATE_SETTLED 8
 
@@ -25,6 +27,8 @@ typedef struct StoredRecord {
     uint32_t region;
     float estimate;                    /* v */
     float weight;                      /* w: the bounce's weight in the image */
+    float radiance;                    /* outgoing radiance estimate, < 0 none */
+    bool lobe;                         /* a guided bounce: estimate and terms set */
     float term[SG_MIXTURE_CANDIDATES]; /* v^2 p / p_k */
 } StoredRecord;
 
@@ -37,6 +41,8 @@ typedef struct RegionStats {
     double moment[SG_MIXTURE_CANDIDATES]; /* sums of w v^2 p / p_k */
     double weight, weighted;              /* sums of w and of w v */
     uint64_t samples;
+    double radiance_sum2;                 /* sum of squared outgoing radiance estimates */
+    uint64_t radiance_samples;
     /* what the region adds to its level's totals under its current choice */
     double variance, cost;
 } RegionStats;
@@ -76,6 +82,7 @@ struct SgMixtureLearner {
     uint32_t tiles;
     RecordBuffer *buffers; /* per tile */
     int exponent_of[SG_MIXTURE_CANDIDATES]; /* index in exponents[] of each candidate's lobe */
+    float *radiance;       /* per fine region, what the view reads */
     SgMixtureView view;
 };
 
@@ -116,7 +123,8 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->coarse = calloc(l->coarse_count, sizeof *l->coarse);
     l->coarse_of = malloc(sizeof *l->coarse_of * l->region_count);
     l->buffers = calloc(tiles ? tiles : 1, sizeof *l->buffers);
-    if (!l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched || !l->coarse_touched || !l->stats ||
+    l->radiance = malloc(sizeof *l->radiance * l->region_count);
+    if (!l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched || !l->coarse_touched || !l->stats ||
         !l->coarse || !l->coarse_of || !l->buffers) {
         sg_mixture_learner_free(l);
         return sg_fail(err, "mixture learner: out of memory for %u regions", (unsigned)(cells * 6)), NULL;
@@ -132,6 +140,9 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
             }
     memset(l->choice, -1, l->region_count);
     memset(l->state, STATE_INITIAL, l->region_count);
+    for (uint32_t i = 0; i < l->region_count; i++)
+        l->radiance[i] = -1.0f;
+    l->view.radiance = l->radiance;
     l->view.lo = lo;
     l->view.inv_size = 1.0f / size;
     for (int i = 0; i < 3; i++)
@@ -163,6 +174,7 @@ void sg_mixture_learner_free(SgMixtureLearner *l)
     free(l->stats);
     free(l->coarse);
     free(l->coarse_of);
+    free(l->radiance);
     free(l);
 }
 
@@ -212,6 +224,10 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     StoredRecord *st = &b->data[b->count++];
     st->region = rec->region;
     st->weight = rec->weight;
+    st->radiance = rec->radiance >= 0.0f && isfinite(rec->radiance) ? rec->radiance : -1.0f;
+    st->lobe = rec->lobe;
+    if (!rec->lobe)
+        return;
     float v = rec->estimate;
     if (!(v > 0.0f) || !isfinite(v)) {
         st->estimate = 0.0f;
@@ -240,6 +256,12 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
 
 static void add_record(RegionStats *st, const StoredRecord *rec)
 {
+    if (rec->radiance >= 0.0f) {
+        st->radiance_sum2 += (double)rec->radiance * rec->radiance;
+        st->radiance_samples++;
+    }
+    if (!rec->lobe)
+        return;
     st->samples++;
     double w = rec->weight;
     if (!(w > 0.0) || !isfinite(w))
@@ -301,6 +323,27 @@ static int choose(RegionStats *st, Totals *t)
     return k;
 }
 
+static float rms_radiance(const RegionStats *st)
+{
+    return st->radiance_samples >= RADIANCE_MIN_SAMPLES
+               ? (float)sqrt(st->radiance_sum2 / (double)st->radiance_samples)
+               : -1.0f;
+}
+
+/* Every region's root mean square outgoing radiance, falling back to its
+ * coarse region's and then the scene's: a few hundred thousand regions at
+ * most, nothing next to a pass. */
+static void refresh_radiance(SgMixtureLearner *l)
+{
+    float global = rms_radiance(&l->global);
+    for (uint32_t i = 0; i < l->region_count; i++) {
+        float m = rms_radiance(&l->stats[i]);
+        if (m < 0.0f)
+            m = rms_radiance(&l->coarse[l->coarse_of[i]]);
+        l->radiance[i] = m < 0.0f ? global : m;
+    }
+}
+
 void sg_mixture_update(SgMixtureLearner *l)
 {
     uint32_t fine = 0, coarse = 0;
@@ -355,6 +398,7 @@ void sg_mixture_update(SgMixtureLearner *l)
                         refresh_state(l, (uint32_t)(f * 6 + bin));
                 }
     }
+    refresh_radiance(l);
 }
 
 uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region)

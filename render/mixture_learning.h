@@ -64,9 +64,15 @@ extern const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES];
  * than starting from the BSDF alone; the Cornell box pays ~2% for it). */
 #define SG_MIXTURE_INITIAL 2
 
-/* One guided bounce as the learner sees it. */
+/* One diffuse or glossy vertex of a learning path as the learner sees it:
+ * what left it, and, where the bounce was guided, how it was drawn. */
 typedef struct SgMixtureRecord {
     uint32_t region;
+    /* the vertex's outgoing radiance toward the path (luminance, per unit
+     * throughput): its next-event estimate and all that came after; < 0
+     * unknown. Its regional second moment drives the learned roulette. */
+    float radiance;
+    bool lobe;       /* the bounce was guided: the fields below are set */
     float pdf_bsdf;  /* BSDF sampler's density of the direction taken */
     float cos_axis;  /* its cosine with the lobe's axis, and with the axis */
     float cos_mirror; /* mirrored across the surface (the folded lobe's two halves) */
@@ -97,6 +103,10 @@ typedef struct SgMixtureView {
     int stride_y, stride_z;        /* in cells */
     const uint8_t *state;          /* per region: candidate (low 3 bits), 8 = settled */
     SgMixtureCandidate of_state[8];
+    /* per region: root mean square of the outgoing radiance per unit
+     * throughput (its coarse region's or the scene's where it has too few
+     * samples), < 0 unknown */
+    const float *radiance;
 } SgMixtureView;
 
 const SgMixtureView *sg_mixture_view(const SgMixtureLearner *l);

@@ -43,6 +43,24 @@ typedef struct SgGuide {
 
 #define SG_ALPHA_LEARNED (-1.0f)
 
+/* How paths are cut short (unbiased either way: a surviving path is
+ * divided by its survival probability). */
+typedef enum SgRoulette {
+    /* guided with a learned alpha: survival by what the path may still
+     * bring (its throughput times the learner's regional radiance) against
+     * the noise its pixel has anyway (efficiency-aware roulette, Rath et
+     * al. 2022): paths that head into the dark die, paths toward the light
+     * live on. Elsewhere, and where the learner knows too little yet, as
+     * SG_ROULETTE_ALBEDO. */
+    SG_ROULETTE_LEARNED,
+    /* after the second bounce, survival = the product of the albedos so
+     * far (pbrt's rule), whatever the light ahead */
+    SG_ROULETTE_ALBEDO,
+} SgRoulette;
+
+const char *sg_roulette_name(SgRoulette r);
+bool sg_roulette_parse(const char *name, SgRoulette *r);
+
 typedef struct SgRenderOptions {
     int width, height;
     int max_depth;        /* maximum path length in segments from the camera */
@@ -54,11 +72,13 @@ typedef struct SgRenderOptions {
      * SG_ALPHA_LEARNED: chosen per region of the scene from the second
      * moments of the bounces traced so far (render/mixture_learning.h) */
     float alpha;
+    SgRoulette roulette;
     SgGuide guide;
 } SgRenderOptions;
 
 /* Defaults: image size and depth from the scene (320x240, 8 when not
- * given), bsdf sampling, seed 0, every core, lobe exponent 16, alpha learned. */
+ * given), bsdf sampling, seed 0, every core, lobe exponent 16, alpha
+ * learned, learned roulette. */
 void sg_render_options_default(SgRenderOptions *o, const SgScene *scene);
 
 typedef struct SgRenderer SgRenderer;

@@ -40,7 +40,7 @@ Test(render_cli, help_and_usage_errors)
     const char *dir = sg_test_tmpdir();
     const char *scene = tiny_scene(dir);
     const char *bad[] = {"--spp 4 --time 1", "--spp zero", "--sampling fancy", "--sampling guided",
-                         "--bogus", "--reference x.exr", "--threads -2"};
+                         "--bogus", "--reference x.exr", "--threads -2", "--roulette sometimes"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         snprintf(cmd, sizeof cmd, "%s %s %s -o %s/bad.exr", render_bin(), scene, bad[i], dir);
         cr_assert_eq(sg_test_run(cmd, err, sizeof err), 1, "'%s' accepted", bad[i]);

@@ -35,7 +35,14 @@ static void feed(SgMixtureLearner *l, uint32_t region, int count, double lit, fl
     const float pdf_bsdf = 0.3f, g = 2.0f;
     for (int i = 0; i < count; i++) {
         bool hit = sg_rng_float(&rng) < lit;
-        SgMixtureRecord rec = {region, pdf_bsdf, hit ? cos_light : 0.3f, 0.0f, pdf_bsdf, hit ? g / pdf_bsdf : 0.0f, 1.0f};
+        SgMixtureRecord rec = {.region = region,
+                               .radiance = -1.0f,
+                               .lobe = true,
+                               .pdf_bsdf = pdf_bsdf,
+                               .cos_axis = hit ? cos_light : 0.3f,
+                               .pdf = pdf_bsdf,
+                               .estimate = hit ? g / pdf_bsdf : 0.0f,
+                               .weight = 1.0f};
         sg_mixture_record(l, (uint32_t)(i & 1), &rec);
     }
     sg_mixture_update(l);
@@ -132,6 +139,45 @@ Test(render_learning, a_region_with_enough_samples_settles)
     sg_mixture_learner_free(l);
 }
 
+/* Vertices that report only what left them (no guided bounce): `count`
+ * records alternating between radiance a and b. */
+static void feed_radiance(SgMixtureLearner *l, uint32_t region, int count, float a, float b)
+{
+    for (int i = 0; i < count; i++) {
+        SgMixtureRecord rec = {.region = region, .radiance = i & 1 ? b : a, .weight = 1.0f};
+        sg_mixture_record(l, (uint32_t)(i & 1), &rec);
+    }
+    sg_mixture_update(l);
+}
+
+Test(render_learning, regions_learn_the_second_moment_of_what_leaves_them)
+{
+    SgMixtureLearner *l = unit_learner();
+    const SgMixtureView *v = sg_mixture_view(l);
+    uint32_t lit = sg_mixture_region(l, v3(0.05f, 0.05f, 0.05f), v3(0, 1, 0));
+    uint32_t sparse = sg_mixture_region(l, v3(0.4f, 0.4f, 0.4f), v3(0, 1, 0));
+    uint32_t dark = sg_mixture_region(l, v3(0.9f, 0.9f, 0.9f), v3(0, 1, 0));
+    uint32_t elsewhere = sg_mixture_region(l, v3(0.9f, 0.1f, 0.9f), v3(1, 0, 0));
+    cr_assert_lt(v->radiance[lit], 0.0f, "nothing known yet");
+    feed_radiance(l, lit, 1000, 1.0f, 3.0f);
+    feed_radiance(l, dark, 1000, 0.0f, 0.1f);
+    feed_radiance(l, sparse, 10, 50.0f, 50.0f);
+    /* root mean square: sqrt((1 + 9) / 2), not the mean 2 */
+    cr_assert_float_eq(v->radiance[lit], sqrtf(5.0f), 1e-5f, "lit: %g", v->radiance[lit]);
+    cr_assert_float_eq(v->radiance[dark], sqrtf(0.005f), 1e-6f, "dark: %g", v->radiance[dark]);
+    /* too few of its own: its coarse region's (the lit region's 1000 and its 10) */
+    float coarse = sqrtf((500.0f * 1.0f + 500.0f * 9.0f + 10.0f * 2500.0f) / 1010.0f);
+    cr_assert_float_eq(v->radiance[sparse], coarse, 1e-4f, "sparse: %g vs %g", v->radiance[sparse], coarse);
+    /* none in its coarse region: the whole scene's */
+    float global = sqrtf((500.0f * 1.0f + 500.0f * 9.0f + 500.0f * 0.01f + 10.0f * 2500.0f) / 2010.0f);
+    cr_assert_float_eq(v->radiance[elsewhere], global, 1e-4f, "elsewhere: %g vs %g", v->radiance[elsewhere],
+                       global);
+    /* vertices without a guided bounce teach nothing about the mixture */
+    cr_assert_eq(sg_mixture_region_samples(l, lit), 0);
+    cr_assert_float_eq(sg_mixture_choice(l, lit).alpha, 1.0f, 0.0f);
+    sg_mixture_learner_free(l);
+}
+
 /* ---- rendered: two rooms and a window ------------------------------------ */
 
 /* Two rooms joined by a small window: the light on room A's ceiling is
@@ -166,16 +212,24 @@ static SgScene *window_rooms(void)
     return s;
 }
 
+typedef struct PassStats {
+    double mean;     /* of the image, over the passes counted */
+    double rays;     /* traced per pass counted */
+} PassStats;
+
 /* Mean over the image of the per-pixel variance of the samples, from the
  * passes after `skip` (learning has had its first passes by then). */
-static double pixel_variance(SgScene *s, SgRenderOptions *o, int skip, int passes)
+static double pixel_variance_stats(SgScene *s, SgRenderOptions *o, int skip, int passes, PassStats *ps)
 {
     SgError err = {0};
     SgRenderer *r = sg_renderer_create(s, o, &err);
     cr_assert_not_null(r, "%s", err.message);
     size_t n = (size_t)o->width * o->height;
     double *sum = calloc(n, sizeof *sum), *sum2 = calloc(n, sizeof *sum2);
+    uint64_t rays_before = 0;
     for (int p = 0; p < skip + passes; p++) {
+        if (p == skip)
+            rays_before = sg_renderer_rays(r);
         sg_renderer_pass(r);
         if (p < skip)
             continue;
@@ -187,15 +241,25 @@ static double pixel_variance(SgScene *s, SgRenderOptions *o, int skip, int passe
         }
     }
     cr_assert_eq(sg_renderer_nonfinite(r), 0);
-    double var = 0.0;
+    double var = 0.0, mean = 0.0;
     for (size_t i = 0; i < n; i++) {
         double m = sum[i] / passes;
         var += (sum2[i] / passes - m * m) * passes / (passes - 1);
+        mean += m;
+    }
+    if (ps) {
+        ps->mean = mean / n;
+        ps->rays = (double)(sg_renderer_rays(r) - rays_before) / passes;
     }
     free(sum);
     free(sum2);
     sg_renderer_free(r);
     return var / n;
+}
+
+static double pixel_variance(SgScene *s, SgRenderOptions *o, int skip, int passes)
+{
+    return pixel_variance_stats(s, o, skip, passes, NULL);
 }
 
 static double variance_with(SgSampling mode, float alpha, const double guide_point[3])
@@ -209,6 +273,7 @@ static double variance_with(SgSampling mode, float alpha, const double guide_poi
     o.guide.ctx = &fp;
     o.sampling = mode;
     o.alpha = alpha;
+    o.roulette = SG_ROULETTE_ALBEDO; /* the mixture alone */
     o.max_depth = 8;
     o.seed = 11;
     double v = pixel_variance(s, &o, 8, 96);
@@ -233,4 +298,39 @@ Test(render_learning, learning_keeps_a_good_guide_and_drops_a_bad_one, .timeout 
     /* ...and the learner drops it */
     cr_assert_lt(bad, 1.15 * bsdf, "learned with a bad guide: %.4g vs bsdf %.4g", bad, bsdf);
     cr_assert_lt(bad, 0.7 * bad_fixed, "learned with a bad guide: %.4g vs forced %.4g", bad, bad_fixed);
+}
+
+/* Room B is lit only through the window: its light comes from paths of 3
+ * and more segments, which albedo roulette cuts as often as any. The
+ * learned roulette keeps those that head for the window and cuts those
+ * that wander in B: less variance for the rays traced, and the same mean. */
+Test(render_learning, learned_roulette_keeps_the_paths_that_bring_light, .timeout = 120)
+{
+    const double door[3] = {2.0, 1.0, 1.0};
+    PassStats st[2];
+    double var[2];
+    const SgRoulette kinds[2] = {SG_ROULETTE_ALBEDO, SG_ROULETTE_LEARNED};
+    for (int k = 0; k < 2; k++) {
+        SgScene *s = window_rooms();
+        SgRenderOptions o;
+        sg_render_options_default(&o, s);
+        SgtFixedPoint fp;
+        memcpy(fp.point, door, sizeof fp.point);
+        o.guide.importance_point = sgt_fixed_point_guide;
+        o.guide.ctx = &fp;
+        o.sampling = SG_SAMPLING_GUIDED;
+        o.roulette = kinds[k];
+        o.max_depth = 12;
+        o.seed = 13;
+        var[k] = pixel_variance_stats(s, &o, 8, 128, &st[k]);
+        sgt_scene_free(s);
+    }
+    double pixels = 40.0 * 30.0;
+    double se = sqrt((var[0] + var[1]) / (128.0 * pixels));
+    double work[2] = {var[0] * st[0].rays, var[1] * st[1].rays};
+    cr_log_info("albedo roulette: variance %.4g, %.0f rays a pass, mean %.5g; learned: %.4g, %.0f rays, mean %.5g",
+                var[0], st[0].rays, st[0].mean, var[1], st[1].rays, st[1].mean);
+    cr_assert_lt(fabs(st[0].mean - st[1].mean), 3.0 * se, "means %.5g and %.5g differ by more than 3 SE (%.3g)",
+                 st[0].mean, st[1].mean, se);
+    cr_assert_lt(work[1], 0.7 * work[0], "variance times rays: learned %.4g, albedo %.4g", work[1], work[0]);
 }
