@@ -286,16 +286,6 @@ static uint32_t voxel_node(const SgImportanceCache *c, int i, int j, int k)
     return c->palette[r->palette_offset + index];
 }
 
-/* The 26 neighbours, faces first, then edges, then corners: the nearest
- * medium voxel is usually found early and the others skipped. */
-static const signed char neighbour_order[26][3] = {
-    {-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1},
-    {-1, -1, 0}, {1, -1, 0}, {-1, 1, 0}, {1, 1, 0}, {-1, 0, -1}, {1, 0, -1},
-    {-1, 0, 1}, {1, 0, 1}, {0, -1, -1}, {0, 1, -1}, {0, -1, 1}, {0, 1, 1},
-    {-1, -1, -1}, {1, -1, -1}, {-1, 1, -1}, {1, 1, -1},
-    {-1, -1, 1}, {1, -1, 1}, {-1, 1, 1}, {1, 1, 1},
-};
-
 bool sg_cache_nearest_node(const SgImportanceCache *c, const double p[3], uint32_t *node)
 {
     double v[3];
@@ -313,23 +303,40 @@ bool sg_cache_nearest_node(const SgImportanceCache *c, const double p[3], uint32
     if (n == SG_CACHE_NONE) {
         /* A surface point lies in a solid voxel (conservative voxelization):
          * take the medium voxel among the 26 neighbours whose centre is
-         * nearest to p, so that the point's own side of a wall wins. */
-        double best = INFINITY;
-        for (int q = 0; q < 26; q++) {
-            const signed char *o = neighbour_order[q];
-            double d2 = 0;
-            for (int a = 0; a < 3; a++) {
-                double t = v[a] - (ijk[a] + o[a] + 0.5);
-                d2 += t * t;
-            }
-            if (d2 >= best)
-                continue; /* cannot win: skip the table lookup */
-            uint32_t m = voxel_node(c, ijk[0] + o[0], ijk[1] + o[1], ijk[2] + o[2]);
-            if (m != SG_CACHE_NONE) {
-                best = d2;
-                n = m;
+         * nearest to p, so that the point's own side of a wall wins. The
+         * squared distance is a sum over the axes, and along each axis the
+         * offsets 0, toward p's nearer side, away from it come in growing
+         * order: a branch and bound in that order skips most neighbours
+         * after the first medium one (~10% of a corridor's queries land
+         * here, next to an edge). */
+        int step[3][3];
+        double term[3][3];
+        for (int a = 0; a < 3; a++) {
+            double f = v[a] - ijk[a] - 0.5; /* in [-0.5, 0.5) */
+            int s = f < 0.0 ? -1 : 1;
+            int o[3] = {0, s, -s};
+            for (int k = 0; k < 3; k++) {
+                double t = f - o[k];
+                step[a][k] = o[k];
+                term[a][k] = t * t;
             }
         }
+        double best = INFINITY;
+        for (int x = 0; x < 3 && term[0][x] < best; x++)
+            for (int y = 0; y < 3 && term[0][x] + term[1][y] < best; y++)
+                for (int z = 0; z < 3; z++) {
+                    double d2 = term[0][x] + term[1][y] + term[2][z];
+                    if (d2 >= best)
+                        break;
+                    if (x == 0 && y == 0 && z == 0)
+                        continue; /* the voxel itself: solid */
+                    uint32_t m = voxel_node(c, ijk[0] + step[0][x], ijk[1] + step[1][y], ijk[2] + step[2][z]);
+                    if (m != SG_CACHE_NONE) {
+                        best = d2;
+                        n = m;
+                        break; /* the rest of this row is farther */
+                    }
+                }
     }
     if (n == SG_CACHE_NONE)
         return false;

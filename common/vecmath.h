@@ -8,6 +8,12 @@ typedef struct Vec3 {
     float x, y, z;
 } Vec3;
 
+/* max and min that compile to one instruction (fmaxf and fminf are libm
+ * calls unless NaN semantics are given up for the whole build); a NaN in b
+ * is returned, one in a is not. */
+static inline float sg_maxf(float a, float b) { return a > b ? a : b; }
+static inline float sg_minf(float a, float b) { return a < b ? a : b; }
+
 static inline Vec3 v3(float x, float y, float z) { Vec3 r = {x, y, z}; return r; }
 static inline Vec3 v3_add(Vec3 a, Vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
 static inline Vec3 v3_sub(Vec3 a, Vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
@@ -26,7 +32,7 @@ static inline Vec3 v3_normalize(Vec3 a)
 }
 static inline float v3_max_component(Vec3 a)
 {
-    return fmaxf(a.x, fmaxf(a.y, a.z));
+    return sg_maxf(a.x, sg_maxf(a.y, a.z));
 }
 
 /* Orthonormal basis around unit n with no precision loss near n = -z

@@ -43,6 +43,7 @@ typedef struct RegionStats {
     uint64_t samples;
     double radiance_sum2;                 /* sum of squared outgoing radiance estimates */
     uint64_t radiance_samples;
+    uint64_t radiance_published;          /* samples when last passed to its fine regions */
     /* what the region adds to its level's totals under its current choice */
     double variance, cost;
 } RegionStats;
@@ -143,6 +144,7 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     for (uint32_t i = 0; i < l->region_count; i++)
         l->radiance[i] = -1.0f;
     l->view.radiance = l->radiance;
+    l->view.global_radiance = -1.0f;
     l->view.lo = lo;
     l->view.inv_size = 1.0f / size;
     for (int i = 0; i < 3; i++)
@@ -330,18 +332,13 @@ static float rms_radiance(const RegionStats *st)
                : -1.0f;
 }
 
-/* Every region's root mean square outgoing radiance, falling back to its
- * coarse region's and then the scene's: a few hundred thousand regions at
- * most, nothing next to a pass. */
-static void refresh_radiance(SgMixtureLearner *l)
+/* A region's root mean square outgoing radiance, or its coarse region's;
+ * -1 leaves it to the whole scene's (view.global_radiance), which changes
+ * every pass and would otherwise be copied to every sparse region. */
+static void refresh_radiance(SgMixtureLearner *l, uint32_t region)
 {
-    float global = rms_radiance(&l->global);
-    for (uint32_t i = 0; i < l->region_count; i++) {
-        float m = rms_radiance(&l->stats[i]);
-        if (m < 0.0f)
-            m = rms_radiance(&l->coarse[l->coarse_of[i]]);
-        l->radiance[i] = m < 0.0f ? global : m;
-    }
+    float m = rms_radiance(&l->stats[region]);
+    l->radiance[region] = m >= 0.0f ? m : rms_radiance(&l->coarse[l->coarse_of[region]]);
 }
 
 void sg_mixture_update(SgMixtureLearner *l)
@@ -377,12 +374,21 @@ void sg_mixture_update(SgMixtureLearner *l)
         l->is_touched[l->touched[i]] = 0;
         l->choice[l->touched[i]] = (int8_t)choose(&l->stats[l->touched[i]], &l->fine_totals);
         refresh_state(l, l->touched[i]);
+        refresh_radiance(l, l->touched[i]);
     }
     for (uint32_t i = 0; i < coarse; i++) {
         uint32_t c = coarse_list[i];
         l->coarse_touched[c] = 0;
         int8_t k = (int8_t)choose(&l->coarse[c], &l->coarse_totals);
-        if (k == l->coarse_choice[c])
+        bool rechosen = k != l->coarse_choice[c];
+        /* its radiance goes to its sparse fine regions each time its
+         * samples double: the estimate settles, the copies cost */
+        RegionStats *cs = &l->coarse[c];
+        bool answers_radiance = cs->radiance_samples >= RADIANCE_MIN_SAMPLES &&
+                                cs->radiance_samples >= 2 * cs->radiance_published;
+        if (answers_radiance)
+            cs->radiance_published = cs->radiance_samples;
+        if (!rechosen && !answers_radiance)
             continue;
         l->coarse_choice[c] = k;
         /* the fine regions it answers for: its cells, same normal bin */
@@ -394,11 +400,13 @@ void sg_mixture_update(SgMixtureLearner *l)
             for (int y = cy * COARSE; y < (cy + 1) * COARSE && y < l->cells[1]; y++)
                 for (int x = cx * COARSE; x < (cx + 1) * COARSE && x < l->cells[0]; x++) {
                     size_t f = ((size_t)z * l->cells[1] + y) * l->cells[0] + x;
-                    if (l->choice[f * 6 + bin] < 0)
+                    if (rechosen && l->choice[f * 6 + bin] < 0)
                         refresh_state(l, (uint32_t)(f * 6 + bin));
+                    if (answers_radiance && l->stats[f * 6 + bin].radiance_samples < RADIANCE_MIN_SAMPLES)
+                        refresh_radiance(l, (uint32_t)(f * 6 + bin));
                 }
     }
-    refresh_radiance(l);
+    l->view.global_radiance = rms_radiance(&l->global);
 }
 
 uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region)

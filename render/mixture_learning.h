@@ -104,9 +104,10 @@ typedef struct SgMixtureView {
     const uint8_t *state;          /* per region: candidate (low 3 bits), 8 = settled */
     SgMixtureCandidate of_state[8];
     /* per region: root mean square of the outgoing radiance per unit
-     * throughput (its coarse region's or the scene's where it has too few
-     * samples), < 0 unknown */
+     * throughput (its coarse region's where it has too few samples), < 0:
+     * see global_radiance (sg_mixture_radiance) */
     const float *radiance;
+    float global_radiance; /* the whole scene's, < 0 unknown */
 } SgMixtureView;
 
 const SgMixtureView *sg_mixture_view(const SgMixtureLearner *l);
@@ -128,6 +129,15 @@ static inline uint32_t sg_mixture_lookup(const SgMixtureView *v, Vec3 p, Vec3 n,
     *choice = v->of_state[st & 7];
     *learning = !(st & 8);
     return region;
+}
+/* What leaves a region (SG_NO_REGION: the scene), as the learned roulette
+ * reads it: the root mean square of the outgoing radiance per unit
+ * throughput, the coarse region's or the scene's where the region has too
+ * few samples; < 0 unknown. */
+static inline float sg_mixture_radiance(const SgMixtureView *v, uint32_t region)
+{
+    float m = region != SG_NO_REGION ? v->radiance[region] : -1.0f;
+    return m >= 0.0f ? m : v->global_radiance;
 }
 /* Does the region still learn? One with enough samples is settled: its
  * choice stays, and paths no longer pay for the cache query there when it

@@ -554,7 +554,7 @@ static Vec3 eval_bsdf(const Material *m, const SgGlossyLobe *lobe, Vec3 wi)
     if (m->type == SG_MATERIAL_GLOSSY) {
         float c = v3_dot(wi, lobe->r);
         if (c > 0.0f) {
-            float s = (m->exponent + 2.0f) * (0.5f * SG_INV_PI) * sg_pow_exponent(fminf(c, 1.0f), m->exponent);
+            float s = (m->exponent + 2.0f) * (0.5f * SG_INV_PI) * sg_pow_exponent(sg_minf(c, 1.0f), m->exponent);
             f = v3_add(f, v3_scale(m->ks, s));
         }
     }
@@ -764,12 +764,12 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             if (mode == SG_SAMPLING_GUIDED && r->learner) {
                 region = sg_mixture_lookup(r->mixture_view, h.p, n, &mix, &learn);
                 learn = learn && learn_tile >= 0 && pending_count < MAX_PENDING;
-                float rms = region != SG_NO_REGION ? r->mixture_view->radiance[region] : -1.0f;
+                float rms = sg_mixture_radiance(r->mixture_view, region);
                 if (depth >= ROULETTE_DEPTH && pixel_deviation > 0.0f && rms >= 0.0f) {
                     float q = ROULETTE_GAIN * luminance(beta) * rms / pixel_deviation;
                     roulette_done = true;
                     if (q < 1.0f) {
-                        q = fmaxf(q, ROULETTE_MIN_SURVIVAL);
+                        q = sg_maxf(q, ROULETTE_MIN_SURVIVAL);
                         if (!(sg_rng_float(rng) < q))
                             break;
                         beta = v3_scale(beta, 1.0f / q);
@@ -880,7 +880,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
 
         /* Russian roulette after a few bounces: unbiased (divide by survival) */
         if (depth >= 2 && !roulette_done) {
-            float q = fminf(0.95f, v3_max_component(rr_beta));
+            float q = sg_minf(0.95f, v3_max_component(rr_beta));
             if (!(sg_rng_float(rng) < q))
                 break;
             beta = v3_scale(beta, 1.0f / q);

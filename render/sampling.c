@@ -14,13 +14,13 @@ Vec3 sg_sample_cosine_hemisphere(Vec3 n, float u1, float u2)
     /* Malley: uniform on the disk, projected up. */
     float r = sqrtf(u1);
     float phi = 2.0f * SG_PI * u2;
-    float z = sqrtf(fmaxf(0.0f, 1.0f - u1));
+    float z = sqrtf(sg_maxf(0.0f, 1.0f - u1));
     return sg_to_world(v3(r * cosf(phi), r * sinf(phi), z), n);
 }
 
 float sg_pdf_cosine_hemisphere(Vec3 n, Vec3 w)
 {
-    return fmaxf(0.0f, v3_dot(n, w)) * SG_INV_PI;
+    return sg_maxf(0.0f, v3_dot(n, w)) * SG_INV_PI;
 }
 
 Vec3 sg_sample_cosine_power(Vec3 a, float p, float u1, float u2)
@@ -30,7 +30,7 @@ Vec3 sg_sample_cosine_power(Vec3 a, float p, float u1, float u2)
     if (p <= 64.0f) {
         /* wide lobe: single precision keeps sin theta to ~1e-4 relative */
         float cos_t = powf(1.0f - u1, 1.0f / (p + 1.0f));
-        float sin_t = sqrtf(fmaxf(0.0f, 1.0f - cos_t * cos_t));
+        float sin_t = sqrtf(sg_maxf(0.0f, 1.0f - cos_t * cos_t));
         return sg_to_world(v3(sin_t * cosf(phi), sin_t * sinf(phi), cos_t), a);
     }
     /* narrow lobe: in logs, so that sin theta keeps its digits (p up to 1e4+) */
@@ -45,7 +45,7 @@ float sg_pdf_cosine_power(Vec3 a, float p, Vec3 w)
     float c = v3_dot(a, w);
     if (c <= 0.0f)
         return 0.0f;
-    return (p + 1.0f) * (0.5f * SG_INV_PI) * sg_pow_exponent(fminf(c, 1.0f), p);
+    return (p + 1.0f) * (0.5f * SG_INV_PI) * sg_pow_exponent(sg_minf(c, 1.0f), p);
 }
 
 Vec3 sg_sample_folded_lobe(Vec3 a, Vec3 n, float p, float u1, float u2)

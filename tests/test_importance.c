@@ -617,6 +617,67 @@ Test(importance_cache, every_medium_position_finds_a_node_on_its_side)
     l_scene_free(&s);
 }
 
+/* A point in a solid voxel takes the node of the medium neighbour (of 26)
+ * whose centre is nearest: checked against every neighbour, on random
+ * points in the solid voxels that touch the medium. */
+Test(importance_cache, a_point_in_a_wall_takes_the_nearest_medium_neighbour)
+{
+    LScene s;
+    l_scene(&s);
+    char path[256];
+    SgImportanceCache *c = build_and_open(&s.medium, &s.skeleton, "wall", 1, path, sizeof path);
+    const SgGrid *g = &s.medium.grid;
+    SgRng rng;
+    sg_rng_seed(&rng, 5, 1);
+    int checked = 0;
+    for (int k = 0; k < g->nz; k++)
+        for (int j = 0; j < g->ny; j++)
+            for (int i = 0; i < g->nx; i++) {
+                if (sg_grid_get(g, i, j, k))
+                    continue;
+                for (int t = 0; t < 4; t++) {
+                    double p[3] = {i + sg_rng_float(&rng), j + sg_rng_float(&rng), k + sg_rng_float(&rng)};
+                    double best = INFINITY;
+                    for (int dz = -1; dz <= 1; dz++)
+                        for (int dy = -1; dy <= 1; dy++)
+                            for (int dx = -1; dx <= 1; dx++) {
+                                int a = i + dx, b = j + dy, e = k + dz;
+                                if (a < 0 || b < 0 || e < 0 || a >= g->nx || b >= g->ny || e >= g->nz ||
+                                    !sg_grid_get(g, a, b, e))
+                                    continue;
+                                double d0 = p[0] - a - 0.5, d1 = p[1] - b - 0.5, d2 = p[2] - e - 0.5;
+                                best = fmin(best, d0 * d0 + d1 * d1 + d2 * d2);
+                            }
+                    uint32_t n;
+                    bool found = sg_cache_nearest_node(c, p, &n);
+                    cr_assert_eq(found, best < INFINITY, "voxel %d %d %d", i, j, k);
+                    if (!found)
+                        continue;
+                    /* the node is that of a neighbour at the least distance (ties: any) */
+                    bool matched = false;
+                    for (int dz = -1; dz <= 1 && !matched; dz++)
+                        for (int dy = -1; dy <= 1 && !matched; dy++)
+                            for (int dx = -1; dx <= 1 && !matched; dx++) {
+                                int a = i + dx, b = j + dy, e = k + dz;
+                                if (a < 0 || b < 0 || e < 0 || a >= g->nx || b >= g->ny || e >= g->nz ||
+                                    !sg_grid_get(g, a, b, e))
+                                    continue;
+                                double d0 = p[0] - a - 0.5, d1 = p[1] - b - 0.5, d2 = p[2] - e - 0.5;
+                                double centre[3] = {a + 0.5, b + 0.5, e + 0.5};
+                                uint32_t m;
+                                cr_assert(sg_cache_nearest_node(c, centre, &m));
+                                matched = fabs(d0 * d0 + d1 * d1 + d2 * d2 - best) < 1e-12 && m == n;
+                            }
+                    cr_assert(matched, "voxel %d %d %d: node %u is no nearest neighbour's", i, j, k, n);
+                    checked++;
+                }
+            }
+    cr_assert_gt(checked, 100);
+    sg_cache_close(c);
+    unlink(path);
+    l_scene_free(&s);
+}
+
 Test(importance_cache, build_is_deterministic_across_thread_counts)
 {
     LScene s;

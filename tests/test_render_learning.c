@@ -158,20 +158,23 @@ Test(render_learning, regions_learn_the_second_moment_of_what_leaves_them)
     uint32_t sparse = sg_mixture_region(l, v3(0.4f, 0.4f, 0.4f), v3(0, 1, 0));
     uint32_t dark = sg_mixture_region(l, v3(0.9f, 0.9f, 0.9f), v3(0, 1, 0));
     uint32_t elsewhere = sg_mixture_region(l, v3(0.9f, 0.1f, 0.9f), v3(1, 0, 0));
-    cr_assert_lt(v->radiance[lit], 0.0f, "nothing known yet");
+    cr_assert_lt(sg_mixture_radiance(v, lit), 0.0f, "nothing known yet");
     feed_radiance(l, lit, 1000, 1.0f, 3.0f);
     feed_radiance(l, dark, 1000, 0.0f, 0.1f);
     feed_radiance(l, sparse, 10, 50.0f, 50.0f);
     /* root mean square: sqrt((1 + 9) / 2), not the mean 2 */
-    cr_assert_float_eq(v->radiance[lit], sqrtf(5.0f), 1e-5f, "lit: %g", v->radiance[lit]);
-    cr_assert_float_eq(v->radiance[dark], sqrtf(0.005f), 1e-6f, "dark: %g", v->radiance[dark]);
+    float got = sg_mixture_radiance(v, lit);
+    cr_assert_float_eq(got, sqrtf(5.0f), 1e-5f, "lit: %g", got);
+    got = sg_mixture_radiance(v, dark);
+    cr_assert_float_eq(got, sqrtf(0.005f), 1e-6f, "dark: %g", got);
     /* too few of its own: its coarse region's (the lit region's 1000 and its 10) */
     float coarse = sqrtf((500.0f * 1.0f + 500.0f * 9.0f + 10.0f * 2500.0f) / 1010.0f);
-    cr_assert_float_eq(v->radiance[sparse], coarse, 1e-4f, "sparse: %g vs %g", v->radiance[sparse], coarse);
+    got = sg_mixture_radiance(v, sparse);
+    cr_assert_float_eq(got, coarse, 1e-4f, "sparse: %g vs %g", got, coarse);
     /* none in its coarse region: the whole scene's */
     float global = sqrtf((500.0f * 1.0f + 500.0f * 9.0f + 500.0f * 0.01f + 10.0f * 2500.0f) / 2010.0f);
-    cr_assert_float_eq(v->radiance[elsewhere], global, 1e-4f, "elsewhere: %g vs %g", v->radiance[elsewhere],
-                       global);
+    got = sg_mixture_radiance(v, elsewhere);
+    cr_assert_float_eq(got, global, 1e-4f, "elsewhere: %g vs %g", got, global);
     /* vertices without a guided bounce teach nothing about the mixture */
     cr_assert_eq(sg_mixture_region_samples(l, lit), 0);
     cr_assert_float_eq(sg_mixture_choice(l, lit).alpha, 1.0f, 0.0f);
