@@ -1044,7 +1044,8 @@ static void estimate_deviations(SgRenderer *r)
     double relative = 0.0;
     for (size_t p = 0; p < pixels; p++) {
         double m = r->sum_bounced[p] / n;
-        double var = fmax(0.0, (r->sum_bounced_sq[p] - n * m * m) / (n - 1.0));
+        double var = (r->sum_bounced_sq[p] - n * m * m) / (n - 1.0);
+        var = var > 0.0 ? var : 0.0;
         relative += var / ((double)mean[p] * mean[p] + eps);
     }
     relative = eps > 0.0 && isfinite(relative) ? relative / (double)pixels : 0.0;
@@ -1054,7 +1055,9 @@ static void estimate_deviations(SgRenderer *r)
 
 void sg_renderer_pass(SgRenderer *r)
 {
-    if (r->pixel_deviation && r->spp > 1)
+    /* every pass at first, then every 16th: the pixels' noise settles, and
+     * this runs on one thread between passes */
+    if (r->pixel_deviation && r->spp > 1 && (r->spp < 32 || r->spp % 16 == 0))
         estimate_deviations(r);
     PassCtx pc = {r, (r->opt.width + TILE - 1) / TILE,
                   mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1), r->spp == 0};
