@@ -18,6 +18,11 @@ static const float exponents[EXPONENTS] = {4.0f, 16.0f, 64.0f};
 #define SETTLED_SAMPLES 4096
 /* Vertices a region needs before its outgoing radiance is used. */
 #define RADIANCE_MIN_SAMPLES 64u
+/* A coarse region, or the whole scene, with this many guided bounces and
+ * as many vertices stops taking records: it is only a fallback, and adding
+ * every record to three levels cost more than the rest of learning (it
+ * runs on one thread between passes). */
+#define FALLBACK_SETTLED 65536u
 #define STATE_INITIAL 7
 #define STATE_SETTLED 8
 
@@ -256,6 +261,11 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     }
 }
 
+static bool fallback_settled(const RegionStats *st)
+{
+    return st->samples >= FALLBACK_SETTLED && st->radiance_samples >= FALLBACK_SETTLED;
+}
+
 static void add_record(RegionStats *st, const StoredRecord *rec)
 {
     if (rec->radiance >= 0.0f) {
@@ -351,12 +361,15 @@ void sg_mixture_update(SgMixtureLearner *l)
             const StoredRecord *rec = &b->data[i];
             uint32_t c = l->coarse_of[rec->region];
             add_record(&l->stats[rec->region], rec);
-            add_record(&l->coarse[c], rec);
-            add_record(&l->global, rec);
             if (!l->is_touched[rec->region]) {
                 l->is_touched[rec->region] = 1;
                 l->touched[fine++] = rec->region;
             }
+            if (!fallback_settled(&l->global))
+                add_record(&l->global, rec);
+            if (fallback_settled(&l->coarse[c]))
+                continue;
+            add_record(&l->coarse[c], rec);
             if (!l->coarse_touched[c]) {
                 l->coarse_touched[c] = 1;
                 coarse_list[coarse++] = c;

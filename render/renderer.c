@@ -68,6 +68,7 @@ struct SgRenderer {
      * there, made before each pass (0: unknown). */
     double *sum_bounced, *sum_bounced_sq;
     float *pixel_deviation;
+    double *deviation_rows; /* per image row, for the estimate's sums */
     int tiles_x, tiles_y;
 
     /* camera in local coordinates */
@@ -287,7 +288,8 @@ static bool setup_learner(SgRenderer *r, const char *path, SgError *err)
         r->pixel_deviation = calloc(2 * pixels, sizeof *r->pixel_deviation);
         r->sum_bounced = calloc(pixels, sizeof *r->sum_bounced);
         r->sum_bounced_sq = calloc(pixels, sizeof *r->sum_bounced_sq);
-        if (!r->pixel_deviation || !r->sum_bounced || !r->sum_bounced_sq)
+        r->deviation_rows = calloc((size_t)r->opt.height, sizeof *r->deviation_rows);
+        if (!r->pixel_deviation || !r->sum_bounced || !r->sum_bounced_sq || !r->deviation_rows)
             return sg_fail(err, "%s: out of memory", path);
     }
     return true;
@@ -454,6 +456,7 @@ void sg_renderer_free(SgRenderer *r)
     free(r->pixel_deviation);
     free(r->sum_bounced);
     free(r->sum_bounced_sq);
+    free(r->deviation_rows);
     free(r->sum);
     free(r->last);
     free(r);
@@ -891,6 +894,8 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
     }
     for (int i = 0; i < pending_count; i++) {
         const PendingRecord *pr = &pending[i];
+        if (!pr->lobe && !r->pixel_deviation)
+            continue; /* only the learned roulette reads what left a vertex */
         float t = luminance(pr->beta);
         SgMixtureRecord rec = {pr->region, luminance(per_throughput(v3_sub(radiance, pr->radiance_in), pr->beta)),
                                pr->lobe, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, t * t};
@@ -933,7 +938,7 @@ static uint64_t mix64(uint64_t x)
 
 /* At most this many learning paths per pass (~20 MB of records), whatever
  * the image size: a large image learns from a share of its pixels. */
-#define LEARN_PATHS_MAX 131072
+#define LEARN_PATHS_MAX 16384
 
 static bool learns(const PassCtx *pc, size_t pix)
 {
@@ -1008,56 +1013,96 @@ static void render_tile(void *vctx, uint64_t index, int thread)
 #define DEVIATION_RADIUS 2
 #define DEVIATION_FLOOR 0.25
 
+/* One step of estimate_deviations over the image's rows (run in parallel;
+ * per-row sums are added in row order after, so the result does not depend
+ * on the thread count). */
+typedef struct DeviationStep {
+    SgRenderer *r;
+    int step;      /* 0: horizontal box, 1: vertical box, 2: relative variance, 3: deviation */
+    double eps, relative;
+    double *row_sum;
+} DeviationStep;
+
+static void deviation_row(void *vctx, uint64_t row, int thread)
+{
+    (void)thread;
+    DeviationStep *d = vctx;
+    SgRenderer *r = d->r;
+    const int w = r->opt.width, h = r->opt.height, y = (int)row;
+    const double n = r->spp;
+    const size_t pixels = (size_t)w * h;
+    float *mean = r->pixel_deviation + (size_t)y * w, *rows = r->pixel_deviation + pixels;
+    const double *bounced = r->sum_bounced + (size_t)y * w;
+    double acc = 0.0;
+    switch (d->step) {
+    case 0: /* running sum along the row */
+        for (int x = 0; x < DEVIATION_RADIUS && x < w; x++)
+            acc += bounced[x];
+        for (int x = 0; x < w; x++) {
+            if (x + DEVIATION_RADIUS < w)
+                acc += bounced[x + DEVIATION_RADIUS];
+            if (x - DEVIATION_RADIUS - 1 >= 0)
+                acc -= bounced[x - DEVIATION_RADIUS - 1];
+            int lo = x - DEVIATION_RADIUS < 0 ? 0 : x - DEVIATION_RADIUS;
+            int hi = x + DEVIATION_RADIUS >= w ? w - 1 : x + DEVIATION_RADIUS;
+            rows[(size_t)y * w + x] = (float)(acc / (n * (hi - lo + 1)));
+        }
+        break;
+    case 1: {
+        int lo = y - DEVIATION_RADIUS < 0 ? 0 : y - DEVIATION_RADIUS;
+        int hi = y + DEVIATION_RADIUS >= h ? h - 1 : y + DEVIATION_RADIUS;
+        for (int x = 0; x < w; x++) {
+            float m = 0.0f;
+            for (int j = lo; j <= hi; j++)
+                m += rows[(size_t)j * w + x];
+            m /= (float)(hi - lo + 1);
+            mean[x] = m > 0.0f && isfinite(m) ? m : 0.0f;
+            acc += mean[x];
+        }
+        break;
+    }
+    case 2:
+        for (int x = 0; x < w; x++) {
+            double m = bounced[x] / n;
+            double var = (r->sum_bounced_sq[(size_t)y * w + x] - n * m * m) / (n - 1.0);
+            acc += (var > 0.0 ? var : 0.0) / ((double)mean[x] * mean[x] + d->eps);
+        }
+        break;
+    default:
+        for (int x = 0; x < w; x++)
+            mean[x] = (float)sqrt(d->relative * ((double)mean[x] * mean[x] + d->eps));
+    }
+    d->row_sum[y] = acc;
+}
+
+static double deviation_step(DeviationStep *d, int step)
+{
+    d->step = step;
+    int h = d->r->opt.height;
+    sg_parallel_for((uint64_t)h, d->r->opt.threads, deviation_row, d);
+    double total = 0.0;
+    for (int y = 0; y < h; y++)
+        total += d->row_sum[y];
+    return total;
+}
+
 static void estimate_deviations(SgRenderer *r)
 {
-    const int w = r->opt.width, h = r->opt.height;
-    const size_t pixels = (size_t)w * h;
-    const double n = r->spp;
-    float *mean = r->pixel_deviation, *rows = r->pixel_deviation + pixels;
-    for (int y = 0; y < h; y++)
-        for (int x = 0; x < w; x++) {
-            double acc = 0.0;
-            int count = 0;
-            for (int i = x - DEVIATION_RADIUS; i <= x + DEVIATION_RADIUS; i++)
-                if (i >= 0 && i < w) {
-                    acc += r->sum_bounced[(size_t)y * w + i];
-                    count++;
-                }
-            rows[(size_t)y * w + x] = (float)(acc / (n * count));
-        }
-    double image_mean = 0.0;
-    for (int y = 0; y < h; y++)
-        for (int x = 0; x < w; x++) {
-            float acc = 0.0f;
-            int count = 0;
-            for (int j = y - DEVIATION_RADIUS; j <= y + DEVIATION_RADIUS; j++)
-                if (j >= 0 && j < h) {
-                    acc += rows[(size_t)j * w + x];
-                    count++;
-                }
-            float m = acc / (float)count;
-            mean[(size_t)y * w + x] = m > 0.0f && isfinite(m) ? m : 0.0f;
-            image_mean += mean[(size_t)y * w + x];
-        }
-    image_mean /= (double)pixels;
-    double eps = DEVIATION_FLOOR * image_mean * DEVIATION_FLOOR * image_mean;
-    double relative = 0.0;
-    for (size_t p = 0; p < pixels; p++) {
-        double m = r->sum_bounced[p] / n;
-        double var = (r->sum_bounced_sq[p] - n * m * m) / (n - 1.0);
-        var = var > 0.0 ? var : 0.0;
-        relative += var / ((double)mean[p] * mean[p] + eps);
-    }
-    relative = eps > 0.0 && isfinite(relative) ? relative / (double)pixels : 0.0;
-    for (size_t p = 0; p < pixels; p++)
-        mean[p] = (float)sqrt(relative * ((double)mean[p] * mean[p] + eps));
+    const double pixels = (double)r->opt.width * r->opt.height;
+    DeviationStep d = {r, 0, 0.0, 0.0, r->deviation_rows};
+    deviation_step(&d, 0);
+    double image_mean = deviation_step(&d, 1) / pixels;
+    d.eps = DEVIATION_FLOOR * image_mean * DEVIATION_FLOOR * image_mean;
+    double relative = deviation_step(&d, 2);
+    d.relative = d.eps > 0.0 && isfinite(relative) ? relative / pixels : 0.0;
+    deviation_step(&d, 3);
 }
 
 void sg_renderer_pass(SgRenderer *r)
 {
-    /* every pass at first, then every 16th: the pixels' noise settles, and
-     * this runs on one thread between passes */
-    if (r->pixel_deviation && r->spp > 1 && (r->spp < 32 || r->spp % 16 == 0))
+    /* every pass at first, then at powers of two and every 16th: the
+     * pixels' noise settles, and the passes wait for this */
+    if (r->pixel_deviation && r->spp > 1 && (r->spp < 8 || !(r->spp & (r->spp - 1)) || r->spp % 16 == 0))
         estimate_deviations(r);
     PassCtx pc = {r, (r->opt.width + TILE - 1) / TILE,
                   mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1), r->spp == 0};
