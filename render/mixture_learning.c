@@ -130,8 +130,8 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->coarse_of = malloc(sizeof *l->coarse_of * l->region_count);
     l->buffers = calloc(tiles ? tiles : 1, sizeof *l->buffers);
     l->radiance = malloc(sizeof *l->radiance * l->region_count);
-    if (!l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched || !l->coarse_touched || !l->stats ||
-        !l->coarse || !l->coarse_of || !l->buffers) {
+    if (!l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
+        !l->coarse_touched || !l->stats || !l->coarse || !l->coarse_of || !l->buffers) {
         sg_mixture_learner_free(l);
         return sg_fail(err, "mixture learner: out of memory for %u regions", (unsigned)(cells * 6)), NULL;
     }
@@ -233,6 +233,7 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     st->weight = rec->weight;
     st->radiance = rec->radiance >= 0.0f && isfinite(rec->radiance) ? rec->radiance : -1.0f;
     st->lobe = rec->lobe;
+    st->estimate = 0.0f;
     if (!rec->lobe)
         return;
     float v = rec->estimate;

@@ -28,6 +28,11 @@
  * bounces weigh little in the image cannot pay for the cache query however
  * much it would lower its own variance.
  *
+ * Every vertex of a learning path also reports what left it (its
+ * next-event estimate and all after, per unit throughput); each region's
+ * root mean square of that drives the guided mode's learned Russian
+ * roulette (render/renderer.c).
+ *
  * Unbiased: a pass uses only the choices made after the previous passes,
  * which are fixed before it starts, so each pass is an unbiased estimate.
  * Deterministic for any thread count: records are kept per image tile and
