@@ -222,7 +222,7 @@ typedef struct PassStats {
 
 /* Mean over the image of the per-pixel variance of the samples, from the
  * passes after `skip` (learning has had its first passes by then). */
-static double pixel_variance_stats(SgScene *s, SgRenderOptions *o, int skip, int passes, PassStats *ps)
+static double pixel_variance(SgScene *s, SgRenderOptions *o, int skip, int passes, PassStats *ps)
 {
     SgError err = {0};
     SgRenderer *r = sg_renderer_create(s, o, &err);
@@ -260,12 +260,17 @@ static double pixel_variance_stats(SgScene *s, SgRenderOptions *o, int skip, int
     return var / n;
 }
 
-static double pixel_variance(SgScene *s, SgRenderOptions *o, int skip, int passes)
-{
-    return pixel_variance_stats(s, o, skip, passes, NULL);
-}
+/* A render of the two rooms with the guide pointing at `guide_point`. */
+typedef struct WindowRun {
+    SgSampling mode;
+    float alpha;
+    SgRoulette roulette;
+    int max_depth;
+    uint64_t seed;
+    int passes; /* counted, after 8 */
+} WindowRun;
 
-static double variance_with(SgSampling mode, float alpha, const double guide_point[3])
+static double window_variance(WindowRun run, const double guide_point[3], PassStats *ps)
 {
     SgScene *s = window_rooms();
     SgRenderOptions o;
@@ -274,14 +279,20 @@ static double variance_with(SgSampling mode, float alpha, const double guide_poi
     memcpy(fp.point, guide_point, sizeof fp.point);
     o.guide.importance_point = sgt_fixed_point_guide;
     o.guide.ctx = &fp;
-    o.sampling = mode;
-    o.alpha = alpha;
-    o.roulette = SG_ROULETTE_ALBEDO; /* the mixture alone */
-    o.max_depth = 8;
-    o.seed = 11;
-    double v = pixel_variance(s, &o, 8, 96);
+    o.sampling = run.mode;
+    o.alpha = run.alpha;
+    o.roulette = run.roulette;
+    o.max_depth = run.max_depth;
+    o.seed = run.seed;
+    double v = pixel_variance(s, &o, 8, run.passes, ps);
     sgt_scene_free(s);
     return v;
+}
+
+static double variance_with(SgSampling mode, float alpha, const double guide_point[3])
+{
+    /* albedo roulette: the mixture alone */
+    return window_variance((WindowRun){mode, alpha, SG_ROULETTE_ALBEDO, 8, 11, 96}, guide_point, NULL);
 }
 
 Test(render_learning, learning_keeps_a_good_guide_and_drops_a_bad_one, .timeout = 120)
@@ -313,21 +324,8 @@ Test(render_learning, learned_roulette_keeps_the_paths_that_bring_light, .timeou
     PassStats st[2];
     double var[2];
     const SgRoulette kinds[2] = {SG_ROULETTE_ALBEDO, SG_ROULETTE_LEARNED};
-    for (int k = 0; k < 2; k++) {
-        SgScene *s = window_rooms();
-        SgRenderOptions o;
-        sg_render_options_default(&o, s);
-        SgtFixedPoint fp;
-        memcpy(fp.point, door, sizeof fp.point);
-        o.guide.importance_point = sgt_fixed_point_guide;
-        o.guide.ctx = &fp;
-        o.sampling = SG_SAMPLING_GUIDED;
-        o.roulette = kinds[k];
-        o.max_depth = 12;
-        o.seed = 13;
-        var[k] = pixel_variance_stats(s, &o, 8, 128, &st[k]);
-        sgt_scene_free(s);
-    }
+    for (int k = 0; k < 2; k++)
+        var[k] = window_variance((WindowRun){SG_SAMPLING_GUIDED, SG_ALPHA_LEARNED, kinds[k], 12, 13, 128}, door, &st[k]);
     double pixels = 40.0 * 30.0;
     double se = sqrt((var[0] + var[1]) / (128.0 * pixels));
     double work[2] = {var[0] * st[0].rays, var[1] * st[1].rays};
