@@ -130,34 +130,29 @@ Test(bench_convergence, mean_of_seeds_with_different_pass_times)
 
 Test(bench_convergence, ratio_to_bsdf_carries_the_marks)
 {
-    char buf[64];
-    SgReach base = {SG_REACH_INTERPOLATED, 12.0};
-    sg_ratio_format(base, (SgReach){SG_REACH_INTERPOLATED, 4.0}, buf, sizeof buf);
-    cr_assert_str_eq(buf, "3.00");
-    sg_ratio_format(base, (SgReach){SG_REACH_EXTRAPOLATED, 24.0}, buf, sizeof buf);
-    cr_assert_str_eq(buf, "~0.50");
-    sg_ratio_format(base, (SgReach){SG_REACH_BEFORE_FIRST, 0.5}, buf, sizeof buf);
-    cr_assert_str_eq(buf, "> 24.00");
-    sg_ratio_format((SgReach){SG_REACH_BEFORE_FIRST, 0.5}, (SgReach){SG_REACH_INTERPOLATED, 2.0}, buf,
-                    sizeof buf);
-    cr_assert_str_eq(buf, "< 0.25");
-    sg_ratio_format(base, (SgReach){SG_REACH_BEYOND, 600.0}, buf, sizeof buf);
-    cr_assert_str_eq(buf, "< 0.02");
-    sg_ratio_format((SgReach){SG_REACH_BEYOND, 600.0}, base, buf, sizeof buf);
-    cr_assert_str_eq(buf, "> 50.00");
-    sg_ratio_format((SgReach){SG_REACH_BEYOND, 600.0}, (SgReach){SG_REACH_BEFORE_FIRST, 0.5}, buf,
-                    sizeof buf);
-    cr_assert_str_eq(buf, "> 1200.00");
-    sg_ratio_format((SgReach){SG_REACH_BEFORE_FIRST, 0.5}, (SgReach){SG_REACH_BEFORE_FIRST, 0.5}, buf,
-                    sizeof buf);
-    cr_assert_str_eq(buf, "-");
-    sg_ratio_format((SgReach){SG_REACH_INTERPOLATED, 0.5}, (SgReach){SG_REACH_EXTRAPOLATED, 200.0}, buf,
-                    sizeof buf);
-    cr_assert_str_eq(buf, "~0.0025");
-    sg_ratio_format(base, (SgReach){SG_REACH_NEVER, 0}, buf, sizeof buf);
-    cr_assert_str_eq(buf, "0 (never)");
-    sg_ratio_format(base, (SgReach){SG_REACH_NONE, 0}, buf, sizeof buf);
-    cr_assert_str_eq(buf, "-");
+    const SgReach base = {SG_REACH_INTERPOLATED, 12.0}, first = {SG_REACH_BEFORE_FIRST, 0.5},
+                  beyond = {SG_REACH_BEYOND, 600.0};
+    const struct {
+        SgReach bsdf, mode;
+        const char *expected;
+    } cases[] = {
+        {base, {SG_REACH_INTERPOLATED, 4.0}, "3.00"},
+        {base, {SG_REACH_EXTRAPOLATED, 24.0}, "~0.50"},
+        {base, first, "> 24.00"},
+        {first, {SG_REACH_INTERPOLATED, 2.0}, "< 0.25"},
+        {base, beyond, "< 0.02"},
+        {beyond, base, "> 50.00"},
+        {beyond, first, "> 1200.00"},
+        {first, first, "-"},
+        {{SG_REACH_INTERPOLATED, 0.5}, {SG_REACH_EXTRAPOLATED, 200.0}, "~0.0025"},
+        {base, {SG_REACH_NEVER, 0}, "0 (never)"},
+        {base, {SG_REACH_NONE, 0}, "-"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char buf[64];
+        sg_ratio_format(cases[i].bsdf, cases[i].mode, buf, sizeof buf);
+        cr_assert_str_eq(buf, cases[i].expected, "case %zu", i);
+    }
 }
 
 Test(bench_convergence, levels_round_up_to_two_significant_digits)
