@@ -16,6 +16,8 @@
 #include "hash.h"
 #include "importance_cache_format.h"
 
+_Static_assert(SG_CACHE_NO_NODE == SG_CACHE_NONE, "the public name of the format's 'none'");
+
 struct SgImportanceCache {
     const uint8_t *data;
     size_t size;
@@ -32,6 +34,7 @@ struct SgImportanceCache {
     int bx, by, bz;
     double inv_voxel_size;
     bool one_component; /* every node in one component: no need to read the node */
+    uint32_t *decoded;  /* sg_cache_decode: node per voxel, x fastest; NULL: read the blocks */
 };
 
 static bool range_ok(const SgCacheRange *r, uint64_t header_size, uint64_t file_size)
@@ -227,6 +230,7 @@ void sg_cache_close(SgImportanceCache *cache)
         return;
     if (cache->mapped)
         munmap((void *)cache->data, cache->size);
+    free(cache->decoded);
     free(cache);
 }
 
@@ -262,11 +266,9 @@ bool sg_cache_node_position(const SgImportanceCache *c, uint32_t node, double p[
     return true;
 }
 
-/* Nearest node of voxel (i,j,k), SG_CACHE_NONE if not medium. */
-static uint32_t voxel_node(const SgImportanceCache *c, int i, int j, int k)
+/* Node of voxel (i,j,k) inside the grid, read from its packed block. */
+static uint32_t packed_voxel_node(const SgImportanceCache *c, int i, int j, int k)
 {
-    if (i < 0 || j < 0 || k < 0 || i >= c->header.nx || j >= c->header.ny || k >= c->header.nz)
-        return SG_CACHE_NONE;
     size_t b = (size_t)(i >> 3) + (size_t)c->bx * ((size_t)(j >> 3) + (size_t)c->by * (size_t)(k >> 3));
     uint32_t record = c->block_index[b];
     if (record == SG_CACHE_NONE)
@@ -286,62 +288,127 @@ static uint32_t voxel_node(const SgImportanceCache *c, int i, int j, int k)
     return c->palette[r->palette_offset + index];
 }
 
-bool sg_cache_nearest_node(const SgImportanceCache *c, const double p[3], uint32_t *node)
+/* Nearest node of voxel (i,j,k), SG_CACHE_NONE if not medium. */
+static inline uint32_t voxel_node(const SgImportanceCache *c, int i, int j, int k)
 {
-    double v[3];
-    int ijk[3];
+    /* one unsigned comparison per axis also rejects negative indices */
+    if ((unsigned)i >= (unsigned)c->header.nx || (unsigned)j >= (unsigned)c->header.ny ||
+        (unsigned)k >= (unsigned)c->header.nz)
+        return SG_CACHE_NONE;
+    if (c->decoded)
+        return c->decoded[(size_t)i + (size_t)c->header.nx * ((size_t)j + (size_t)c->header.ny * (size_t)k)];
+    return packed_voxel_node(c, i, j, k);
+}
+
+bool sg_cache_decode(SgImportanceCache *c, uint64_t max_bytes)
+{
+    if (c->decoded)
+        return true;
+    const int nx = c->header.nx, ny = c->header.ny, nz = c->header.nz;
+    uint64_t voxels = (uint64_t)nx * (uint64_t)ny * (uint64_t)nz;
+    if (voxels * sizeof(uint32_t) > max_bytes)
+        return false;
+    uint32_t *t = malloc(voxels * sizeof *t);
+    if (!t)
+        return false;
+    /* block by block: an absent block fills its voxels at once */
+    for (int bk = 0; bk < c->bz; bk++)
+        for (int bj = 0; bj < c->by; bj++)
+            for (int bi = 0; bi < c->bx; bi++) {
+                bool present = c->block_index[bi + (size_t)c->bx * (bj + (size_t)c->by * bk)] != SG_CACHE_NONE;
+                for (int k = 8 * bk; k < 8 * bk + 8 && k < nz; k++)
+                    for (int j = 8 * bj; j < 8 * bj + 8 && j < ny; j++)
+                        for (int i = 8 * bi; i < 8 * bi + 8 && i < nx; i++)
+                            t[(size_t)i + (size_t)nx * ((size_t)j + (size_t)ny * (size_t)k)] =
+                                present ? packed_voxel_node(c, i, j, k) : SG_CACHE_NONE;
+            }
+    c->decoded = t;
+    return true;
+}
+
+/* Voxel indices of v (voxel units), false outside the range any grid can
+ * have; NaN fails too. */
+static inline bool voxel_of(const double v[3], int ijk[3])
+{
     for (int a = 0; a < 3; a++) {
-        if (!isfinite(p[a]))
-            return false;
-        v[a] = (p[a] - c->header.origin[a]) * c->inv_voxel_size;
         if (!(v[a] > -2.0 && v[a] < (double)(1 << 21)))
             return false;
         int i = (int)v[a]; /* floor without the libm call: v > -2 */
         ijk[a] = i - (v[a] < (double)i);
     }
-    uint32_t n = voxel_node(c, ijk[0], ijk[1], ijk[2]);
-    if (n == SG_CACHE_NONE) {
-        /* A surface point lies in a solid voxel (conservative voxelization):
-         * take the medium voxel among the 26 neighbours whose centre is
-         * nearest to p, so that the point's own side of a wall wins. The
-         * squared distance is a sum over the axes, and along each axis the
-         * offsets 0, toward p's nearer side, away from it come in growing
-         * order: a branch and bound in that order skips most neighbours
-         * after the first medium one (~10% of a corridor's queries land
-         * here, next to an edge). */
-        int step[3][3];
-        double term[3][3];
-        for (int a = 0; a < 3; a++) {
-            double f = v[a] - ijk[a] - 0.5; /* in [-0.5, 0.5) */
-            int s = f < 0.0 ? -1 : 1;
-            int o[3] = {0, s, -s};
-            for (int k = 0; k < 3; k++) {
-                double t = f - o[k];
-                step[a][k] = o[k];
-                term[a][k] = t * t;
-            }
+    return true;
+}
+
+const uint32_t *sg_cache_decoded(const SgImportanceCache *c) { return c->decoded; }
+
+/* A surface point lies in a solid voxel (conservative voxelization): take
+ * the medium voxel among the 26 neighbours of ijk whose centre is nearest
+ * to v (voxel units), so that the point's own side of a wall wins. The
+ * squared distance is a sum over the axes, and along each axis the offsets
+ * 0, toward v's nearer side, away from it come in growing order: a branch
+ * and bound in that order skips most neighbours after the first medium one
+ * (~10% of a corridor's queries land here, next to an edge). */
+static uint32_t neighbour_node(const SgImportanceCache *c, const double v[3], const int ijk[3])
+{
+    int step[3][3];
+    double term[3][3];
+    for (int a = 0; a < 3; a++) {
+        double f = v[a] - ijk[a] - 0.5; /* in [-0.5, 0.5) */
+        int s = f < 0.0 ? -1 : 1;
+        int o[3] = {0, s, -s};
+        for (int k = 0; k < 3; k++) {
+            double t = f - o[k];
+            step[a][k] = o[k];
+            term[a][k] = t * t;
         }
-        double best = INFINITY;
-        for (int x = 0; x < 3 && term[0][x] < best; x++)
-            for (int y = 0; y < 3 && term[0][x] + term[1][y] < best; y++)
-                for (int z = 0; z < 3; z++) {
-                    double d2 = term[0][x] + term[1][y] + term[2][z];
-                    if (d2 >= best)
-                        break;
-                    if (x == 0 && y == 0 && z == 0)
-                        continue; /* the voxel itself: solid */
-                    uint32_t m = voxel_node(c, ijk[0] + step[0][x], ijk[1] + step[1][y], ijk[2] + step[2][z]);
-                    if (m != SG_CACHE_NONE) {
-                        best = d2;
-                        n = m;
-                        break; /* the rest of this row is farther */
-                    }
-                }
     }
+    double best = INFINITY;
+    uint32_t n = SG_CACHE_NONE;
+    for (int x = 0; x < 3 && term[0][x] < best; x++)
+        for (int y = 0; y < 3 && term[0][x] + term[1][y] < best; y++)
+            for (int z = 0; z < 3; z++) {
+                double d2 = term[0][x] + term[1][y] + term[2][z];
+                if (d2 >= best)
+                    break;
+                if (x == 0 && y == 0 && z == 0)
+                    continue; /* the voxel itself: solid */
+                uint32_t m = voxel_node(c, ijk[0] + step[0][x], ijk[1] + step[1][y], ijk[2] + step[2][z]);
+                if (m != SG_CACHE_NONE) {
+                    best = d2;
+                    n = m;
+                    break; /* the rest of this row is farther */
+                }
+            }
+    return n;
+}
+
+/* v in voxel units; NaN and far-out points fail the range test. */
+static inline bool nearest_node_voxel(const SgImportanceCache *c, const double v[3], uint32_t *node)
+{
+    int ijk[3];
+    if (!voxel_of(v, ijk))
+        return false;
+    uint32_t n = voxel_node(c, ijk[0], ijk[1], ijk[2]);
+    if (n == SG_CACHE_NONE)
+        n = neighbour_node(c, v, ijk);
     if (n == SG_CACHE_NONE)
         return false;
     *node = n;
     return true;
+}
+
+bool sg_cache_nearest_node(const SgImportanceCache *c, const double p[3], uint32_t *node)
+{
+    double v[3];
+    for (int a = 0; a < 3; a++)
+        v[a] = (p[a] - c->header.origin[a]) * c->inv_voxel_size;
+    return nearest_node_voxel(c, v, node);
+}
+
+bool sg_cache_nearest_node_voxel(const SgImportanceCache *c, const float v[3], uint32_t *node)
+{
+    double d[3] = {v[0], v[1], v[2]};
+    return nearest_node_voxel(c, d, node);
 }
 
 bool sg_cache_importance_point(const SgImportanceCache *c, const double p[3], uint32_t light,

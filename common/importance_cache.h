@@ -17,6 +17,8 @@ extern "C" {
 
 typedef struct SgImportanceCache SgImportanceCache;
 
+#define SG_CACHE_NO_NODE 0xffffffffu /* a voxel that is not medium (sg_cache_decoded) */
+
 SgImportanceCache *sg_cache_open(const char *path, SgError *err);
 void sg_cache_close(SgImportanceCache *cache);
 
@@ -49,8 +51,22 @@ bool sg_cache_light_reaches(const SgImportanceCache *cache, uint32_t light, cons
 SgImportanceCache *sg_cache_open_memory(const void *data, size_t size, const char *name,
                                         SgError *err);
 
+/* Unpacks the nearest-node table into memory (4 bytes a voxel), unless
+ * that would take more than max_bytes: lookups then read one word instead
+ * of a packed block (for render's hot loop). False: not unpacked (too
+ * large, or no memory); lookups still work, from the packed blocks. */
+bool sg_cache_decode(SgImportanceCache *cache, uint64_t max_bytes);
+
 /* Nearest skeleton node (geodesic) of the voxel at p. */
 bool sg_cache_nearest_node(const SgImportanceCache *cache, const double p[3], uint32_t *node);
+/* The same for a point given in voxel units, v = (p - origin) / voxel_size
+ * (sg_cache_grid): for callers that keep their own frame (render's hot loop). */
+bool sg_cache_nearest_node_voxel(const SgImportanceCache *cache, const float v[3], uint32_t *node);
+/* The unpacked table (sg_cache_decode; NULL before): the node of voxel
+ * (i, j, k) at i + nx (j + ny k), SG_CACHE_NO_NODE where the voxel is not
+ * medium; sg_cache_nearest_node_voxel then looks at its neighbours. For a
+ * hot loop that reads it inline (and prefetches). */
+const uint32_t *sg_cache_decoded(const SgImportanceCache *cache);
 bool sg_cache_node_position(const SgImportanceCache *cache, uint32_t node, double p[3]);
 /* Importance point of a node for a light; false if the light cannot reach it. */
 bool sg_cache_node_importance_point(const SgImportanceCache *cache, uint32_t node,

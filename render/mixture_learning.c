@@ -189,7 +189,7 @@ uint32_t sg_mixture_region(const SgMixtureLearner *l, Vec3 p, Vec3 n)
 {
     SgMixtureCandidate choice;
     bool learning;
-    return sg_mixture_lookup(&l->view, p, n, &choice, &learning);
+    return sg_mixture_lookup(&l->view, p, sg_mixture_normal_bin(n), &choice, &learning);
 }
 
 SgMixtureCandidate sg_mixture_choice(const SgMixtureLearner *l, uint32_t region)

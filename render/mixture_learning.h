@@ -117,7 +117,15 @@ typedef struct SgMixtureView {
 
 const SgMixtureView *sg_mixture_view(const SgMixtureLearner *l);
 
-static inline uint32_t sg_mixture_lookup(const SgMixtureView *v, Vec3 p, Vec3 n, SgMixtureCandidate *choice,
+/* The bin of a unit normal: its dominant axis and sign (0..5; the opposite
+ * normal's bin is bin ^ 1). A renderer keeps it per triangle. */
+static inline uint32_t sg_mixture_normal_bin(Vec3 n)
+{
+    float ax = n.x < 0.0f ? -n.x : n.x, ay = n.y < 0.0f ? -n.y : n.y, az = n.z < 0.0f ? -n.z : n.z;
+    return ax >= ay && ax >= az ? (n.x < 0.0f) : ay >= az ? 2u + (n.y < 0.0f) : 4u + (n.z < 0.0f);
+}
+/* The region of p whose normal falls in `bin`: its mixture and whether it still learns. */
+static inline uint32_t sg_mixture_lookup(const SgMixtureView *v, Vec3 p, uint32_t bin, SgMixtureCandidate *choice,
                                          bool *learning)
 {
     float x = (p.x - v->lo.x) * v->inv_size, y = (p.y - v->lo.y) * v->inv_size,
@@ -127,8 +135,6 @@ static inline uint32_t sg_mixture_lookup(const SgMixtureView *v, Vec3 p, Vec3 n,
         *learning = false;
         return SG_NO_REGION;
     }
-    float ax = n.x < 0.0f ? -n.x : n.x, ay = n.y < 0.0f ? -n.y : n.y, az = n.z < 0.0f ? -n.z : n.z;
-    uint32_t bin = ax >= ay && ax >= az ? (n.x < 0.0f) : ay >= az ? 2u + (n.y < 0.0f) : 4u + (n.z < 0.0f);
     uint32_t region = (((uint32_t)z * (uint32_t)v->stride_z + (uint32_t)y * (uint32_t)v->stride_y + (uint32_t)x) * 6u) + bin;
     uint8_t st = v->state[region];
     *choice = v->of_state[st & 7];

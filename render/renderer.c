@@ -26,7 +26,23 @@ typedef struct TriInfo {
     Vec3 normal;       /* unit geometric normal (winding order) */
     uint32_t material;
     uint32_t light;    /* SG_NO_LIGHT if not emissive */
+    uint8_t normal_bin; /* the learner's bin of the normal (sg_mixture_normal_bin) */
 } TriInfo;
+
+/* The importance cache read in the renderer's frame: a query is then a
+ * voxel lookup and a table read, with no call through the guide function
+ * and no conversion to world coordinates. */
+typedef struct CacheGuide {
+    const SgImportanceCache *cache;
+    Vec3 origin;       /* voxel (0,0,0)'s corner, local coordinates */
+    float inv_voxel;   /* 1 / voxel size */
+    float offset;      /* the guide's query offset */
+    uint32_t lights;
+    float *points;     /* [node][light][3] importance points, local; NaN: the
+                        * light cannot be reached from the node */
+    const uint32_t *decoded; /* node per voxel (sg_cache_decoded), or NULL */
+    int dims[3];
+} CacheGuide;
 
 typedef struct Material {
     SgMaterialType type;
@@ -59,6 +75,7 @@ struct SgRenderer {
     uint32_t *light_tris;   /* triangle ids grouped by light */
     double *light_tri_cdf;  /* per light, cumulative area fractions */
     double *follow_cdf;     /* guide: cumulative follow probability per light */
+    CacheGuide cache_guide; /* cache_guide.points NULL: the guide function answers */
     /* Guided mode with a learned alpha: per-region choice of the mixture. */
     SgMixtureLearner *learner;
     const SgMixtureView *mixture_view; /* the learner's, read at every bounce */
@@ -238,6 +255,45 @@ static bool setup_lights(SgRenderer *r, const SgScene *s, SgError *err)
     return true;
 }
 
+/* The cache guide's table; a table too large for memory leaves the guide
+ * function to answer (same answers, slower). */
+static bool setup_cache_guide(SgRenderer *r, const char *path, SgError *err)
+{
+    const SgImportanceCache *c = r->opt.guide.cache;
+    CacheGuide *g = &r->cache_guide;
+    if (!c || r->opt.sampling == SG_SAMPLING_BSDF)
+        return true;
+    uint32_t nodes = sg_cache_node_count(c), lights = sg_cache_light_count(c);
+    if (lights != r->light_count)
+        return sg_fail(err, "%s: the importance cache has %u lights, the scene %u", path, lights,
+                       r->light_count);
+    double floats = 3.0 * nodes * lights;
+    if (!nodes || !lights || floats * sizeof(float) > 256.0 * 1024 * 1024)
+        return true;
+    g->points = malloc((size_t)floats * sizeof(float));
+    if (!g->points)
+        return true;
+    double origin[3];
+    sg_cache_grid(c, g->dims, origin);
+    g->decoded = sg_cache_decoded(c);
+    double voxel = sg_cache_voxel_size(c);
+    g->cache = c;
+    g->origin = v3((float)(origin[0] - r->centre[0]), (float)(origin[1] - r->centre[1]),
+                   (float)(origin[2] - r->centre[2]));
+    g->inv_voxel = (float)(1.0 / voxel);
+    g->offset = (float)r->opt.guide.query_offset;
+    g->lights = lights;
+    for (uint32_t n = 0; n < nodes; n++)
+        for (uint32_t l = 0; l < lights; l++) {
+            double q[3];
+            float *out = g->points + 3 * ((size_t)n * lights + l);
+            bool ok = sg_cache_node_importance_point(c, n, l, q);
+            for (int a = 0; a < 3; a++)
+                out[a] = ok ? (float)(q[a] - r->centre[a]) : NAN;
+        }
+    return true;
+}
+
 static void setup_camera(SgRenderer *r, const SgScene *s)
 {
     const SgCamera *c = &s->camera;
@@ -397,8 +453,13 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         d3_cross(e1, e2, n);
         double nl = d3_length(n);
         r->tris[t].normal = nl > 0 ? v3((float)(n[0] / nl), (float)(n[1] / nl), (float)(n[2] / nl)) : v3(0, 0, 1);
+        r->tris[t].normal_bin = (uint8_t)sg_mixture_normal_bin(r->tris[t].normal);
     }
     if (!setup_lights(r, s, err)) {
+        sg_renderer_free(r);
+        return NULL;
+    }
+    if (!setup_cache_guide(r, path, err)) {
         sg_renderer_free(r);
         return NULL;
     }
@@ -452,6 +513,7 @@ void sg_renderer_free(SgRenderer *r)
     free(r->light_tris);
     free(r->light_tri_cdf);
     free(r->follow_cdf);
+    free(r->cache_guide.points);
     sg_mixture_learner_free(r->learner);
     free(r->pixel_deviation);
     free(r->sum_bounced);
@@ -608,28 +670,85 @@ typedef struct PathStats {
     uint64_t backface;
 } PathStats;
 
-/* Direction toward the guide's importance point, or false. */
+/* A guide query in two halves, around the bounce's shadow ray: the first
+ * picks the light and starts loading the cache's voxel, the second reads
+ * it (by then in cache) and makes the lobe's axis. */
+typedef struct GuideQuery {
+    uint32_t light;
+    float voxel[3]; /* the query point in the cache's voxel units */
+    int64_t index;  /* its voxel in the decoded table, -1: ask the cache */
+} GuideQuery;
 
-static bool guide_axis(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, Vec3 *axis)
+/* False: no light to follow. */
+static bool guide_begin(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, GuideQuery *gq)
 {
     float u = sg_rng_float(rng); /* drawn always: keeps the streams aligned */
     if (!r->light_count || r->follow_cdf[r->light_count - 1] <= 0.0)
         return false;
-    uint32_t l = pick_cdf(r->follow_cdf, r->light_count, u * r->follow_cdf[r->light_count - 1]);
+    gq->light = r->light_count == 1
+                    ? 0
+                    : pick_cdf(r->follow_cdf, r->light_count, u * r->follow_cdf[r->light_count - 1]);
+    const CacheGuide *g = &r->cache_guide;
+    if (g->points) {
+        Vec3 w = v3_add(p, v3_scale(n, g->offset));
+        gq->voxel[0] = (w.x - g->origin.x) * g->inv_voxel;
+        gq->voxel[1] = (w.y - g->origin.y) * g->inv_voxel;
+        gq->voxel[2] = (w.z - g->origin.z) * g->inv_voxel;
+        gq->index = -1;
+        if (g->decoded) {
+            int ijk[3];
+            bool inside = true;
+            for (int a = 0; a < 3; a++) {
+                float v = gq->voxel[a];
+                inside = inside && v >= 0.0f && v < (float)g->dims[a];
+                ijk[a] = inside ? (int)v : 0; /* v >= 0: truncation is floor */
+            }
+            if (inside) {
+                gq->index = ijk[0] + (int64_t)g->dims[0] * (ijk[1] + (int64_t)g->dims[1] * ijk[2]);
+                __builtin_prefetch(g->decoded + gq->index);
+            }
+        }
+    }
+    return true;
+}
+
+/* The importance point (local coordinates), or false. */
+static bool importance_point(const SgRenderer *r, const GuideQuery *gq, Vec3 p, Vec3 n, Vec3 *q)
+{
+    const CacheGuide *g = &r->cache_guide;
+    if (g->points) {
+        uint32_t node = gq->index >= 0 ? g->decoded[gq->index] : SG_CACHE_NO_NODE;
+        /* in a wall or outside the grid: the cache looks at the neighbours */
+        if (node == SG_CACHE_NO_NODE && !sg_cache_nearest_node_voxel(g->cache, gq->voxel, &node))
+            return false;
+        const float *pt = g->points + 3 * ((size_t)node * g->lights + gq->light);
+        *q = v3(pt[0], pt[1], pt[2]);
+        return pt[0] == pt[0]; /* NaN: the light cannot reach the node */
+    }
     double off = r->opt.guide.query_offset;
     double world[3] = {p.x + r->centre[0] + off * n.x, p.y + r->centre[1] + off * n.y,
                        p.z + r->centre[2] + off * n.z};
-    double q[3];
-    if (!r->opt.guide.importance_point(r->opt.guide.ctx, world, l, q))
+    double wq[3];
+    if (!r->opt.guide.importance_point(r->opt.guide.ctx, world, gq->light, wq))
         return false;
-    double d[3] = {q[0] - (p.x + r->centre[0]), q[1] - (p.y + r->centre[1]), q[2] - (p.z + r->centre[2])};
-    double len = d3_length(d);
+    *q = v3((float)(wq[0] - r->centre[0]), (float)(wq[1] - r->centre[1]), (float)(wq[2] - r->centre[2]));
+    return true;
+}
+
+/* The direction toward the importance point, or false (none, or below the surface). */
+static bool guide_end(const SgRenderer *r, const GuideQuery *gq, Vec3 p, Vec3 n, Vec3 *axis)
+{
+    Vec3 q;
+    if (!importance_point(r, gq, p, n, &q))
+        return false;
+    Vec3 d = v3_sub(q, p);
+    float len2 = v3_dot(d, d);
     /* a point at the shading point has no direction; one at infinity (a
      * bad guide) would give a NaN axis that passes the test below */
-    if (!(len > 1e-6 * r->scale) || !isfinite(len))
+    float min_len = 1e-6f * r->scale;
+    if (!(len2 > min_len * min_len) || !(len2 < INFINITY))
         return false;
-    double inv = 1.0 / len;
-    Vec3 a = v3((float)(d[0] * inv), (float)(d[1] * inv), (float)(d[2] * inv));
+    Vec3 a = v3_scale(d, 1.0f / sqrtf(len2));
     if (v3_dot(a, n) <= 0.0f)
         return false; /* below the surface: back to BSDF sampling */
     *axis = a;
@@ -765,10 +884,13 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             bool learn = false;
             PendingRecord *pr = NULL;
             if (mode == SG_SAMPLING_GUIDED && r->learner) {
-                region = sg_mixture_lookup(r->mixture_view, h.p, n, &mix, &learn);
+                /* n is the winding normal or its opposite: the other bin of the pair */
+                uint32_t bin = r->tris[h.tri].normal_bin ^ (cos_o < 0.0f ? 0u : 1u);
+                region = sg_mixture_lookup(r->mixture_view, h.p, bin, &mix, &learn);
                 learn = learn && learn_tile >= 0 && pending_count < MAX_PENDING;
-                float rms = sg_mixture_radiance(r->mixture_view, region);
-                if (depth >= ROULETTE_DEPTH && pixel_deviation > 0.0f && rms >= 0.0f) {
+                float rms = depth >= ROULETTE_DEPTH && pixel_deviation > 0.0f
+                                ? sg_mixture_radiance(r->mixture_view, region) : -1.0f;
+                if (rms >= 0.0f) {
                     float q = ROULETTE_GAIN * luminance(beta) * rms / pixel_deviation;
                     roulette_done = true;
                     if (q < 1.0f) {
@@ -789,7 +911,8 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             }
             bool guided = mode == SG_SAMPLING_SKELETON ||
                           (mode == SG_SAMPLING_GUIDED && (mix.alpha < 1.0f || learn));
-            guided = guided && guide_axis(r, h.p, n, rng, &axis);
+            GuideQuery gq;
+            guided = guided && guide_begin(r, h.p, n, rng, &gq);
             Vec3 origin = offset_origin(r, h.p, n);
 
             /* next-event estimation */
@@ -835,6 +958,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 }
             }
 
+            guided = guided && guide_end(r, &gq, h.p, n, &axis);
             if (guided) {
                 if (mode == SG_SAMPLING_SKELETON) {
                     if (!lit) /* the paper: lobe only where not directly lit */
@@ -917,6 +1041,7 @@ typedef struct PassCtx {
     int tiles_x;
     uint64_t pass_key;
     bool first_pass;
+    uint64_t learn_stride;
 } PassCtx;
 
 static uint64_t mix64(uint64_t x)
@@ -940,9 +1065,9 @@ static uint64_t mix64(uint64_t x)
  * the image size: a large image learns from a share of its pixels. */
 #define LEARN_PATHS_MAX 16384
 
-static bool learns(const PassCtx *pc, size_t pix)
+/* One path in `stride` learns in this pass (1: all). */
+static uint64_t learn_stride(const SgRenderer *r)
 {
-    const SgRenderer *r = pc->r;
     uint64_t pixels = (uint64_t)r->opt.width * (uint64_t)r->opt.height;
     uint64_t stride = 1;
     while (pixels / stride > LEARN_PATHS_MAX)
@@ -951,7 +1076,12 @@ static bool learns(const PassCtx *pc, size_t pix)
     if (pass >= LEARN_WARMUP_PASSES)
         for (int p = 2; p <= pass && stride < LEARN_STRIDE_MAX; p *= 2)
             stride *= 2;
-    return stride == 1 || mix64(pc->pass_key ^ (pix * 0x9e3779b97f4a7c15ULL)) % stride == 0;
+    return stride;
+}
+
+static bool learns(const PassCtx *pc, size_t pix)
+{
+    return pc->learn_stride == 1 || mix64(pc->pass_key ^ (pix * 0x9e3779b97f4a7c15ULL)) % pc->learn_stride == 0;
 }
 
 static void render_tile(void *vctx, uint64_t index, int thread)
@@ -1105,7 +1235,8 @@ void sg_renderer_pass(SgRenderer *r)
     if (r->pixel_deviation && r->spp > 1 && (r->spp < 8 || !(r->spp & (r->spp - 1)) || r->spp % 16 == 0))
         estimate_deviations(r);
     PassCtx pc = {r, (r->opt.width + TILE - 1) / TILE,
-                  mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1), r->spp == 0};
+                  mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1), r->spp == 0,
+                  learn_stride(r)};
     int tiles_y = (r->opt.height + TILE - 1) / TILE;
     sg_parallel_for((uint64_t)pc.tiles_x * tiles_y, r->opt.threads, render_tile, &pc);
     if (r->learner)

@@ -55,14 +55,6 @@ Vec3 sg_sample_folded_lobe(Vec3 a, Vec3 n, float p, float u1, float u2)
     return c < 0.0f ? v3_sub(w, v3_scale(n, 2.0f * c)) : w;
 }
 
-float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w)
-{
-    if (v3_dot(w, n) <= 0.0f)
-        return 0.0f;
-    Vec3 mirrored = v3_sub(a, v3_scale(n, 2.0f * v3_dot(a, n)));
-    return sg_pdf_cosine_power(a, p, w) + sg_pdf_cosine_power(mirrored, p, w);
-}
-
 SgGlossyLobe sg_glossy_lobe(Vec3 n, Vec3 wo, float exponent, float diffuse_weight)
 {
     SgGlossyLobe lobe;

@@ -5,7 +5,10 @@
 #ifndef SG_RENDER_SAMPLING_H
 #define SG_RENDER_SAMPLING_H
 
+#include <math.h>
 #include <stdbool.h>
+#include <stdint.h>
+#include <string.h>
 
 #include "vecmath.h"
 
@@ -34,7 +37,7 @@ float sg_pdf_cosine_power(Vec3 a, float p, Vec3 w);
  * where a reflective BSDF is zero. pdf(w) = lobe(a, w) + lobe(a', w) for
  * w.n > 0 (a' = a mirrored across the surface), 0 below. */
 Vec3 sg_sample_folded_lobe(Vec3 a, Vec3 n, float p, float u1, float u2);
-float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w);
+static inline float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w);
 
 /* The non-delta BSDF of the renderer's diffuse and glossy materials:
  *   f(wo, wi) = kd / pi + ks (p + 2) / (2 pi) max(0, wi.r)^p,  r = reflect(wo, n),
@@ -69,9 +72,18 @@ Vec3 sg_sample_mixture(const SgMixture *m, float u0, float u1, float u2);
 float sg_pdf_mixture(const SgMixture *m, Vec3 w);
 
 /* c^p for c in [0, 1]: by squaring when p is a small whole number (the
- * usual lobe exponents), powf otherwise. */
+ * usual lobe exponents; a power of two, as the learner's 4, 16 and 64, in
+ * log2(p) products), powf otherwise. */
 static inline float sg_pow_exponent(float c, float p)
 {
+    int32_t bits;
+    memcpy(&bits, &p, sizeof bits);
+    int k = (bits >> 23) - 127; /* p = 2^k when the mantissa is zero (p > 0) */
+    if ((bits & 0x007fffff) == 0 && k >= 0 && k <= 6) {
+        for (; k; k--)
+            c *= c;
+        return c;
+    }
     if (p >= 0.0f && p <= 64.0f && p == (float)(int)p) {
         float r = 1.0f, b = c;
         for (int e = (int)p; e; e >>= 1) {
@@ -83,11 +95,26 @@ static inline float sg_pow_exponent(float c, float p)
     }
     return powf(c, p);
 }
-
 /* Reflection of wo (pointing away from the surface) about n. */
 static inline Vec3 sg_reflect(Vec3 wo, Vec3 n)
 {
     return v3_sub(v3_scale(n, 2.0f * v3_dot(wo, n)), wo);
+}
+
+/* Inline: the guided mode evaluates it twice per bounce. The mirrored
+ * axis a' = a - 2 (a.n) n gives a'.w = a.w - 2 (a.n)(n.w). */
+static inline float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w)
+{
+    float wn = v3_dot(w, n);
+    if (!(wn > 0.0f))
+        return 0.0f;
+    float c1 = v3_dot(a, w), c2 = c1 - 2.0f * v3_dot(a, n) * wn;
+    float sum = 0.0f;
+    if (c1 > 0.0f)
+        sum += sg_pow_exponent(sg_minf(c1, 1.0f), p);
+    if (c2 > 0.0f)
+        sum += sg_pow_exponent(sg_minf(c2, 1.0f), p);
+    return (p + 1.0f) * (0.5f * SG_INV_PI) * sum;
 }
 
 #ifdef __cplusplus

@@ -673,6 +673,72 @@ Test(importance_cache, a_point_in_a_wall_takes_the_nearest_medium_neighbour)
     l_scene_free(&s);
 }
 
+/* sg_cache_decode unpacks the node table for render: every lookup answers
+ * as from the packed blocks (medium voxels, wall points, points outside),
+ * the table holds each voxel's node, and a budget too small leaves the
+ * cache packed and working. */
+Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
+{
+    LScene s;
+    l_scene(&s);
+    char path[256];
+    SgImportanceCache *c = build_and_open(&s.medium, &s.skeleton, "decode", 1, path, sizeof path);
+    const SgGrid *g = &s.medium.grid;
+    enum { POINTS = 20000 };
+    double (*p)[3] = malloc(sizeof *p * POINTS);
+    uint32_t *node = malloc(sizeof *node * POINTS);
+    bool *found = malloc(sizeof *found * POINTS);
+    cr_assert(p && node && found);
+    const int dims[3] = {g->nx, g->ny, g->nz};
+    SgRng rng;
+    sg_rng_seed(&rng, 9, 2);
+    for (int i = 0; i < POINTS; i++) {
+        for (int a = 0; a < 3; a++) /* the grid and a voxel and a half around it */
+            p[i][a] = -1.5 + (dims[a] + 3.0) * sg_rng_float(&rng);
+        found[i] = sg_cache_nearest_node(c, p[i], &node[i]);
+    }
+    cr_assert_not(sg_cache_decode(c, 1024), "a 1 KB budget cannot hold %d voxels", g->nx * g->ny * g->nz);
+    cr_assert_null(sg_cache_decoded(c));
+    cr_assert(sg_cache_decode(c, 1u << 20));
+    const uint32_t *table = sg_cache_decoded(c);
+    cr_assert_not_null(table);
+    int medium = 0, walls = 0;
+    for (int i = 0; i < POINTS; i++) {
+        uint32_t n = SG_CACHE_NO_NODE;
+        cr_assert_eq(sg_cache_nearest_node(c, p[i], &n), found[i], "point %d", i);
+        if (found[i])
+            cr_assert_eq(n, node[i], "point %d: node %u unpacked, %u packed", i, n, node[i]);
+        float v[3] = {(float)p[i][0], (float)p[i][1], (float)p[i][2]}; /* origin 0, voxel 1 */
+        uint32_t nv = SG_CACHE_NO_NODE;
+        cr_assert_eq(sg_cache_nearest_node_voxel(c, v, &nv), found[i], "point %d in voxel units", i);
+        if (found[i])
+            cr_assert_eq(nv, node[i]);
+    }
+    for (int k = 0; k < g->nz; k++)
+        for (int j = 0; j < g->ny; j++)
+            for (int i = 0; i < g->nx; i++) {
+                uint32_t t = table[i + g->nx * (j + g->ny * k)];
+                if (!sg_grid_get(g, i, j, k)) {
+                    cr_assert_eq(t, SG_CACHE_NO_NODE, "solid voxel %d %d %d", i, j, k);
+                    walls++;
+                    continue;
+                }
+                double centre[3] = {i + 0.5, j + 0.5, k + 0.5};
+                uint32_t n;
+                cr_assert(sg_cache_nearest_node(c, centre, &n));
+                cr_assert_eq(t, n, "voxel %d %d %d", i, j, k);
+                medium++;
+            }
+    cr_assert_gt(medium, 100);
+    cr_assert_gt(walls, 100);
+    free(p);
+    free(node);
+    free(found);
+    sg_cache_close(c);
+    unlink(path);
+    l_scene_free(&s);
+}
+
 Test(importance_cache, build_is_deterministic_across_thread_counts)
 {
     LScene s;

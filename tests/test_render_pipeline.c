@@ -1,7 +1,8 @@
 /* bin/render with a real importance cache, built by the other programs
  * (skipped when they are not built): guided agrees with bsdf within three
  * standard errors on the dark corridor and the Cornell box; a cache built
- * for other geometry is refused. */
+ * for other geometry is refused; the renderer's own reading of the cache
+ * answers as the guide function does. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
@@ -9,6 +10,9 @@
 #include <string.h>
 
 #include "image_io.h"
+#include "importance_cache.h"
+#include "render/renderer.h"
+#include "scene.h"
 #include "support_files.h"
 
 static bool have_programs(void)
@@ -112,4 +116,80 @@ Test(render_pipeline, cache_for_other_geometry_is_refused)
     char out[4200];
     snprintf(out, sizeof out, "%s/x.exr", dir);
     cr_assert_not(sg_test_exists(out));
+}
+
+static bool cache_function(void *ctx, const double p[3], uint32_t light, double q[3])
+{
+    return sg_cache_importance_point(ctx, p, light, q);
+}
+
+/* The corridor, guided with a fixed alpha (no learning: a path's samples
+ * depend only on its own queries), 8 spp at 80x60. */
+static float *render_corridor(const SgScene *scene, SgImportanceCache *cache, bool direct)
+{
+    SgRenderOptions o;
+    sg_render_options_default(&o, scene);
+    o.width = 80;
+    o.height = 60;
+    o.sampling = SG_SAMPLING_GUIDED;
+    o.alpha = 0.5f;
+    o.threads = 2;
+    o.guide.importance_point = cache_function;
+    o.guide.ctx = cache;
+    o.guide.cache = direct ? cache : NULL;
+    o.guide.query_offset = 1.5 * sg_cache_voxel_size(cache);
+    SgError e = {0};
+    SgRenderer *r = sg_renderer_create(scene, &o, &e);
+    cr_assert(r, "%s", e.message);
+    for (int i = 0; i < 8; i++)
+        sg_renderer_pass(r);
+    float *rgb = malloc(sizeof(float) * 3 * 80 * 60);
+    cr_assert(rgb);
+    sg_renderer_image(r, rgb);
+    sg_renderer_free(r);
+    return rgb;
+}
+
+/* The renderer reads the cache in its own frame (float voxel coordinates,
+ * the unpacked node table, importance points copied to local coordinates):
+ * it must pick the nodes the guide function picks, in world coordinates
+ * and double precision. A different node changes a path's samples, so the
+ * pixels tell: all but a few must be identical. Unpacked or packed, the
+ * renderer's own reading gives the same image. */
+Test(render_pipeline, the_renderers_reading_of_the_cache_matches_the_guide_function, .timeout = 120)
+{
+    if (!have_programs())
+        cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
+    const char *dir = sg_test_tmpdir();
+    const char *path = precompute("data/corridor/corridor.json", dir);
+    SgError e = {0};
+    SgScene *scene = sg_scene_load("data/corridor/corridor.json", &e);
+    cr_assert(scene, "%s", e.message);
+    SgImportanceCache *cache = sg_cache_open(path, &e);
+    cr_assert(cache, "%s", e.message);
+
+    float *function = render_corridor(scene, cache, false);
+    float *packed = render_corridor(scene, cache, true);
+    cr_assert(sg_cache_decode(cache, 256u << 20));
+    cr_assert_not_null(sg_cache_decoded(cache));
+    float *unpacked = render_corridor(scene, cache, true);
+
+    int differ = 0, lit = 0;
+    for (int i = 0; i < 80 * 60; i++) {
+        bool same = true;
+        for (int c = 0; c < 3; c++) {
+            same = same && function[3 * i + c] == unpacked[3 * i + c];
+            cr_assert_eq(packed[3 * i + c], unpacked[3 * i + c], "pixel %d: packed and unpacked differ", i);
+        }
+        differ += !same;
+        lit += function[3 * i] + function[3 * i + 1] + function[3 * i + 2] > 0.0f;
+    }
+    cr_log_info("direct reading vs guide function: %d of %d pixels differ", differ, 80 * 60);
+    cr_assert_gt(lit, 80 * 60 / 2, "the corridor should be mostly lit: %d pixels", lit);
+    cr_assert_leq(differ, 80 * 60 / 100, "%d pixels differ", differ);
+    free(function);
+    free(packed);
+    free(unpacked);
+    sg_cache_close(cache);
+    sg_scene_free(scene);
 }
