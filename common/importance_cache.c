@@ -17,6 +17,7 @@
 #include "importance_cache_format.h"
 
 _Static_assert(SG_CACHE_NO_NODE == SG_CACHE_NONE, "the public name of the format's 'none'");
+_Static_assert((SG_CACHE_NONE & SG_CACHE_WALL_BIT) != 0, "'none' reads as a wall entry");
 
 struct SgImportanceCache {
     const uint8_t *data;
@@ -295,8 +296,10 @@ static inline uint32_t voxel_node(const SgImportanceCache *c, int i, int j, int 
     if ((unsigned)i >= (unsigned)c->header.nx || (unsigned)j >= (unsigned)c->header.ny ||
         (unsigned)k >= (unsigned)c->header.nz)
         return SG_CACHE_NONE;
-    if (c->decoded)
-        return c->decoded[(size_t)i + (size_t)c->header.nx * ((size_t)j + (size_t)c->header.ny * (size_t)k)];
+    if (c->decoded) {
+        uint32_t m = c->decoded[(size_t)i + (size_t)c->header.nx * ((size_t)j + (size_t)c->header.ny * (size_t)k)];
+        return m & SG_CACHE_WALL_BIT ? SG_CACHE_NONE : m; /* a wall's entry is not medium */
+    }
     return packed_voxel_node(c, i, j, k);
 }
 
@@ -322,6 +325,37 @@ bool sg_cache_decode(SgImportanceCache *c, uint64_t max_bytes)
                             t[(size_t)i + (size_t)nx * ((size_t)j + (size_t)ny * (size_t)k)] =
                                 present ? packed_voxel_node(c, i, j, k) : SG_CACHE_NONE;
             }
+    /* A wall voxel whose medium neighbours (of 26) all have one node: any
+     * point in it gets that node (neighbour_node could pick no other), so
+     * the entry says so and a lookup there needs no search. */
+    if (c->header.node_count < SG_CACHE_WALL_BIT)
+        for (int k = 0; k < nz; k++)
+            for (int j = 0; j < ny; j++)
+                for (int i = 0; i < nx; i++) {
+                    size_t at = (size_t)i + (size_t)nx * ((size_t)j + (size_t)ny * (size_t)k);
+                    if (t[at] != SG_CACHE_NONE)
+                        continue;
+                    uint32_t common = SG_CACHE_NONE;
+                    bool mixed = false;
+                    for (int dz = -1; dz <= 1 && !mixed; dz++)
+                        for (int dy = -1; dy <= 1 && !mixed; dy++)
+                            for (int dx = -1; dx <= 1; dx++) {
+                                int a = i + dx, b = j + dy, e = k + dz;
+                                if ((unsigned)a >= (unsigned)nx || (unsigned)b >= (unsigned)ny ||
+                                    (unsigned)e >= (unsigned)nz)
+                                    continue;
+                                uint32_t m = t[(size_t)a + (size_t)nx * ((size_t)b + (size_t)ny * (size_t)e)];
+                                if (m & SG_CACHE_WALL_BIT)
+                                    continue; /* solid (maybe marked already) */
+                                if (common != SG_CACHE_NONE && m != common) {
+                                    mixed = true;
+                                    break;
+                                }
+                                common = m;
+                            }
+                    if (!mixed && common != SG_CACHE_NONE)
+                        t[at] = common | SG_CACHE_WALL_BIT;
+                }
     c->decoded = t;
     return true;
 }
@@ -350,35 +384,50 @@ const uint32_t *sg_cache_decoded(const SgImportanceCache *c) { return c->decoded
  * (~10% of a corridor's queries land here, next to an edge). */
 static uint32_t neighbour_node(const SgImportanceCache *c, const double v[3], const int ijk[3])
 {
-    int step[3][3];
+    const int dims[3] = {c->header.nx, c->header.ny, c->header.nz};
     double term[3][3];
+    int at[3][3];      /* the neighbour's index along the axis */
+    bool inside[3][3]; /* ... within the grid */
     for (int a = 0; a < 3; a++) {
         double f = v[a] - ijk[a] - 0.5; /* in [-0.5, 0.5) */
         int s = f < 0.0 ? -1 : 1;
-        int o[3] = {0, s, -s};
+        const int o[3] = {0, s, -s};
         for (int k = 0; k < 3; k++) {
             double t = f - o[k];
-            step[a][k] = o[k];
             term[a][k] = t * t;
+            at[a][k] = ijk[a] + o[k];
+            inside[a][k] = (unsigned)at[a][k] < (unsigned)dims[a];
         }
     }
     double best = INFINITY;
     uint32_t n = SG_CACHE_NONE;
-    for (int x = 0; x < 3 && term[0][x] < best; x++)
-        for (int y = 0; y < 3 && term[0][x] + term[1][y] < best; y++)
+    for (int x = 0; x < 3 && term[0][x] < best; x++) {
+        if (!inside[0][x])
+            continue;
+        for (int y = 0; y < 3 && term[0][x] + term[1][y] < best; y++) {
+            if (!inside[1][y])
+                continue;
+            double dxy = term[0][x] + term[1][y];
             for (int z = 0; z < 3; z++) {
-                double d2 = term[0][x] + term[1][y] + term[2][z];
+                double d2 = dxy + term[2][z];
                 if (d2 >= best)
                     break;
-                if (x == 0 && y == 0 && z == 0)
-                    continue; /* the voxel itself: solid */
-                uint32_t m = voxel_node(c, ijk[0] + step[0][x], ijk[1] + step[1][y], ijk[2] + step[2][z]);
+                if (!inside[2][z] || (x == 0 && y == 0 && z == 0)) /* (0,0,0): the voxel itself, solid */
+                    continue;
+                uint32_t m = c->decoded
+                                 ? c->decoded[(size_t)at[0][x] + (size_t)dims[0] * ((size_t)at[1][y] +
+                                                                                  (size_t)dims[1] * (size_t)at[2][z])]
+                                 : packed_voxel_node(c, at[0][x], at[1][y], at[2][z]);
+                if (m & SG_CACHE_WALL_BIT)
+                    m = SG_CACHE_NONE; /* a wall (marked or not) */
                 if (m != SG_CACHE_NONE) {
                     best = d2;
                     n = m;
                     break; /* the rest of this row is farther */
                 }
             }
+        }
+    }
     return n;
 }
 
@@ -388,7 +437,15 @@ static inline bool nearest_node_voxel(const SgImportanceCache *c, const double v
     int ijk[3];
     if (!voxel_of(v, ijk))
         return false;
-    uint32_t n = voxel_node(c, ijk[0], ijk[1], ijk[2]);
+    uint32_t n;
+    if (c->decoded && (unsigned)ijk[0] < (unsigned)c->header.nx && (unsigned)ijk[1] < (unsigned)c->header.ny &&
+        (unsigned)ijk[2] < (unsigned)c->header.nz) {
+        n = c->decoded[(size_t)ijk[0] + (size_t)c->header.nx * ((size_t)ijk[1] + (size_t)c->header.ny * (size_t)ijk[2])];
+        if (n != SG_CACHE_NONE)
+            n &= ~SG_CACHE_WALL_BIT; /* medium, or a wall whose neighbours agree */
+    } else {
+        n = voxel_node(c, ijk[0], ijk[1], ijk[2]);
+    }
     if (n == SG_CACHE_NONE)
         n = neighbour_node(c, v, ijk);
     if (n == SG_CACHE_NONE)

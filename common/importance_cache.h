@@ -17,7 +17,8 @@ extern "C" {
 
 typedef struct SgImportanceCache SgImportanceCache;
 
-#define SG_CACHE_NO_NODE 0xffffffffu /* a voxel that is not medium (sg_cache_decoded) */
+#define SG_CACHE_NO_NODE 0xffffffffu  /* a voxel that is not medium (sg_cache_decoded) */
+#define SG_CACHE_WALL_BIT 0x80000000u /* marks a wall's entry in sg_cache_decoded */
 
 SgImportanceCache *sg_cache_open(const char *path, SgError *err);
 void sg_cache_close(SgImportanceCache *cache);
@@ -62,10 +63,12 @@ bool sg_cache_nearest_node(const SgImportanceCache *cache, const double p[3], ui
 /* The same for a point given in voxel units, v = (p - origin) / voxel_size
  * (sg_cache_grid): for callers that keep their own frame (render's hot loop). */
 bool sg_cache_nearest_node_voxel(const SgImportanceCache *cache, const float v[3], uint32_t *node);
-/* The unpacked table (sg_cache_decode; NULL before): the node of voxel
- * (i, j, k) at i + nx (j + ny k), SG_CACHE_NO_NODE where the voxel is not
- * medium; sg_cache_nearest_node_voxel then looks at its neighbours. For a
- * hot loop that reads it inline (and prefetches). */
+/* The unpacked table (sg_cache_decode; NULL before), entry of voxel
+ * (i, j, k) at i + nx (j + ny k): its node where the voxel is medium; where
+ * it is a wall, node | SG_CACHE_WALL_BIT if all its medium neighbours have
+ * that node (the answer for any point in it), else SG_CACHE_NO_NODE
+ * (sg_cache_nearest_node_voxel then searches the neighbours). For a hot
+ * loop that reads it inline (and prefetches). */
 const uint32_t *sg_cache_decoded(const SgImportanceCache *cache);
 bool sg_cache_node_position(const SgImportanceCache *cache, uint32_t node, double p[3]);
 /* Importance point of a node for a light; false if the light cannot reach it. */

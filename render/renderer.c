@@ -41,7 +41,8 @@ typedef struct CacheGuide {
     float *points;     /* [node][light][3] importance points, local; NaN: the
                         * light cannot be reached from the node */
     const uint32_t *decoded; /* node per voxel (sg_cache_decoded), or NULL */
-    int dims[3];
+    float extent[3];   /* the grid's size in voxels */
+    int64_t stride[3]; /* of x, y, z in the decoded table */
 } CacheGuide;
 
 typedef struct Material {
@@ -273,9 +274,15 @@ static bool setup_cache_guide(SgRenderer *r, const char *path, SgError *err)
     g->points = malloc((size_t)floats * sizeof(float));
     if (!g->points)
         return true;
+    int dims[3];
     double origin[3];
-    sg_cache_grid(c, g->dims, origin);
+    sg_cache_grid(c, dims, origin);
     g->decoded = sg_cache_decoded(c);
+    for (int a = 0; a < 3; a++)
+        g->extent[a] = (float)dims[a];
+    g->stride[0] = 1;
+    g->stride[1] = dims[0];
+    g->stride[2] = (int64_t)dims[0] * dims[1];
     double voxel = sg_cache_voxel_size(c);
     g->cache = c;
     g->origin = v3((float)(origin[0] - r->centre[0]), (float)(origin[1] - r->centre[1]),
@@ -694,19 +701,13 @@ static bool guide_begin(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, GuideQu
         gq->voxel[0] = (w.x - g->origin.x) * g->inv_voxel;
         gq->voxel[1] = (w.y - g->origin.y) * g->inv_voxel;
         gq->voxel[2] = (w.z - g->origin.z) * g->inv_voxel;
+        const float *v = gq->voxel;
         gq->index = -1;
-        if (g->decoded) {
-            int ijk[3];
-            bool inside = true;
-            for (int a = 0; a < 3; a++) {
-                float v = gq->voxel[a];
-                inside = inside && v >= 0.0f && v < (float)g->dims[a];
-                ijk[a] = inside ? (int)v : 0; /* v >= 0: truncation is floor */
-            }
-            if (inside) {
-                gq->index = ijk[0] + (int64_t)g->dims[0] * (ijk[1] + (int64_t)g->dims[1] * ijk[2]);
-                __builtin_prefetch(g->decoded + gq->index);
-            }
+        if (g->decoded && v[0] >= 0.0f && v[1] >= 0.0f && v[2] >= 0.0f && v[0] < g->extent[0] &&
+            v[1] < g->extent[1] && v[2] < g->extent[2]) {
+            /* v >= 0: truncation is floor */
+            gq->index = (int64_t)(int)v[0] + g->stride[1] * (int)v[1] + g->stride[2] * (int)v[2];
+            __builtin_prefetch(g->decoded + gq->index);
         }
     }
     return true;
@@ -718,8 +719,10 @@ static bool importance_point(const SgRenderer *r, const GuideQuery *gq, Vec3 p, 
     const CacheGuide *g = &r->cache_guide;
     if (g->points) {
         uint32_t node = gq->index >= 0 ? g->decoded[gq->index] : SG_CACHE_NO_NODE;
-        /* in a wall or outside the grid: the cache looks at the neighbours */
-        if (node == SG_CACHE_NO_NODE && !sg_cache_nearest_node_voxel(g->cache, gq->voxel, &node))
+        if (node != SG_CACHE_NO_NODE)
+            node &= ~SG_CACHE_WALL_BIT; /* medium, or a wall whose neighbours agree */
+        /* in another wall or outside the grid: the cache searches the neighbours */
+        else if (!sg_cache_nearest_node_voxel(g->cache, gq->voxel, &node))
             return false;
         const float *pt = g->points + 3 * ((size_t)node * g->lights + gq->light);
         *q = v3(pt[0], pt[1], pt[2]);

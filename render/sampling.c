@@ -18,11 +18,6 @@ Vec3 sg_sample_cosine_hemisphere(Vec3 n, float u1, float u2)
     return sg_to_world(v3(r * cosf(phi), r * sinf(phi), z), n);
 }
 
-float sg_pdf_cosine_hemisphere(Vec3 n, Vec3 w)
-{
-    return sg_maxf(0.0f, v3_dot(n, w)) * SG_INV_PI;
-}
-
 Vec3 sg_sample_cosine_power(Vec3 a, float p, float u1, float u2)
 {
     /* cos theta = u^(1/(p+1)), with u = 1 - u1 in (0, 1]. */
@@ -38,14 +33,6 @@ Vec3 sg_sample_cosine_power(Vec3 a, float p, float u1, float u2)
     float cos_t = (float)exp(l);
     float sin_t = (float)sqrt(fmax(0.0, -expm1(2.0 * l)));
     return sg_to_world(v3(sin_t * cosf(phi), sin_t * sinf(phi), cos_t), a);
-}
-
-float sg_pdf_cosine_power(Vec3 a, float p, Vec3 w)
-{
-    float c = v3_dot(a, w);
-    if (c <= 0.0f)
-        return 0.0f;
-    return (p + 1.0f) * (0.5f * SG_INV_PI) * sg_pow_exponent(sg_minf(c, 1.0f), p);
 }
 
 Vec3 sg_sample_folded_lobe(Vec3 a, Vec3 n, float p, float u1, float u2)
@@ -72,30 +59,9 @@ Vec3 sg_sample_glossy(const SgGlossyLobe *lobe, float u0, float u1, float u2)
     return sg_sample_cosine_power(lobe->r, lobe->exponent, u1, u2);
 }
 
-float sg_pdf_glossy(const SgGlossyLobe *lobe, Vec3 w)
-{
-    float pd = lobe->diffuse_weight;
-    float pdf = 0.0f;
-    if (pd > 0.0f)
-        pdf += pd * sg_pdf_cosine_hemisphere(lobe->n, w);
-    if (pd < 1.0f)
-        pdf += (1.0f - pd) * sg_pdf_cosine_power(lobe->r, lobe->exponent, w);
-    return pdf;
-}
-
 Vec3 sg_sample_mixture(const SgMixture *m, float u0, float u1, float u2)
 {
     if (u0 < m->alpha)
         return sg_sample_glossy(&m->bsdf, u0 / m->alpha, u1, u2);
     return sg_sample_folded_lobe(m->axis, m->bsdf.n, m->lobe_exponent, u1, u2);
-}
-
-float sg_pdf_mixture(const SgMixture *m, Vec3 w)
-{
-    float pdf = 0.0f;
-    if (m->alpha > 0.0f)
-        pdf += m->alpha * sg_pdf_glossy(&m->bsdf, w);
-    if (m->alpha < 1.0f)
-        pdf += (1.0f - m->alpha) * sg_pdf_folded_lobe(m->axis, m->bsdf.n, m->lobe_exponent, w);
-    return pdf;
 }

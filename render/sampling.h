@@ -24,13 +24,13 @@ Vec3 sg_to_world(Vec3 local, Vec3 axis);
 
 /* Cosine-weighted hemisphere around unit n: pdf = max(0, w.n) / pi. */
 Vec3 sg_sample_cosine_hemisphere(Vec3 n, float u1, float u2);
-float sg_pdf_cosine_hemisphere(Vec3 n, Vec3 w);
+static inline float sg_pdf_cosine_hemisphere(Vec3 n, Vec3 w);
 
 /* Cosine-power lobe around unit axis a, exponent p >= 0 (0 = uniform
  * hemisphere): pdf = (p + 1) / (2 pi) max(0, w.a)^p. Accurate up to p = 1e4
  * and beyond (sin theta is computed without cancellation). */
 Vec3 sg_sample_cosine_power(Vec3 a, float p, float u1, float u2);
-float sg_pdf_cosine_power(Vec3 a, float p, Vec3 w);
+static inline float sg_pdf_cosine_power(Vec3 a, float p, Vec3 w);
 
 /* The cosine-power lobe folded onto the hemisphere of n: a lobe sample
  * below the surface is mirrored across it, so that no sample is wasted
@@ -55,7 +55,7 @@ typedef struct SgGlossyLobe {
 
 SgGlossyLobe sg_glossy_lobe(Vec3 n, Vec3 wo, float exponent, float diffuse_weight);
 Vec3 sg_sample_glossy(const SgGlossyLobe *lobe, float u0, float u1, float u2);
-float sg_pdf_glossy(const SgGlossyLobe *lobe, Vec3 w);
+static inline float sg_pdf_glossy(const SgGlossyLobe *lobe, Vec3 w);
 
 /* One-sample mixture (defensive importance sampling): the glossy BSDF
  * sampler with probability alpha, the cosine-power lobe around `axis`
@@ -69,7 +69,7 @@ typedef struct SgMixture {
 } SgMixture;
 
 Vec3 sg_sample_mixture(const SgMixture *m, float u0, float u1, float u2);
-float sg_pdf_mixture(const SgMixture *m, Vec3 w);
+static inline float sg_pdf_mixture(const SgMixture *m, Vec3 w);
 
 /* c^p for c in [0, 1]: by squaring when p is a small whole number (the
  * usual lobe exponents; a power of two, as the learner's 4, 16 and 64, in
@@ -101,7 +101,32 @@ static inline Vec3 sg_reflect(Vec3 wo, Vec3 n)
     return v3_sub(v3_scale(n, 2.0f * v3_dot(wo, n)), wo);
 }
 
-/* Inline: the guided mode evaluates it twice per bounce. The mirrored
+/* The densities are inline: every bounce evaluates two or three. */
+static inline float sg_pdf_cosine_hemisphere(Vec3 n, Vec3 w)
+{
+    return sg_maxf(0.0f, v3_dot(n, w)) * SG_INV_PI;
+}
+
+static inline float sg_pdf_cosine_power(Vec3 a, float p, Vec3 w)
+{
+    float c = v3_dot(a, w);
+    if (c <= 0.0f)
+        return 0.0f;
+    return (p + 1.0f) * (0.5f * SG_INV_PI) * sg_pow_exponent(sg_minf(c, 1.0f), p);
+}
+
+static inline float sg_pdf_glossy(const SgGlossyLobe *lobe, Vec3 w)
+{
+    float pd = lobe->diffuse_weight;
+    float pdf = 0.0f;
+    if (pd > 0.0f)
+        pdf += pd * sg_pdf_cosine_hemisphere(lobe->n, w);
+    if (pd < 1.0f)
+        pdf += (1.0f - pd) * sg_pdf_cosine_power(lobe->r, lobe->exponent, w);
+    return pdf;
+}
+
+/* The guided mode evaluates it twice per bounce. The mirrored
  * axis a' = a - 2 (a.n) n gives a'.w = a.w - 2 (a.n)(n.w). */
 static inline float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w)
 {
@@ -115,6 +140,16 @@ static inline float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w)
     if (c2 > 0.0f)
         sum += sg_pow_exponent(sg_minf(c2, 1.0f), p);
     return (p + 1.0f) * (0.5f * SG_INV_PI) * sum;
+}
+
+static inline float sg_pdf_mixture(const SgMixture *m, Vec3 w)
+{
+    float pdf = 0.0f;
+    if (m->alpha > 0.0f)
+        pdf += m->alpha * sg_pdf_glossy(&m->bsdf, w);
+    if (m->alpha < 1.0f)
+        pdf += (1.0f - m->alpha) * sg_pdf_folded_lobe(m->axis, m->bsdf.n, m->lobe_exponent, w);
+    return pdf;
 }
 
 #ifdef __cplusplus

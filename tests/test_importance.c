@@ -702,7 +702,7 @@ Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
     cr_assert(sg_cache_decode(c, 1u << 20));
     const uint32_t *table = sg_cache_decoded(c);
     cr_assert_not_null(table);
-    int medium = 0, walls = 0;
+    int medium = 0, walls = 0, marked = 0;
     for (int i = 0; i < POINTS; i++) {
         uint32_t n = SG_CACHE_NO_NODE;
         cr_assert_eq(sg_cache_nearest_node(c, p[i], &n), found[i], "point %d", i);
@@ -719,7 +719,18 @@ Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
             for (int i = 0; i < g->nx; i++) {
                 uint32_t t = table[i + g->nx * (j + g->ny * k)];
                 if (!sg_grid_get(g, i, j, k)) {
-                    cr_assert_eq(t, SG_CACHE_NO_NODE, "solid voxel %d %d %d", i, j, k);
+                    /* a wall: no node, or the node every point in it gets */
+                    cr_assert(t == SG_CACHE_NO_NODE || (t & SG_CACHE_WALL_BIT), "solid voxel %d %d %d", i, j, k);
+                    if (t != SG_CACHE_NO_NODE) {
+                        for (int q = 0; q < 8; q++) {
+                            double corner[3] = {i + 0.05 + 0.9 * (q & 1), j + 0.05 + 0.9 * (q >> 1 & 1),
+                                                k + 0.05 + 0.9 * (q >> 2)};
+                            uint32_t n;
+                            cr_assert(sg_cache_nearest_node(c, corner, &n));
+                            cr_assert_eq(n, t & ~SG_CACHE_WALL_BIT, "wall voxel %d %d %d", i, j, k);
+                        }
+                        marked++;
+                    }
                     walls++;
                     continue;
                 }
@@ -731,6 +742,7 @@ Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
             }
     cr_assert_gt(medium, 100);
     cr_assert_gt(walls, 100);
+    cr_assert_gt(marked, 50, "walls whose neighbours agree: %d", marked);
     free(p);
     free(node);
     free(found);
