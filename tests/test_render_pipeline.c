@@ -156,7 +156,7 @@ static float *render_corridor(const SgScene *scene, SgImportanceCache *cache, bo
  * and double precision. A different node changes a path's samples, so the
  * pixels tell: all but a few must be identical. Unpacked or packed, the
  * renderer's own reading gives the same image. */
-Test(render_pipeline, the_renderers_reading_of_the_cache_matches_the_guide_function, .timeout = 120)
+Test(render_pipeline, the_renderers_reading_of_the_cache_matches_the_guide_function)
 {
     if (!have_programs())
         cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
