@@ -267,6 +267,19 @@ bool sg_cache_node_position(const SgImportanceCache *c, uint32_t node, double p[
     return true;
 }
 
+/* Index of voxel (i,j,k) in a table of the grid, x fastest (the decoded table). */
+static inline size_t grid_index(int nx, int ny, int i, int j, int k)
+{
+    return (size_t)i + (size_t)nx * ((size_t)j + (size_t)ny * (size_t)k);
+}
+
+/* One unsigned comparison per axis also rejects negative indices. */
+static inline bool in_grid(const SgImportanceCache *c, int i, int j, int k)
+{
+    return (unsigned)i < (unsigned)c->header.nx && (unsigned)j < (unsigned)c->header.ny &&
+           (unsigned)k < (unsigned)c->header.nz;
+}
+
 /* Node of voxel (i,j,k) inside the grid, read from its packed block. */
 static uint32_t packed_voxel_node(const SgImportanceCache *c, int i, int j, int k)
 {
@@ -292,12 +305,10 @@ static uint32_t packed_voxel_node(const SgImportanceCache *c, int i, int j, int 
 /* Nearest node of voxel (i,j,k), SG_CACHE_NONE if not medium. */
 static inline uint32_t voxel_node(const SgImportanceCache *c, int i, int j, int k)
 {
-    /* one unsigned comparison per axis also rejects negative indices */
-    if ((unsigned)i >= (unsigned)c->header.nx || (unsigned)j >= (unsigned)c->header.ny ||
-        (unsigned)k >= (unsigned)c->header.nz)
+    if (!in_grid(c, i, j, k))
         return SG_CACHE_NONE;
     if (c->decoded) {
-        uint32_t m = c->decoded[(size_t)i + (size_t)c->header.nx * ((size_t)j + (size_t)c->header.ny * (size_t)k)];
+        uint32_t m = c->decoded[grid_index(c->header.nx, c->header.ny, i, j, k)];
         return m & SG_CACHE_WALL_BIT ? SG_CACHE_NONE : m; /* a wall's entry is not medium */
     }
     return packed_voxel_node(c, i, j, k);
@@ -322,7 +333,7 @@ bool sg_cache_decode(SgImportanceCache *c, uint64_t max_bytes)
                 for (int k = 8 * bk; k < 8 * bk + 8 && k < nz; k++)
                     for (int j = 8 * bj; j < 8 * bj + 8 && j < ny; j++)
                         for (int i = 8 * bi; i < 8 * bi + 8 && i < nx; i++)
-                            t[(size_t)i + (size_t)nx * ((size_t)j + (size_t)ny * (size_t)k)] =
+                            t[grid_index(nx, ny, i, j, k)] =
                                 present ? packed_voxel_node(c, i, j, k) : SG_CACHE_NONE;
             }
     /* A wall voxel whose medium neighbours (of 26) all have one node: any
@@ -332,7 +343,7 @@ bool sg_cache_decode(SgImportanceCache *c, uint64_t max_bytes)
         for (int k = 0; k < nz; k++)
             for (int j = 0; j < ny; j++)
                 for (int i = 0; i < nx; i++) {
-                    size_t at = (size_t)i + (size_t)nx * ((size_t)j + (size_t)ny * (size_t)k);
+                    size_t at = grid_index(nx, ny, i, j, k);
                     if (t[at] != SG_CACHE_NONE)
                         continue;
                     uint32_t common = SG_CACHE_NONE;
@@ -344,7 +355,7 @@ bool sg_cache_decode(SgImportanceCache *c, uint64_t max_bytes)
                                 if ((unsigned)a >= (unsigned)nx || (unsigned)b >= (unsigned)ny ||
                                     (unsigned)e >= (unsigned)nz)
                                     continue;
-                                uint32_t m = t[(size_t)a + (size_t)nx * ((size_t)b + (size_t)ny * (size_t)e)];
+                                uint32_t m = t[grid_index(nx, ny, a, b, e)];
                                 if (m & SG_CACHE_WALL_BIT)
                                     continue; /* solid (maybe marked already) */
                                 if (common != SG_CACHE_NONE && m != common) {
@@ -415,8 +426,7 @@ static uint32_t neighbour_node(const SgImportanceCache *c, const double v[3], co
                 if (!inside[2][z] || (x == 0 && y == 0 && z == 0)) /* (0,0,0): the voxel itself, solid */
                     continue;
                 uint32_t m = c->decoded
-                                 ? c->decoded[(size_t)at[0][x] + (size_t)dims[0] * ((size_t)at[1][y] +
-                                                                                  (size_t)dims[1] * (size_t)at[2][z])]
+                                 ? c->decoded[grid_index(dims[0], dims[1], at[0][x], at[1][y], at[2][z])]
                                  : packed_voxel_node(c, at[0][x], at[1][y], at[2][z]);
                 if (m & SG_CACHE_WALL_BIT)
                     m = SG_CACHE_NONE; /* a wall (marked or not) */
@@ -438,9 +448,8 @@ static inline bool nearest_node_voxel(const SgImportanceCache *c, const double v
     if (!voxel_of(v, ijk))
         return false;
     uint32_t n;
-    if (c->decoded && (unsigned)ijk[0] < (unsigned)c->header.nx && (unsigned)ijk[1] < (unsigned)c->header.ny &&
-        (unsigned)ijk[2] < (unsigned)c->header.nz) {
-        n = c->decoded[(size_t)ijk[0] + (size_t)c->header.nx * ((size_t)ijk[1] + (size_t)c->header.ny * (size_t)ijk[2])];
+    if (c->decoded && in_grid(c, ijk[0], ijk[1], ijk[2])) {
+        n = c->decoded[grid_index(c->header.nx, c->header.ny, ijk[0], ijk[1], ijk[2])];
         if (n != SG_CACHE_NONE)
             n &= ~SG_CACHE_WALL_BIT; /* medium, or a wall whose neighbours agree */
     } else {
