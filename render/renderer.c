@@ -788,6 +788,18 @@ typedef struct PendingRecord {
 #define ROULETTE_GAIN 2.0f
 #define ROULETTE_MIN_SURVIVAL 0.05f
 
+/* Russian roulette after a few bounces, on the product of albedos:
+ * unbiased (the survivor is divided by its survival probability). */
+static bool albedo_roulette(Vec3 *beta, Vec3 *rr_beta, SgRng *rng)
+{
+    float q = sg_minf(0.95f, v3_max_component(*rr_beta));
+    if (!(sg_rng_float(rng) < q))
+        return false;
+    *beta = v3_scale(*beta, 1.0f / q);
+    *rr_beta = v3_scale(*rr_beta, 1.0f / q);
+    return true;
+}
+
 static Vec3 per_throughput(Vec3 c, Vec3 beta)
 {
     return v3(beta.x > 0.0f ? c.x / beta.x : 0.0f, beta.y > 0.0f ? c.y / beta.y : 0.0f,
@@ -975,6 +987,19 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 radiance = v3_add(radiance, v3_mul(beta, v3_scale(nee, w)));
             }
 
+            /* Albedo roulette before the bounce is drawn (it depends only on
+             * the albedos): a path cut here pays for no direction, pdf or
+             * guide lobe it would not follow. */
+            rr_beta = v3_mul(rr_beta, v3_add(m->kd, m->ks));
+            if (depth >= ROULETTE_DEPTH && !roulette_done) {
+                roulette_done = true;
+                if (!albedo_roulette(&beta, &rr_beta, rng)) {
+                    if (pr && guided) /* for the learner, a bounce that brought nothing back */
+                        *pr = (PendingRecord){pr->region, true, 0.0f, 0.0f, 0.0f, 0.0f, pr->beta, pr->radiance_in, radiance};
+                    break;
+                }
+            }
+
             float u0 = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
             Vec3 wi = bounce_sample(&bs, u0, u1, u2);
             float cos_x = v3_dot(wi, n);
@@ -1000,7 +1025,6 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             }
             Vec3 f = eval_bsdf(m, &lobe, wi);
             beta = v3_mul(beta, v3_scale(f, cos_x / pdf));
-            rr_beta = v3_mul(rr_beta, v3_add(m->kd, m->ks));
             d = wi;
             o = origin;
             prev_pdf = pdf;
@@ -1008,14 +1032,9 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             specular_bounce = false;
         }
 
-        /* Russian roulette after a few bounces: unbiased (divide by survival) */
-        if (depth >= 2 && !roulette_done) {
-            float q = sg_minf(0.95f, v3_max_component(rr_beta));
-            if (!(sg_rng_float(rng) < q))
-                break;
-            beta = v3_scale(beta, 1.0f / q);
-            rr_beta = v3_scale(rr_beta, 1.0f / q);
-        }
+        /* after a specular bounce: the same roulette */
+        if (depth >= ROULETTE_DEPTH && !roulette_done && !albedo_roulette(&beta, &rr_beta, rng))
+            break;
         if (!(v3_max_component(beta) > 0.0f))
             break;
     }
