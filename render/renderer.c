@@ -650,25 +650,39 @@ static float light_pdf(const SgRenderer *r, uint32_t tri, float dist2, float cos
 
 /* Which way does the bounce sample at a diffuse/glossy vertex go. */
 typedef struct BounceSampler {
-    int kind;          /* 0 bsdf, 1 lobe only (skeleton), 2 mixture (guided) */
-    SgMixture mix;     /* mix.bsdf is the material's lobe */
+    int kind;                 /* 0 bsdf, 1 lobe only (skeleton), 2 mixture (guided) */
+    const SgGlossyLobe *bsdf; /* the material's lobe; bsdf->n is the shading normal */
+    SgFoldedLobe lobe;        /* the guide's (kind 2) */
+    float alpha;              /* the BSDF's share of the mixture */
 } BounceSampler;
 
-static float bounce_pdf(const BounceSampler *b, Vec3 w)
+/* The mixture's density of w (kind 2), w.n = wn given; its BSDF part and
+ * w's cosines with the axis and the mirrored axis, for the learner. */
+static inline float mixture_pdf(const BounceSampler *b, Vec3 w, float wn, float *pdf_bsdf, float *c1, float *c2)
 {
+    *pdf_bsdf = sg_pdf_glossy(b->bsdf, w);
+    return b->alpha * *pdf_bsdf + (1.0f - b->alpha) * sg_pdf_folded_lobe_at(&b->lobe, w, wn, c1, c2);
+}
+
+static float bounce_pdf(const BounceSampler *b, Vec3 w, float wn)
+{
+    float pdf_bsdf, c1, c2;
     switch (b->kind) {
-    case 1: return sg_pdf_cosine_power(b->mix.axis, b->mix.lobe_exponent, w);
-    case 2: return sg_pdf_mixture(&b->mix, w);
-    default: return sg_pdf_glossy(&b->mix.bsdf, w);
+    case 1: return sg_pdf_cosine_power(b->lobe.axis, b->lobe.exponent, w);
+    case 2: return mixture_pdf(b, w, wn, &pdf_bsdf, &c1, &c2);
+    default: return sg_pdf_glossy(b->bsdf, w);
     }
 }
 
 static Vec3 bounce_sample(const BounceSampler *b, float u0, float u1, float u2)
 {
     switch (b->kind) {
-    case 1: return sg_sample_cosine_power(b->mix.axis, b->mix.lobe_exponent, u1, u2);
-    case 2: return sg_sample_mixture(&b->mix, u0, u1, u2);
-    default: return sg_sample_glossy(&b->mix.bsdf, u0, u1, u2);
+    case 1: return sg_sample_cosine_power(b->lobe.axis, b->lobe.exponent, u1, u2);
+    case 2:
+        if (u0 < b->alpha) /* as sg_sample_mixture */
+            return sg_sample_glossy(b->bsdf, u0 / b->alpha, u1, u2);
+        return sg_sample_folded_lobe(b->lobe.axis, b->bsdf->n, b->lobe.exponent, u1, u2);
+    default: return sg_sample_glossy(b->bsdf, u0, u1, u2);
     }
 }
 
@@ -890,7 +904,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 break;
             SgGlossyLobe lobe = sg_glossy_lobe(n, wo, m->type == SG_MATERIAL_GLOSSY ? m->exponent : 0.0f,
                                                m->diffuse_weight);
-            BounceSampler bs = {0, {lobe, n, r->opt.lobe_exponent, 1.0f}};
+            BounceSampler bs = {0, &lobe, {n, 0.0f, 0.0f, 0.0f, -1}, 1.0f};
             Vec3 axis;
             /* guided: the region's learned alpha; where it is the BSDF
              * alone the guide is asked only by paths that learn */
@@ -933,7 +947,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             /* next-event estimation */
             Vec3 nee = v3(0, 0, 0);
             Vec3 nee_dir = v3(0, 0, 0);
-            float nee_pdf = 0.0f;
+            float nee_pdf = 0.0f, nee_cos = 0.0f;
             bool lit = false;
             float ul = sg_rng_float(rng), ut = sg_rng_float(rng);
             float ua = sg_rng_float(rng), ub = sg_rng_float(rng);
@@ -967,6 +981,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                             Vec3 f = eval_bsdf(m, &lobe, wi);
                             nee = v3_scale(v3_mul(f, lm->emission), cos_x / pl);
                             nee_dir = wi;
+                            nee_cos = cos_x;
                             nee_pdf = pl;
                         }
                     }
@@ -977,13 +992,15 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             if (guided) {
                 if (mode == SG_SAMPLING_SKELETON) {
                     if (!lit) /* the paper: lobe only where not directly lit */
-                        bs = (BounceSampler){1, {lobe, axis, r->opt.lobe_exponent, 0.0f}};
+                        bs = (BounceSampler){1, &lobe, sg_folded_lobe(axis, n, r->opt.lobe_exponent), 0.0f};
                 } else {
-                    bs = (BounceSampler){mix.alpha < 1.0f ? 2 : 0, {lobe, axis, mix.exponent, mix.alpha}};
+                    /* alpha 1 (a learning path): the BSDF, with the lobe's
+                     * densities at hand for the learner */
+                    bs = (BounceSampler){2, &lobe, sg_folded_lobe(axis, n, mix.exponent), mix.alpha};
                 }
             }
             if (nee_pdf > 0.0f) {
-                float w = power_heuristic(nee_pdf, bounce_pdf(&bs, nee_dir));
+                float w = power_heuristic(nee_pdf, bounce_pdf(&bs, nee_dir, nee_cos));
                 radiance = v3_add(radiance, v3_mul(beta, v3_scale(nee, w)));
             }
 
@@ -1003,26 +1020,15 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             float u0 = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
             Vec3 wi = bounce_sample(&bs, u0, u1, u2);
             float cos_x = v3_dot(wi, n);
-            float pdf, pdf_bsdf = 0.0f;
-            if (bs.kind == 2 || (learn && guided)) {
-                /* the BSDF's part, which the learner needs too */
-                pdf_bsdf = sg_pdf_glossy(&lobe, wi);
-                pdf = bs.kind == 2 ? mix.alpha * pdf_bsdf +
-                                         (1.0f - mix.alpha) * sg_pdf_folded_lobe(axis, n, mix.exponent, wi)
-                                   : pdf_bsdf;
-            } else {
-                pdf = bounce_pdf(&bs, wi);
-            }
+            float pdf, pdf_bsdf = 0.0f, c1 = 0.0f, c2 = 0.0f;
+            if (bs.kind == 2) /* with the BSDF's part and the cosines the learner needs */
+                pdf = mixture_pdf(&bs, wi, cos_x, &pdf_bsdf, &c1, &c2);
+            else
+                pdf = bounce_pdf(&bs, wi, cos_x);
             if (!(cos_x > 0.0f) || !(pdf > 0.0f))
                 break; /* below the surface: f = 0, the path ends */
-            if (pr && guided) {
-                pr->lobe = true;
-                pr->pdf_bsdf = pdf_bsdf;
-                pr->cos_axis = v3_dot(wi, axis);
-                pr->cos_mirror = v3_dot(wi, v3_sub(axis, v3_scale(n, 2.0f * v3_dot(axis, n))));
-                pr->pdf = pdf;
-                pr->radiance = radiance;
-            }
+            if (pr && guided)
+                *pr = (PendingRecord){pr->region, true, pdf_bsdf, c1, c2, pdf, pr->beta, pr->radiance_in, radiance};
             Vec3 f = eval_bsdf(m, &lobe, wi);
             beta = v3_mul(beta, v3_scale(f, cos_x / pdf));
             d = wi;

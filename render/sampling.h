@@ -39,6 +39,21 @@ static inline float sg_pdf_cosine_power(Vec3 a, float p, Vec3 w);
 Vec3 sg_sample_folded_lobe(Vec3 a, Vec3 n, float p, float u1, float u2);
 static inline float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w);
 
+/* The folded lobe's density made ready for a vertex, where it is evaluated
+ * at several directions (the guided bounce: the light sample's and its own):
+ * a.n, the normalization and the way to raise to p are computed once. */
+typedef struct SgFoldedLobe {
+    Vec3 axis;
+    float axis_n;   /* a.n: the mirrored axis's cosine is w.a - 2 (a.n)(w.n) */
+    float exponent;
+    float norm;     /* (p + 1) / (2 pi) */
+    int squarings;  /* p = 2^squarings, or -1 */
+} SgFoldedLobe;
+
+static inline SgFoldedLobe sg_folded_lobe(Vec3 a, Vec3 n, float p);
+/* pdf at w, given wn = w.n; c1, c2 get w's cosines with a and a'. */
+static inline float sg_pdf_folded_lobe_at(const SgFoldedLobe *l, Vec3 w, float wn, float *c1, float *c2);
+
 /* The non-delta BSDF of the renderer's diffuse and glossy materials:
  *   f(wo, wi) = kd / pi + ks (p + 2) / (2 pi) max(0, wi.r)^p,  r = reflect(wo, n),
  * for wi above the surface (n faces wo), zero below. kd + ks <= 1 per channel
@@ -126,20 +141,42 @@ static inline float sg_pdf_glossy(const SgGlossyLobe *lobe, Vec3 w)
     return pdf;
 }
 
-/* The guided mode evaluates it twice per bounce. The mirrored
- * axis a' = a - 2 (a.n) n gives a'.w = a.w - 2 (a.n)(n.w). */
-static inline float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w)
+static inline SgFoldedLobe sg_folded_lobe(Vec3 a, Vec3 n, float p)
 {
-    float wn = v3_dot(w, n);
+    int32_t bits;
+    memcpy(&bits, &p, sizeof bits);
+    int k = (bits >> 23) - 127; /* p = 2^k when the mantissa is zero (p > 0) */
+    return (SgFoldedLobe){a, v3_dot(a, n), p, (p + 1.0f) * (0.5f * SG_INV_PI),
+                          (bits & 0x007fffff) == 0 && k >= 0 && k <= 6 ? k : -1};
+}
+
+static inline float sg_folded_lobe_power(const SgFoldedLobe *l, float c)
+{
+    c = sg_minf(c, 1.0f);
+    if (l->squarings < 0)
+        return sg_pow_exponent(c, l->exponent);
+    for (int k = l->squarings; k; k--)
+        c *= c;
+    return c;
+}
+
+/* The mirrored axis a' = a - 2 (a.n) n gives a'.w = a.w - 2 (a.n)(n.w). */
+static inline float sg_pdf_folded_lobe_at(const SgFoldedLobe *l, Vec3 w, float wn, float *c1, float *c2)
+{
+    *c1 = v3_dot(l->axis, w);
+    *c2 = *c1 - 2.0f * l->axis_n * wn;
     if (!(wn > 0.0f))
         return 0.0f;
-    float c1 = v3_dot(a, w), c2 = c1 - 2.0f * v3_dot(a, n) * wn;
-    float sum = 0.0f;
-    if (c1 > 0.0f)
-        sum += sg_pow_exponent(sg_minf(c1, 1.0f), p);
-    if (c2 > 0.0f)
-        sum += sg_pow_exponent(sg_minf(c2, 1.0f), p);
-    return (p + 1.0f) * (0.5f * SG_INV_PI) * sum;
+    float sum = (*c1 > 0.0f ? sg_folded_lobe_power(l, *c1) : 0.0f) +
+                (*c2 > 0.0f ? sg_folded_lobe_power(l, *c2) : 0.0f);
+    return l->norm * sum;
+}
+
+static inline float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w)
+{
+    SgFoldedLobe l = sg_folded_lobe(a, n, p);
+    float c1, c2;
+    return sg_pdf_folded_lobe_at(&l, w, v3_dot(w, n), &c1, &c2);
 }
 
 static inline float sg_pdf_mixture(const SgMixture *m, Vec3 w)
