@@ -153,7 +153,7 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->view.lo = lo;
     l->view.inv_size = 1.0f / size;
     for (int i = 0; i < 3; i++)
-        l->view.cells[i] = (float)l->cells[i];
+        l->view.cell_max[i] = (float)l->cells[i] - 0.5f;
     l->view.stride_y = l->cells[0];
     l->view.stride_z = l->cells[0] * l->cells[1];
     l->view.state = l->state;

@@ -95,7 +95,7 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
                                             int initial, SgError *err);
 void sg_mixture_learner_free(SgMixtureLearner *l);
 
-/* The region of point p with shading normal n, or SG_NO_REGION outside. */
+/* The region of point p with shading normal n (outside the grid: the nearest cell's). */
 uint32_t sg_mixture_region(const SgMixtureLearner *l, Vec3 p, Vec3 n);
 /* The mixture to use in a region (SG_NO_REGION: the initial one). */
 SgMixtureCandidate sg_mixture_choice(const SgMixtureLearner *l, uint32_t region);
@@ -104,7 +104,7 @@ SgMixtureCandidate sg_mixture_choice(const SgMixtureLearner *l, uint32_t region)
 typedef struct SgMixtureView {
     Vec3 lo;
     float inv_size;
-    float cells[3];
+    float cell_max[3];             /* cells - 1/2: truncates to the last cell */
     int stride_y, stride_z;        /* in cells */
     const uint8_t *state;          /* per region: candidate (low 3 bits), 8 = settled */
     SgMixtureCandidate of_state[8];
@@ -124,17 +124,16 @@ static inline uint32_t sg_mixture_normal_bin(Vec3 n)
     float ax = n.x < 0.0f ? -n.x : n.x, ay = n.y < 0.0f ? -n.y : n.y, az = n.z < 0.0f ? -n.z : n.z;
     return ax >= ay && ax >= az ? (n.x < 0.0f) : ay >= az ? 2u + (n.y < 0.0f) : 4u + (n.z < 0.0f);
 }
-/* The region of p whose normal falls in `bin`: its mixture and whether it still learns. */
+/* The region of p whose normal falls in `bin` (a point outside the grid
+ * counts in the nearest cell): its mixture and whether it still learns. */
 static inline uint32_t sg_mixture_lookup(const SgMixtureView *v, Vec3 p, uint32_t bin, SgMixtureCandidate *choice,
                                          bool *learning)
 {
-    float x = (p.x - v->lo.x) * v->inv_size, y = (p.y - v->lo.y) * v->inv_size,
-          z = (p.z - v->lo.z) * v->inv_size;
-    if (!(x >= 0.0f && y >= 0.0f && z >= 0.0f && x < v->cells[0] && y < v->cells[1] && z < v->cells[2])) {
-        *choice = v->of_state[7];
-        *learning = false;
-        return SG_NO_REGION;
-    }
+    /* clamped into the grid (branch-free, NaN to 0): it covers the scene's
+     * triangles, so only rounding puts a hit point outside */
+    float x = sg_minf(sg_maxf((p.x - v->lo.x) * v->inv_size, 0.0f), v->cell_max[0]),
+          y = sg_minf(sg_maxf((p.y - v->lo.y) * v->inv_size, 0.0f), v->cell_max[1]),
+          z = sg_minf(sg_maxf((p.z - v->lo.z) * v->inv_size, 0.0f), v->cell_max[2]);
     uint32_t region = (((uint32_t)z * (uint32_t)v->stride_z + (uint32_t)y * (uint32_t)v->stride_y + (uint32_t)x) * 6u) + bin;
     uint8_t st = v->state[region];
     *choice = v->of_state[st & 7];
