@@ -23,8 +23,8 @@ static const float exponents[EXPONENTS] = {4.0f, 16.0f, 64.0f};
  * every record to three levels cost more than the rest of learning (it
  * runs on one thread between passes). */
 #define FALLBACK_SETTLED 65536u
-#define STATE_INITIAL 7
-#define STATE_SETTLED 8
+#define STATE_INITIAL SG_MIXTURE_STATE_CANDIDATE
+#define STATE_SETTLED SG_MIXTURE_STATE_SETTLED
 
 /* A record as kept: its terms computed by the thread that made it, so that
  * the sequential sum after the pass is only additions. */
@@ -145,7 +145,8 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
                     l->coarse_of[fine * 6 + bin] = (uint32_t)(c * 6 + bin);
             }
     memset(l->choice, -1, l->region_count);
-    memset(l->state, STATE_INITIAL, l->region_count);
+    memset(l->state, STATE_INITIAL | (sg_mixture_candidates[initial].alpha < 1.0f ? SG_MIXTURE_STATE_LOBE : 0),
+           l->region_count);
     for (uint32_t i = 0; i < l->region_count; i++)
         l->radiance[i] = -1.0f;
     l->view.radiance = l->radiance;
@@ -194,7 +195,7 @@ uint32_t sg_mixture_region(const SgMixtureLearner *l, Vec3 p, Vec3 n)
 
 SgMixtureCandidate sg_mixture_choice(const SgMixtureLearner *l, uint32_t region)
 {
-    return l->view.of_state[region < l->region_count ? l->state[region] & 7 : STATE_INITIAL];
+    return l->view.of_state[region < l->region_count ? l->state[region] & SG_MIXTURE_STATE_CANDIDATE : STATE_INITIAL];
 }
 
 bool sg_mixture_learning(const SgMixtureLearner *l, uint32_t region)
@@ -211,8 +212,9 @@ static void refresh_state(SgMixtureLearner *l, uint32_t region)
         k = l->coarse_choice[l->coarse_of[region]];
     if (k < 0)
         k = l->global_choice;
-    l->state[region] = (uint8_t)((k < 0 ? STATE_INITIAL : k) |
-                                 (l->stats[region].samples >= SETTLED_SAMPLES ? STATE_SETTLED : 0));
+    int candidate = k < 0 ? (int)STATE_INITIAL : k;
+    l->state[region] = (uint8_t)(candidate | (l->stats[region].samples >= SETTLED_SAMPLES ? STATE_SETTLED : 0) |
+                                 (l->view.of_state[candidate].alpha < 1.0f ? SG_MIXTURE_STATE_LOBE : 0));
 }
 
 void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord *rec)

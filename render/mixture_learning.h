@@ -106,7 +106,7 @@ typedef struct SgMixtureView {
     float inv_size;
     float cell_max[3];             /* cells - 1/2: truncates to the last cell */
     int stride_y, stride_z;        /* in cells */
-    const uint8_t *state;          /* per region: candidate (low 3 bits), 8 = settled */
+    const uint8_t *state;          /* per region: SG_MIXTURE_STATE_* bits */
     SgMixtureCandidate of_state[8];
     /* per region: root mean square of the outgoing radiance per unit
      * throughput (its coarse region's where it has too few samples), < 0:
@@ -117,6 +117,13 @@ typedef struct SgMixtureView {
 
 const SgMixtureView *sg_mixture_view(const SgMixtureLearner *l);
 
+/* A region's state byte: the candidate in use (7: the initial one), whether
+ * the region has settled (stopped learning), whether its candidate uses
+ * the lobe (alpha < 1: bounces there ask the guide). */
+#define SG_MIXTURE_STATE_CANDIDATE 7u
+#define SG_MIXTURE_STATE_SETTLED 8u
+#define SG_MIXTURE_STATE_LOBE 16u
+
 /* The bin of a unit normal: its dominant axis and sign (0..5; the opposite
  * normal's bin is bin ^ 1). A renderer keeps it per triangle. */
 static inline uint32_t sg_mixture_normal_bin(Vec3 n)
@@ -125,19 +132,24 @@ static inline uint32_t sg_mixture_normal_bin(Vec3 n)
     return ax >= ay && ax >= az ? (n.x < 0.0f) : ay >= az ? 2u + (n.y < 0.0f) : 4u + (n.z < 0.0f);
 }
 /* The region of p whose normal falls in `bin` (a point outside the grid
- * counts in the nearest cell): its mixture and whether it still learns. */
-static inline uint32_t sg_mixture_lookup(const SgMixtureView *v, Vec3 p, uint32_t bin, SgMixtureCandidate *choice,
-                                         bool *learning)
+ * counts in the nearest cell); v->state[region] tells the rest. */
+static inline uint32_t sg_mixture_region_at(const SgMixtureView *v, Vec3 p, uint32_t bin)
 {
     /* clamped into the grid (branch-free, NaN to 0): it covers the scene's
      * triangles, so only rounding puts a hit point outside */
     float x = sg_minf(sg_maxf((p.x - v->lo.x) * v->inv_size, 0.0f), v->cell_max[0]),
           y = sg_minf(sg_maxf((p.y - v->lo.y) * v->inv_size, 0.0f), v->cell_max[1]),
           z = sg_minf(sg_maxf((p.z - v->lo.z) * v->inv_size, 0.0f), v->cell_max[2]);
-    uint32_t region = (((uint32_t)z * (uint32_t)v->stride_z + (uint32_t)y * (uint32_t)v->stride_y + (uint32_t)x) * 6u) + bin;
+    return (((uint32_t)z * (uint32_t)v->stride_z + (uint32_t)y * (uint32_t)v->stride_y + (uint32_t)x) * 6u) + bin;
+}
+/* The same, with the region's mixture and whether it still learns. */
+static inline uint32_t sg_mixture_lookup(const SgMixtureView *v, Vec3 p, uint32_t bin, SgMixtureCandidate *choice,
+                                         bool *learning)
+{
+    uint32_t region = sg_mixture_region_at(v, p, bin);
     uint8_t st = v->state[region];
-    *choice = v->of_state[st & 7];
-    *learning = !(st & 8);
+    *choice = v->of_state[st & SG_MIXTURE_STATE_CANDIDATE];
+    *learning = !(st & SG_MIXTURE_STATE_SETTLED);
     return region;
 }
 /* What leaves a region (SG_NO_REGION: the scene), as the learned roulette

@@ -909,16 +909,21 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             /* guided: the region's learned alpha; where it is the BSDF
              * alone the guide is asked only by paths that learn */
             SgMixtureCandidate mix = {r->opt.alpha, r->opt.lobe_exponent};
+            bool lobe_region = r->opt.alpha < 1.0f;
             uint32_t region = SG_NO_REGION;
             bool learn = false;
             PendingRecord *pr = NULL;
             if (mode == SG_SAMPLING_GUIDED && r->learner) {
+                const SgMixtureView *view = r->mixture_view;
                 /* n is the winding normal or its opposite: the other bin of the pair */
                 uint32_t bin = r->tris[h.tri].normal_bin ^ (cos_o < 0.0f ? 0u : 1u);
-                region = sg_mixture_lookup(r->mixture_view, h.p, bin, &mix, &learn);
-                learn = learn && learn_tile >= 0 && pending_count < MAX_PENDING;
-                float rms = depth >= ROULETTE_DEPTH && pixel_deviation > 0.0f
-                                ? sg_mixture_radiance(r->mixture_view, region) : -1.0f;
+                region = sg_mixture_region_at(view, h.p, bin);
+                uint8_t st = view->state[region];
+                mix = view->of_state[st & SG_MIXTURE_STATE_CANDIDATE];
+                lobe_region = st & SG_MIXTURE_STATE_LOBE;
+                learn = learn_tile >= 0 && !(st & SG_MIXTURE_STATE_SETTLED) && pending_count < MAX_PENDING;
+                float rms = pixel_deviation > 0.0f && depth >= ROULETTE_DEPTH ? sg_mixture_radiance(view, region)
+                                                                              : -1.0f;
                 if (rms >= 0.0f) {
                     float q = ROULETTE_GAIN * luminance(beta) * rms / pixel_deviation;
                     roulette_done = true;
@@ -938,8 +943,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     pr->radiance_in = radiance;
                 }
             }
-            bool guided = mode == SG_SAMPLING_SKELETON ||
-                          (mode == SG_SAMPLING_GUIDED && (mix.alpha < 1.0f || learn));
+            bool guided = mode == SG_SAMPLING_SKELETON || (mode == SG_SAMPLING_GUIDED && (lobe_region || learn));
             GuideQuery gq;
             guided = guided && guide_begin(r, h.p, n, rng, &gq);
             Vec3 origin = offset_origin(r, h.p, n);
@@ -1070,6 +1074,7 @@ typedef struct PassCtx {
     uint64_t pass_key;
     bool first_pass;
     uint64_t learn_stride;
+    uint64_t learn_below; /* UINT64_MAX / learn_stride */
 } PassCtx;
 
 static uint64_t mix64(uint64_t x)
@@ -1084,7 +1089,7 @@ static uint64_t mix64(uint64_t x)
 
 /* Which paths teach the learner: all in the first passes, then a share
  * that halves as the passes double (1/2, 1/4, ... down to 1/64), chosen by
- * a hash of pixel and pass so that every pixel takes turns. Learning costs
+ * pixel and pass so that every pixel takes turns. Learning costs
  * a cache query at every bounce; what it learns matters most early. */
 #define LEARN_WARMUP_PASSES 2
 #define LEARN_STRIDE_MAX 64
@@ -1107,9 +1112,12 @@ static uint64_t learn_stride(const SgRenderer *r)
     return stride;
 }
 
+/* Fibonacci hashing (the high bits of pixel times 2^64/golden ratio spread
+ * consecutive pixels evenly), the pixels shifted by the pass: one in
+ * `stride` (a power of two), a different set each pass, for an imul. */
 static bool learns(const PassCtx *pc, size_t pix)
 {
-    return pc->learn_stride == 1 || mix64(pc->pass_key ^ (pix * 0x9e3779b97f4a7c15ULL)) % pc->learn_stride == 0;
+    return pc->learn_stride == 1 || ((uint64_t)pix + pc->pass_key) * 0x9e3779b97f4a7c15ULL < pc->learn_below;
 }
 
 static void render_tile(void *vctx, uint64_t index, int thread)
@@ -1264,7 +1272,8 @@ void sg_renderer_pass(SgRenderer *r)
         estimate_deviations(r);
     PassCtx pc = {r, (r->opt.width + TILE - 1) / TILE,
                   mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1), r->spp == 0,
-                  learn_stride(r)};
+                  learn_stride(r), 0};
+    pc.learn_below = UINT64_MAX / pc.learn_stride;
     int tiles_y = (r->opt.height + TILE - 1) / TILE;
     sg_parallel_for((uint64_t)pc.tiles_x * tiles_y, r->opt.threads, render_tile, &pc);
     if (r->learner)

@@ -150,16 +150,6 @@ static inline SgFoldedLobe sg_folded_lobe(Vec3 a, Vec3 n, float p)
                           (bits & 0x007fffff) == 0 && k >= 0 && k <= 6 ? k : -1};
 }
 
-static inline float sg_folded_lobe_power(const SgFoldedLobe *l, float c)
-{
-    c = sg_minf(c, 1.0f);
-    if (l->squarings < 0)
-        return sg_pow_exponent(c, l->exponent);
-    for (int k = l->squarings; k; k--)
-        c *= c;
-    return c;
-}
-
 /* The mirrored axis a' = a - 2 (a.n) n gives a'.w = a.w - 2 (a.n)(n.w). */
 static inline float sg_pdf_folded_lobe_at(const SgFoldedLobe *l, Vec3 w, float wn, float *c1, float *c2)
 {
@@ -167,9 +157,16 @@ static inline float sg_pdf_folded_lobe_at(const SgFoldedLobe *l, Vec3 w, float w
     *c2 = *c1 - 2.0f * l->axis_n * wn;
     if (!(wn > 0.0f))
         return 0.0f;
-    float sum = (*c1 > 0.0f ? sg_folded_lobe_power(l, *c1) : 0.0f) +
-                (*c2 > 0.0f ? sg_folded_lobe_power(l, *c2) : 0.0f);
-    return l->norm * sum;
+    float a = sg_minf(sg_maxf(*c1, 0.0f), 1.0f), b = sg_minf(sg_maxf(*c2, 0.0f), 1.0f);
+    if (l->squarings >= 0) { /* p >= 1: a cosine below zero adds 0^p = 0 */
+        for (int k = l->squarings; k; k--) {
+            a *= a;
+            b *= b;
+        }
+        return l->norm * (a + b);
+    }
+    return l->norm * ((*c1 > 0.0f ? sg_pow_exponent(a, l->exponent) : 0.0f) +
+                      (*c2 > 0.0f ? sg_pow_exponent(b, l->exponent) : 0.0f));
 }
 
 static inline float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w)
