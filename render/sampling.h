@@ -86,15 +86,22 @@ typedef struct SgMixture {
 Vec3 sg_sample_mixture(const SgMixture *m, float u0, float u1, float u2);
 static inline float sg_pdf_mixture(const SgMixture *m, Vec3 w);
 
+/* k when p = 2^k with 0 <= k <= 6 (c^p is then k squarings), else -1. */
+static inline int sg_exponent_squarings(float p)
+{
+    int32_t bits;
+    memcpy(&bits, &p, sizeof bits);
+    int k = (bits >> 23) - 127; /* p = 2^k when the mantissa is zero (p > 0) */
+    return (bits & 0x007fffff) == 0 && k >= 0 && k <= 6 ? k : -1;
+}
+
 /* c^p for c in [0, 1]: by squaring when p is a small whole number (the
  * usual lobe exponents; a power of two, as the learner's 4, 16 and 64, in
  * log2(p) products), powf otherwise. */
 static inline float sg_pow_exponent(float c, float p)
 {
-    int32_t bits;
-    memcpy(&bits, &p, sizeof bits);
-    int k = (bits >> 23) - 127; /* p = 2^k when the mantissa is zero (p > 0) */
-    if ((bits & 0x007fffff) == 0 && k >= 0 && k <= 6) {
+    int k = sg_exponent_squarings(p);
+    if (k >= 0) {
         for (; k; k--)
             c *= c;
         return c;
@@ -143,11 +150,7 @@ static inline float sg_pdf_glossy(const SgGlossyLobe *lobe, Vec3 w)
 
 static inline SgFoldedLobe sg_folded_lobe(Vec3 a, Vec3 n, float p)
 {
-    int32_t bits;
-    memcpy(&bits, &p, sizeof bits);
-    int k = (bits >> 23) - 127; /* p = 2^k when the mantissa is zero (p > 0) */
-    return (SgFoldedLobe){a, v3_dot(a, n), p, (p + 1.0f) * (0.5f * SG_INV_PI),
-                          (bits & 0x007fffff) == 0 && k >= 0 && k <= 6 ? k : -1};
+    return (SgFoldedLobe){a, v3_dot(a, n), p, (p + 1.0f) * (0.5f * SG_INV_PI), sg_exponent_squarings(p)};
 }
 
 /* The mirrored axis a' = a - 2 (a.n) n gives a'.w = a.w - 2 (a.n)(n.w). */
