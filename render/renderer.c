@@ -656,20 +656,12 @@ typedef struct BounceSampler {
     float alpha;              /* the BSDF's share of the mixture */
 } BounceSampler;
 
-/* The mixture's density of w (kind 2), w.n = wn given; its BSDF part and
- * w's cosines with the axis and the mirrored axis, for the learner. */
-static inline float mixture_pdf(const BounceSampler *b, Vec3 w, float wn, float *pdf_bsdf, float *c1, float *c2)
-{
-    *pdf_bsdf = sg_pdf_glossy(b->bsdf, w);
-    return b->alpha * *pdf_bsdf + (1.0f - b->alpha) * sg_pdf_folded_lobe_at(&b->lobe, w, wn, c1, c2);
-}
-
 static float bounce_pdf(const BounceSampler *b, Vec3 w, float wn)
 {
     float pdf_bsdf, c1, c2;
     switch (b->kind) {
     case 1: return sg_pdf_cosine_power(b->lobe.axis, b->lobe.exponent, w);
-    case 2: return mixture_pdf(b, w, wn, &pdf_bsdf, &c1, &c2);
+    case 2: return sg_pdf_mixture_at(b->bsdf, &b->lobe, b->alpha, w, wn, &pdf_bsdf, &c1, &c2);
     default: return sg_pdf_glossy(b->bsdf, w);
     }
 }
@@ -678,10 +670,7 @@ static Vec3 bounce_sample(const BounceSampler *b, float u0, float u1, float u2)
 {
     switch (b->kind) {
     case 1: return sg_sample_cosine_power(b->lobe.axis, b->lobe.exponent, u1, u2);
-    case 2:
-        if (u0 < b->alpha) /* as sg_sample_mixture */
-            return sg_sample_glossy(b->bsdf, u0 / b->alpha, u1, u2);
-        return sg_sample_folded_lobe(b->lobe.axis, b->bsdf->n, b->lobe.exponent, u1, u2);
+    case 2: return sg_sample_mixture_at(b->bsdf, &b->lobe, b->alpha, u0, u1, u2);
     default: return sg_sample_glossy(b->bsdf, u0, u1, u2);
     }
 }
@@ -1026,7 +1015,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             float cos_x = v3_dot(wi, n);
             float pdf, pdf_bsdf = 0.0f, c1 = 0.0f, c2 = 0.0f;
             if (bs.kind == 2) /* with the BSDF's part and the cosines the learner needs */
-                pdf = mixture_pdf(&bs, wi, cos_x, &pdf_bsdf, &c1, &c2);
+                pdf = sg_pdf_mixture_at(&lobe, &bs.lobe, bs.alpha, wi, cos_x, &pdf_bsdf, &c1, &c2);
             else
                 pdf = bounce_pdf(&bs, wi, cos_x);
             if (!(cos_x > 0.0f) || !(pdf > 0.0f))
