@@ -25,6 +25,8 @@ static const float exponents[EXPONENTS] = {4.0f, 16.0f, 64.0f};
 #define FALLBACK_SETTLED 65536u
 #define STATE_INITIAL SG_MIXTURE_STATE_CANDIDATE
 #define STATE_SETTLED SG_MIXTURE_STATE_SETTLED
+#define REGION_SEEN 1u         /* has records (listed in seen) */
+#define REGION_OWN_RADIANCE 2u /* enough of them for its own radiance estimate */
 
 /* A record as kept: its terms computed by the thread that made it, so that
  * the sequential sum after the pass is only additions. */
@@ -37,8 +39,10 @@ typedef struct StoredRecord {
     float term[SG_MIXTURE_CANDIDATES]; /* v^2 p / p_k */
 } StoredRecord;
 
+/* One cache line each: threads rendering neighbouring tiles append to
+ * neighbouring buffers. */
 typedef struct RecordBuffer {
-    StoredRecord *data;
+    _Alignas(64) StoredRecord *data;
     size_t count, capacity;
 } RecordBuffer;
 
@@ -86,9 +90,26 @@ struct SgMixtureLearner {
     uint8_t *is_touched, *coarse_touched;
     uint32_t *coarse_of;   /* fine region -> coarse region */
     uint32_t tiles;
-    RecordBuffer *buffers; /* per tile */
+    /* two sets of per-tile buffers: the pass being rendered fills one
+     * while sg_mixture_learn reads the other (the pass before) */
+    RecordBuffer *buffers;
+    uint32_t filling;      /* the set records go to: buffers + filling * tiles */
     int exponent_of[SG_MIXTURE_CANDIDATES]; /* index in exponents[] of each candidate's lobe */
-    float *radiance;       /* per fine region, what the view reads */
+    float *radiance;       /* per fine region, as learned */
+    float global_radiance;
+    /* what the renderer reads (the view) is a copy, brought up to date by
+     * sg_mixture_end_pass, so that learning can run while a pass renders */
+    uint8_t *view_state;
+    float *view_radiance;
+    uint32_t *changed;     /* fine regions whose state or radiance changed since */
+    uint8_t *is_changed;
+    uint32_t changed_count;
+    /* per fine region, REGION_* bits: what the update would otherwise read
+     * from the region's statistics (a cache miss each; most of them are
+     * cold) */
+    uint8_t *flags;
+    uint32_t *seen;        /* fine regions with records, in the order they came */
+    uint32_t seen_count;
     SgMixtureView view;
 };
 
@@ -128,10 +149,20 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->stats = calloc(l->region_count, sizeof *l->stats);
     l->coarse = calloc(l->coarse_count, sizeof *l->coarse);
     l->coarse_of = malloc(sizeof *l->coarse_of * l->region_count);
-    l->buffers = calloc(tiles ? tiles : 1, sizeof *l->buffers);
+    size_t buffers = 2 * (size_t)(tiles ? tiles : 1);
+    l->buffers = aligned_alloc(_Alignof(RecordBuffer), buffers * sizeof *l->buffers);
+    if (l->buffers)
+        memset(l->buffers, 0, buffers * sizeof *l->buffers);
     l->radiance = malloc(sizeof *l->radiance * l->region_count);
+    l->view_state = malloc(l->region_count);
+    l->view_radiance = malloc(sizeof *l->view_radiance * l->region_count);
+    l->changed = malloc(sizeof *l->changed * l->region_count);
+    l->is_changed = calloc(l->region_count, 1);
+    l->flags = calloc(l->region_count, 1);
+    l->seen = malloc(sizeof *l->seen * l->region_count);
     if (!l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
-        !l->coarse_touched || !l->stats || !l->coarse || !l->coarse_of || !l->buffers) {
+        !l->coarse_touched || !l->stats || !l->coarse || !l->coarse_of || !l->buffers || !l->view_state ||
+        !l->view_radiance || !l->changed || !l->is_changed || !l->flags || !l->seen) {
         sg_mixture_learner_free(l);
         return sg_fail(err, "mixture learner: out of memory for %u regions", (unsigned)(cells * 6)), NULL;
     }
@@ -149,15 +180,17 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
            l->region_count);
     for (uint32_t i = 0; i < l->region_count; i++)
         l->radiance[i] = -1.0f;
-    l->view.radiance = l->radiance;
-    l->view.global_radiance = -1.0f;
+    memcpy(l->view_state, l->state, l->region_count);
+    memcpy(l->view_radiance, l->radiance, sizeof *l->radiance * l->region_count);
+    l->view.radiance = l->view_radiance;
+    l->global_radiance = l->view.global_radiance = -1.0f;
     l->view.lo = lo;
     l->view.inv_size = 1.0f / size;
     for (int i = 0; i < 3; i++)
         l->view.cell_max[i] = (float)l->cells[i] - 0.5f;
     l->view.stride_y = l->cells[0];
     l->view.stride_z = l->cells[0] * l->cells[1];
-    l->view.state = l->state;
+    l->view.state = l->view_state;
     for (int k = 0; k < 8; k++)
         l->view.of_state[k] = sg_mixture_candidates[k < SG_MIXTURE_CANDIDATES ? k : initial];
     memset(l->coarse_choice, -1, l->coarse_count);
@@ -170,7 +203,7 @@ void sg_mixture_learner_free(SgMixtureLearner *l)
     if (!l)
         return;
     if (l->buffers)
-        for (uint32_t t = 0; t < l->tiles; t++)
+        for (uint32_t t = 0; t < 2 * l->tiles; t++)
             free(l->buffers[t].data);
     free(l->buffers);
     free(l->choice);
@@ -183,6 +216,12 @@ void sg_mixture_learner_free(SgMixtureLearner *l)
     free(l->coarse);
     free(l->coarse_of);
     free(l->radiance);
+    free(l->view_state);
+    free(l->view_radiance);
+    free(l->changed);
+    free(l->is_changed);
+    free(l->flags);
+    free(l->seen);
     free(l);
 }
 
@@ -205,6 +244,15 @@ bool sg_mixture_learning(const SgMixtureLearner *l, uint32_t region)
 
 const SgMixtureView *sg_mixture_view(const SgMixtureLearner *l) { return &l->view; }
 
+/* The region's view entry is stale until the next sg_mixture_end_pass. */
+static void mark_changed(SgMixtureLearner *l, uint32_t region)
+{
+    if (!l->is_changed[region]) {
+        l->is_changed[region] = 1;
+        l->changed[l->changed_count++] = region;
+    }
+}
+
 static void refresh_state(SgMixtureLearner *l, uint32_t region)
 {
     int k = l->choice[region];
@@ -213,15 +261,22 @@ static void refresh_state(SgMixtureLearner *l, uint32_t region)
     if (k < 0)
         k = l->global_choice;
     int candidate = k < 0 ? (int)STATE_INITIAL : k;
-    l->state[region] = (uint8_t)(candidate | (l->stats[region].samples >= SETTLED_SAMPLES ? STATE_SETTLED : 0) |
-                                 (l->view.of_state[candidate].alpha < 1.0f ? SG_MIXTURE_STATE_LOBE : 0));
+    /* a region without a choice of its own has too few samples to settle:
+     * its statistics are not read */
+    bool settled = l->choice[region] >= 0 && l->stats[region].samples >= SETTLED_SAMPLES;
+    uint8_t st = (uint8_t)(candidate | (settled ? STATE_SETTLED : 0) |
+                           (l->view.of_state[candidate].alpha < 1.0f ? SG_MIXTURE_STATE_LOBE : 0));
+    if (st != l->state[region]) {
+        l->state[region] = st;
+        mark_changed(l, region);
+    }
 }
 
 void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord *rec)
 {
     if (tile >= l->tiles || rec->region >= l->region_count)
         return;
-    RecordBuffer *b = &l->buffers[tile];
+    RecordBuffer *b = &l->buffers[l->filling * l->tiles + tile];
     if (b->count == b->capacity) {
         size_t cap = b->capacity ? 2 * b->capacity : 1024;
         StoredRecord *d = realloc(b->data, cap * sizeof *d);
@@ -350,20 +405,69 @@ static float rms_radiance(const RegionStats *st)
  * every pass and would otherwise be copied to every sparse region. */
 static void refresh_radiance(SgMixtureLearner *l, uint32_t region)
 {
-    float m = rms_radiance(&l->stats[region]);
-    l->radiance[region] = m >= 0.0f ? m : rms_radiance(&l->coarse[l->coarse_of[region]]);
+    float m = l->flags[region] & REGION_SEEN ? rms_radiance(&l->stats[region]) : -1.0f;
+    if (m >= 0.0f)
+        l->flags[region] |= REGION_OWN_RADIANCE;
+    else
+        m = rms_radiance(&l->coarse[l->coarse_of[region]]);
+    if (m != l->radiance[region]) {
+        l->radiance[region] = m;
+        mark_changed(l, region);
+    }
+}
+
+/* Brings the view up to date with what has been learned. */
+static void publish(SgMixtureLearner *l)
+{
+    if (l->changed_count > l->region_count / 8) {
+        memcpy(l->view_state, l->state, l->region_count);
+        memcpy(l->view_radiance, l->radiance, sizeof *l->radiance * l->region_count);
+        memset(l->is_changed, 0, l->region_count);
+    } else
+        for (uint32_t i = 0; i < l->changed_count; i++) {
+            uint32_t r = l->changed[i];
+            l->view_state[r] = l->state[r];
+            l->view_radiance[r] = l->radiance[r];
+            l->is_changed[r] = 0;
+        }
+    l->changed_count = 0;
+    l->view.global_radiance = l->global_radiance;
+}
+
+void sg_mixture_end_pass(SgMixtureLearner *l)
+{
+    sg_mixture_learn(l); /* records not learned yet (no-op when they were) */
+    publish(l);
+    l->filling ^= 1u;
 }
 
 void sg_mixture_update(SgMixtureLearner *l)
 {
+    sg_mixture_end_pass(l);
+    sg_mixture_learn(l);
+    publish(l);
+}
+
+void sg_mixture_learn(SgMixtureLearner *l)
+{
     uint32_t fine = 0, coarse = 0;
     uint32_t *coarse_list = l->touched + l->region_count;
+    const uint32_t learning = l->filling ^ 1u;
+    size_t records = 0;
+    for (uint32_t t = 0; t < l->tiles; t++)
+        records += l->buffers[learning * l->tiles + t].count;
+    if (!records)
+        return;
     for (uint32_t t = 0; t < l->tiles; t++) {
-        RecordBuffer *b = &l->buffers[t];
+        RecordBuffer *b = &l->buffers[learning * l->tiles + t];
         for (size_t i = 0; i < b->count; i++) {
             const StoredRecord *rec = &b->data[i];
             uint32_t c = l->coarse_of[rec->region];
             add_record(&l->stats[rec->region], rec);
+            if (!(l->flags[rec->region] & REGION_SEEN)) {
+                l->flags[rec->region] |= REGION_SEEN;
+                l->seen[l->seen_count++] = rec->region;
+            }
             if (!l->is_touched[rec->region]) {
                 l->is_touched[rec->region] = 1;
                 l->touched[fine++] = rec->region;
@@ -384,7 +488,8 @@ void sg_mixture_update(SgMixtureLearner *l)
     if (g != l->global_choice) {
         l->global_choice = g; /* rare: every region that follows it looks again */
         for (uint32_t i = 0; i < l->region_count; i++)
-            refresh_state(l, i);
+            if (l->choice[i] < 0 && l->coarse_choice[l->coarse_of[i]] < 0)
+                refresh_state(l, i);
     }
     for (uint32_t i = 0; i < fine; i++) {
         l->is_touched[l->touched[i]] = 0;
@@ -418,11 +523,11 @@ void sg_mixture_update(SgMixtureLearner *l)
                     size_t f = ((size_t)z * l->cells[1] + y) * l->cells[0] + x;
                     if (rechosen && l->choice[f * 6 + bin] < 0)
                         refresh_state(l, (uint32_t)(f * 6 + bin));
-                    if (answers_radiance && l->stats[f * 6 + bin].radiance_samples < RADIANCE_MIN_SAMPLES)
+                    if (answers_radiance && !(l->flags[f * 6 + bin] & REGION_OWN_RADIANCE))
                         refresh_radiance(l, (uint32_t)(f * 6 + bin));
                 }
     }
-    l->view.global_radiance = rms_radiance(&l->global);
+    l->global_radiance = rms_radiance(&l->global);
 }
 
 uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region)
@@ -435,7 +540,8 @@ double sg_mixture_guided_fraction(const SgMixtureLearner *l)
 {
     /* weighted by the bounces each region has seen */
     double all = 0.0, guided = 0.0;
-    for (uint32_t i = 0; i < l->region_count; i++) {
+    for (uint32_t s = 0; s < l->seen_count; s++) {
+        uint32_t i = l->seen[s];
         double n = (double)l->stats[i].samples;
         all += n;
         if (n > 0.0 && sg_mixture_choice(l, i).alpha < 1.0f)

@@ -170,8 +170,20 @@ bool sg_mixture_learning(const SgMixtureLearner *l, uint32_t region);
  * only an aid; the estimate stays unbiased). */
 void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord *rec);
 /* After a pass: sums every tile's records in tile order, re-chooses the
- * alpha of each region that got samples, empties the buffers. */
+ * alpha of each region that got samples, empties the buffers, and the view
+ * shows the new choices. */
 void sg_mixture_update(SgMixtureLearner *l);
+/* The same in two halves, so that learning from one pass overlaps the
+ * next (the view then lags one pass; still unbiased, since it is fixed
+ * during each pass, and deterministic):
+ *   sg_mixture_end_pass, between passes: the view shows what
+ *     sg_mixture_learn has learned so far; the pass's records are put
+ *     aside to be learned (learned at once if the last ones were not);
+ *   sg_mixture_learn, on one thread while the next pass renders (it
+ *     reads only the records put aside and writes only the learner's
+ *     own tables, not the view nor the buffers being filled). */
+void sg_mixture_end_pass(SgMixtureLearner *l);
+void sg_mixture_learn(SgMixtureLearner *l);
 
 /* A region's sample count, for tests and reports. */
 uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region);

@@ -1064,6 +1064,7 @@ typedef struct PassCtx {
     bool first_pass;
     uint64_t learn_stride;
     uint64_t learn_below; /* UINT64_MAX / learn_stride */
+    bool learn_job;       /* job 0 runs sg_mixture_learn */
 } PassCtx;
 
 static uint64_t mix64(uint64_t x)
@@ -1109,10 +1110,8 @@ static bool learns(const PassCtx *pc, size_t pix)
     return pc->learn_stride == 1 || ((uint64_t)pix + pc->pass_key) * 0x9e3779b97f4a7c15ULL < pc->learn_below;
 }
 
-static void render_tile(void *vctx, uint64_t index, int thread)
+static void render_tile(PassCtx *pc, uint64_t index)
 {
-    (void)thread;
-    PassCtx *pc = vctx;
     SgRenderer *r = pc->r;
     const int w = r->opt.width, hgt = r->opt.height;
     int tx = (int)(index % (uint64_t)pc->tiles_x), ty = (int)(index / (uint64_t)pc->tiles_x);
@@ -1154,6 +1153,22 @@ static void render_tile(void *vctx, uint64_t index, int thread)
         atomic_fetch_add(&r->backface_hits, st.backface);
     if (nonfinite)
         atomic_fetch_add(&r->nonfinite, nonfinite);
+}
+
+/* A pass's jobs: with a learner, job 0 learns from the pass before
+ * (taken first, it runs beside the tiles), then one job per tile. */
+static void pass_job(void *vctx, uint64_t index, int thread)
+{
+    (void)thread;
+    PassCtx *pc = vctx;
+    if (pc->learn_job) {
+        if (index == 0) {
+            sg_mixture_learn(pc->r->learner);
+            return;
+        }
+        index--;
+    }
+    render_tile(pc, index);
 }
 
 /* The noise a path may add to each pixel, for the learned roulette:
@@ -1261,12 +1276,17 @@ void sg_renderer_pass(SgRenderer *r)
         estimate_deviations(r);
     PassCtx pc = {r, (r->opt.width + TILE - 1) / TILE,
                   mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1), r->spp == 0,
-                  learn_stride(r), 0};
+                  learn_stride(r), 0, r->learner != NULL};
     pc.learn_below = UINT64_MAX / pc.learn_stride;
     int tiles_y = (r->opt.height + TILE - 1) / TILE;
-    sg_parallel_for((uint64_t)pc.tiles_x * tiles_y, r->opt.threads, render_tile, &pc);
-    if (r->learner)
+    sg_parallel_for((uint64_t)pc.tiles_x * tiles_y + pc.learn_job, r->opt.threads, pass_job, &pc);
+    /* The first pass's records are learned at once (the second pass then
+     * uses them); after that, each pass's are learned during the next and
+     * used from the one after: the update no longer holds up the threads. */
+    if (r->learner && r->spp == 0)
         sg_mixture_update(r->learner);
+    else if (r->learner)
+        sg_mixture_end_pass(r->learner);
     r->spp++;
 }
 
