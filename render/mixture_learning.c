@@ -113,6 +113,13 @@ struct SgMixtureLearner {
     SgMixtureView view;
 };
 
+/* The fine region of cell (x, y, z), normal bin `bin` (the view's layout). */
+static uint32_t region_of(const SgMixtureLearner *l, int x, int y, int z, uint32_t bin)
+{
+    const uint32_t *s = l->view.stride[bin];
+    return l->view.base[bin] + (uint32_t)x * s[0] + (uint32_t)y * s[1] + (uint32_t)z * s[2];
+}
+
 SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest, uint32_t tiles,
                                             int initial, SgError *err)
 {
@@ -166,14 +173,23 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
         sg_mixture_learner_free(l);
         return sg_fail(err, "mixture learner: out of memory for %u regions", (unsigned)(cells * 6)), NULL;
     }
+    for (uint32_t b = 0; b < 6; b++) {
+        uint32_t nx = (uint32_t)l->cells[0], ny = (uint32_t)l->cells[1], nz = (uint32_t)l->cells[2];
+        uint32_t *st = l->view.stride[b];
+        l->view.base[b] = (b >> 1) * 2u * (uint32_t)cells + (b & 1u);
+        switch (b >> 1) {
+        case 0: st[1] = 2, st[2] = 2 * ny, st[0] = 2 * ny * nz; break; /* y, z, x */
+        case 1: st[0] = 2, st[2] = 2 * nx, st[1] = 2 * nx * nz; break; /* x, z, y */
+        default: st[0] = 2, st[1] = 2 * nx, st[2] = 2 * nx * ny; break; /* x, y, z */
+        }
+    }
     for (int z = 0; z < l->cells[2]; z++)
         for (int y = 0; y < l->cells[1]; y++)
             for (int x = 0; x < l->cells[0]; x++) {
-                size_t fine = ((size_t)z * l->cells[1] + y) * l->cells[0] + x;
                 size_t c = ((size_t)(z / COARSE) * l->coarse_cells[1] + y / COARSE) * l->coarse_cells[0] +
                            x / COARSE;
                 for (int bin = 0; bin < 6; bin++)
-                    l->coarse_of[fine * 6 + bin] = (uint32_t)(c * 6 + bin);
+                    l->coarse_of[region_of(l, x, y, z, bin)] = (uint32_t)(c * 6 + bin);
             }
     memset(l->choice, -1, l->region_count);
     memset(l->state, STATE_INITIAL | (sg_mixture_candidates[initial].alpha < 1.0f ? SG_MIXTURE_STATE_LOBE : 0),
@@ -188,8 +204,6 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->view.inv_size = 1.0f / size;
     for (int i = 0; i < 3; i++)
         l->view.cell_max[i] = (float)l->cells[i] - 0.5f;
-    l->view.stride_y = l->cells[0];
-    l->view.stride_z = l->cells[0] * l->cells[1];
     l->view.state = l->view_state;
     for (int k = 0; k < 8; k++)
         l->view.of_state[k] = sg_mixture_candidates[k < SG_MIXTURE_CANDIDATES ? k : initial];
@@ -520,11 +534,11 @@ void sg_mixture_learn(SgMixtureLearner *l)
         for (int z = cz * COARSE; z < (cz + 1) * COARSE && z < l->cells[2]; z++)
             for (int y = cy * COARSE; y < (cy + 1) * COARSE && y < l->cells[1]; y++)
                 for (int x = cx * COARSE; x < (cx + 1) * COARSE && x < l->cells[0]; x++) {
-                    size_t f = ((size_t)z * l->cells[1] + y) * l->cells[0] + x;
-                    if (rechosen && l->choice[f * 6 + bin] < 0)
-                        refresh_state(l, (uint32_t)(f * 6 + bin));
-                    if (answers_radiance && !(l->flags[f * 6 + bin] & REGION_OWN_RADIANCE))
-                        refresh_radiance(l, (uint32_t)(f * 6 + bin));
+                    uint32_t f = region_of(l, x, y, z, bin);
+                    if (rechosen && l->choice[f] < 0)
+                        refresh_state(l, f);
+                    if (answers_radiance && !(l->flags[f] & REGION_OWN_RADIANCE))
+                        refresh_radiance(l, f);
                 }
     }
     l->global_radiance = rms_radiance(&l->global);

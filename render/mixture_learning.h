@@ -105,7 +105,14 @@ typedef struct SgMixtureView {
     Vec3 lo;
     float inv_size;
     float cell_max[3];             /* cells - 1/2: truncates to the last cell */
-    int stride_y, stride_z;        /* in cells */
+    /* region of cell (x, y, z) in normal bin b: base[b] + x stride[b][0] +
+     * y stride[b][1] + z stride[b][2]. Each pair of opposite bins has its
+     * own table whose fastest axes lie in the walls it holds (y then z for
+     * the x bins, x then z for y, x then y for z), the two bins side by
+     * side: the regions of a wall's row share cache lines, as the renderer
+     * reads one at every bounce. */
+    uint32_t base[6];
+    uint32_t stride[6][3];
     const uint8_t *state;          /* per region: SG_MIXTURE_STATE_* bits */
     SgMixtureCandidate of_state[8];
     /* per region: root mean square of the outgoing radiance per unit
@@ -140,7 +147,8 @@ static inline uint32_t sg_mixture_region_at(const SgMixtureView *v, Vec3 p, uint
     float x = sg_minf(sg_maxf((p.x - v->lo.x) * v->inv_size, 0.0f), v->cell_max[0]),
           y = sg_minf(sg_maxf((p.y - v->lo.y) * v->inv_size, 0.0f), v->cell_max[1]),
           z = sg_minf(sg_maxf((p.z - v->lo.z) * v->inv_size, 0.0f), v->cell_max[2]);
-    return (((uint32_t)z * (uint32_t)v->stride_z + (uint32_t)y * (uint32_t)v->stride_y + (uint32_t)x) * 6u) + bin;
+    const uint32_t *s = v->stride[bin];
+    return v->base[bin] + (uint32_t)x * s[0] + (uint32_t)y * s[1] + (uint32_t)z * s[2];
 }
 /* The same, with the region's mixture and whether it still learns. */
 static inline uint32_t sg_mixture_lookup(const SgMixtureView *v, Vec3 p, uint32_t bin, SgMixtureCandidate *choice,
