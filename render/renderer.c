@@ -1280,12 +1280,9 @@ void sg_renderer_pass(SgRenderer *r)
     pc.learn_below = UINT64_MAX / pc.learn_stride;
     int tiles_y = (r->opt.height + TILE - 1) / TILE;
     sg_parallel_for((uint64_t)pc.tiles_x * tiles_y + pc.learn_job, r->opt.threads, pass_job, &pc);
-    /* The first pass's records are learned at once (the second pass then
-     * uses them); after that, each pass's are learned during the next and
-     * used from the one after: the update no longer holds up the threads. */
-    if (r->learner && r->spp == 0)
-        sg_mixture_update(r->learner);
-    else if (r->learner)
+    /* Each pass's records are learned during the next and used from the
+     * one after: the update does not hold up the threads. */
+    if (r->learner)
         sg_mixture_end_pass(r->learner);
     r->spp++;
 }
