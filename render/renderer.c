@@ -766,29 +766,29 @@ typedef struct PendingRecord {
     uint32_t region;
     bool lobe;     /* guided: the bounce's fields are set */
     float pdf_bsdf, cos_axis, cos_mirror, pdf;
-    Vec3 beta;     /* path throughput at the vertex */
-    Vec3 radiance_in;  /* radiance gathered before the vertex's next-event estimate */
+    Vec3 beta;     /* path throughput of the bounce (after the roulette) */
     Vec3 radiance; /* radiance gathered before the bounce */
 } PendingRecord;
 
 #define MAX_PENDING 32
 
 /* Learned roulette (efficiency-aware, after Rath et al. 2022, without the
- * splitting): from the third vertex on (as albedo roulette), a path
- * survives a vertex with probability
+ * splitting): from the third vertex on (as albedo roulette), after its
+ * next-event estimate, a path's bounce survives with probability
  *     q = min(1, ROULETTE_GAIN |beta| sqrt(M2(region)) / sigma(pixel)),
- * M2 the region's second moment of outgoing radiance per unit throughput,
- * sigma the noise the pixel has anyway (estimate_deviations). Cutting a
- * path adds variance |beta|^2 M2 (1/q - 1) and saves the rest of its cost;
- * this q balances the two against the pixel's variance per cost (the ratio
- * of a whole path's cost to its rest folded into ROULETTE_GAIN; 1.4 and 2.8
- * measured within noise of 2 on the five bench scenes, 0.7 made fireflies
- * on Sponza). Paths heading into the dark die; paths toward the light live
- * on, where albedo roulette would cut them. Never below
- * ROULETTE_MIN_SURVIVAL, so that a region whose estimate is wrongly low
- * cannot make fireflies. */
+ * M2 the region's second moment of what a bounce brings back per unit
+ * throughput, sigma the noise the pixel has anyway (estimate_deviations).
+ * Cutting adds variance |beta|^2 M2 (1/q - 1) and saves the rest of the
+ * path's cost; this q balances the two against the pixel's variance per
+ * cost (the ratio of a whole path's cost to its rest folded into
+ * ROULETTE_GAIN: 2.8 against 2 and 1.4 measured corridor 5.3x / 4.8x / 4.7x
+ * bsdf's efficiency, the Cornell box within noise of 0.97x at all three;
+ * 0.7 made fireflies on Sponza). Paths heading into the dark die; paths
+ * toward the light live on, where albedo roulette would cut them. Never
+ * below ROULETTE_MIN_SURVIVAL, so that a region whose estimate is wrongly
+ * low cannot make fireflies. */
 #define ROULETTE_DEPTH 2
-#define ROULETTE_GAIN 2.0f
+#define ROULETTE_GAIN 2.8f
 #define ROULETTE_MIN_SURVIVAL 0.05f
 
 /* Russian roulette after a few bounces, on the product of albedos:
@@ -832,7 +832,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
     const SgSampling mode = r->opt.sampling;
 
     for (int depth = 0;; depth++) {
-        bool roulette_done = false; /* the learned roulette has decided at this vertex */
+        bool roulette_done = false; /* a roulette has decided at this vertex */
         Hit h = intersect(r, o, d, INFINITY);
         st->rays++;
         if (!h.found)
@@ -901,6 +901,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             bool lobe_region = r->opt.alpha < 1.0f;
             uint32_t region = SG_NO_REGION;
             bool learn = false;
+            float rms = -1.0f; /* what a bounce from here brings back, for the learned roulette */
             PendingRecord *pr = NULL;
             if (mode == SG_SAMPLING_GUIDED && r->learner) {
                 const SgMixtureView *view = r->mixture_view;
@@ -911,25 +912,13 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 mix = view->of_state[st & SG_MIXTURE_STATE_CANDIDATE];
                 lobe_region = st & SG_MIXTURE_STATE_LOBE;
                 learn = learn_tile >= 0 && !(st & SG_MIXTURE_STATE_SETTLED) && pending_count < MAX_PENDING;
-                float rms = pixel_deviation > 0.0f && depth >= ROULETTE_DEPTH ? sg_mixture_radiance(view, region)
-                                                                              : -1.0f;
-                if (rms >= 0.0f) {
-                    float q = ROULETTE_GAIN * luminance(beta) * rms / pixel_deviation;
-                    roulette_done = true;
-                    if (q < 1.0f) {
-                        q = sg_maxf(q, ROULETTE_MIN_SURVIVAL);
-                        if (!(sg_rng_float(rng) < q))
-                            break;
-                        beta = v3_scale(beta, 1.0f / q);
-                    }
-                    rr_beta = v3(1, 1, 1);
-                }
+                rms = pixel_deviation > 0.0f && depth >= ROULETTE_DEPTH ? sg_mixture_radiance(view, region) : -1.0f;
                 if (learn) {
                     pr = &pending[pending_count++];
                     pr->region = region;
                     pr->lobe = false;
                     pr->beta = beta;
-                    pr->radiance_in = radiance;
+                    pr->radiance = radiance;
                 }
             }
             bool guided = mode == SG_SAMPLING_SKELETON || (mode == SG_SAMPLING_GUIDED && (lobe_region || learn));
@@ -997,17 +986,36 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 radiance = v3_add(radiance, v3_mul(beta, v3_scale(nee, w)));
             }
 
-            /* Albedo roulette before the bounce is drawn (it depends only on
-             * the albedos): a path cut here pays for no direction, pdf or
+            /* Roulette after next-event estimation and before the bounce is
+             * drawn: it decides on the bounce alone, and a path cut here
+             * keeps its direct light and pays for no direction, pdf or
              * guide lobe it would not follow. */
             rr_beta = v3_mul(rr_beta, v3_add(m->kd, m->ks));
-            if (depth >= ROULETTE_DEPTH && !roulette_done) {
+            if (depth >= ROULETTE_DEPTH && rms >= 0.0f) {
+                /* learned: by what the bounce brings back */
+                float q = ROULETTE_GAIN * luminance(beta) * rms / pixel_deviation;
+                roulette_done = true;
+                if (q < 1.0f) {
+                    q = sg_maxf(q, ROULETTE_MIN_SURVIVAL);
+                    if (!(sg_rng_float(rng) < q)) {
+                        if (pr) /* what a surviving bounce brings is what the learner estimates */
+                            pending_count--;
+                        break;
+                    }
+                    beta = v3_scale(beta, 1.0f / q);
+                }
+                rr_beta = v3(1, 1, 1);
+            } else if (depth >= ROULETTE_DEPTH) {
                 roulette_done = true;
                 if (!albedo_roulette(&beta, &rr_beta, rng)) {
                     if (pr && guided) /* for the learner, a bounce that brought nothing back */
-                        *pr = (PendingRecord){pr->region, true, 0.0f, 0.0f, 0.0f, 0.0f, pr->beta, pr->radiance_in, radiance};
+                        *pr = (PendingRecord){pr->region, true, 0.0f, 0.0f, 0.0f, 0.0f, pr->beta, radiance};
                     break;
                 }
+            }
+            if (pr) { /* the bounce's throughput and what came before it */
+                pr->beta = beta;
+                pr->radiance = radiance;
             }
 
             float u0 = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
@@ -1021,7 +1029,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             if (!(cos_x > 0.0f) || !(pdf > 0.0f))
                 break; /* below the surface: f = 0, the path ends */
             if (pr && guided)
-                *pr = (PendingRecord){pr->region, true, pdf_bsdf, c1, c2, pdf, pr->beta, pr->radiance_in, radiance};
+                *pr = (PendingRecord){pr->region, true, pdf_bsdf, c1, c2, pdf, pr->beta, radiance};
             Vec3 f = eval_bsdf(m, &lobe, wi);
             beta = v3_mul(beta, v3_scale(f, cos_x / pdf));
             d = wi;
@@ -1042,15 +1050,15 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
         if (!pr->lobe && !r->pixel_deviation)
             continue; /* only the learned roulette reads what left a vertex */
         float t = luminance(pr->beta);
-        SgMixtureRecord rec = {pr->region, luminance(per_throughput(v3_sub(radiance, pr->radiance_in), pr->beta)),
-                               pr->lobe, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, t * t};
+        /* the bounce's one-sample estimate: what came after, per unit throughput */
+        float after = luminance(per_throughput(v3_sub(radiance, pr->radiance), pr->beta));
+        SgMixtureRecord rec = {pr->region, after, pr->lobe, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, t * t};
         if (pr->lobe) {
-            /* the bounce's one-sample estimate: what came after, per unit throughput */
             rec.pdf_bsdf = pr->pdf_bsdf;
             rec.cos_axis = pr->cos_axis;
             rec.cos_mirror = pr->cos_mirror;
             rec.pdf = pr->pdf;
-            rec.estimate = luminance(per_throughput(v3_sub(radiance, pr->radiance), pr->beta));
+            rec.estimate = after;
         }
         sg_mixture_record(r->learner, (uint32_t)learn_tile, &rec);
     }
