@@ -768,6 +768,7 @@ typedef struct PendingRecord {
     float pdf_bsdf, cos_axis, cos_mirror, pdf;
     Vec3 beta;     /* path throughput of the bounce (after the roulette) */
     Vec3 radiance; /* radiance gathered before the bounce */
+    bool cut;      /* the roulette cut the path here: no sample of M2 */
 } PendingRecord;
 
 #define MAX_PENDING 32
@@ -919,6 +920,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     pr->lobe = false;
                     pr->beta = beta;
                     pr->radiance = radiance;
+                    pr->cut = false;
                 }
             }
             bool guided = mode == SG_SAMPLING_SKELETON || (mode == SG_SAMPLING_GUIDED && (lobe_region || learn));
@@ -1009,7 +1011,9 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 roulette_done = true;
                 if (!albedo_roulette(&beta, &rr_beta, rng)) {
                     if (pr && guided) /* for the learner, a bounce that brought nothing back */
-                        *pr = (PendingRecord){pr->region, true, 0.0f, 0.0f, 0.0f, 0.0f, pr->beta, radiance};
+                        *pr = (PendingRecord){pr->region, true, 0.0f, 0.0f, 0.0f, 0.0f, pr->beta, radiance, true};
+                    else if (pr) /* nothing for M2, which is of surviving bounces (as above) */
+                        pending_count--;
                     break;
                 }
             }
@@ -1029,7 +1033,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             if (!(cos_x > 0.0f) || !(pdf > 0.0f))
                 break; /* below the surface: f = 0, the path ends */
             if (pr && guided)
-                *pr = (PendingRecord){pr->region, true, pdf_bsdf, c1, c2, pdf, pr->beta, radiance};
+                *pr = (PendingRecord){pr->region, true, pdf_bsdf, c1, c2, pdf, pr->beta, radiance, false};
             Vec3 f = eval_bsdf(m, &lobe, wi);
             beta = v3_mul(beta, v3_scale(f, cos_x / pdf));
             d = wi;
@@ -1052,7 +1056,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
         float t = luminance(pr->beta);
         /* the bounce's one-sample estimate: what came after, per unit throughput */
         float after = luminance(per_throughput(v3_sub(radiance, pr->radiance), pr->beta));
-        SgMixtureRecord rec = {pr->region, after, pr->lobe, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, t * t};
+        SgMixtureRecord rec = {pr->region, pr->cut ? -1.0f : after, pr->lobe, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, t * t};
         if (pr->lobe) {
             rec.pdf_bsdf = pr->pdf_bsdf;
             rec.cos_axis = pr->cos_axis;
