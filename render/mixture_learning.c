@@ -113,13 +113,6 @@ struct SgMixtureLearner {
     SgMixtureView view;
 };
 
-/* The fine region of cell (x, y, z), normal bin `bin` (the view's layout). */
-static uint32_t region_of(const SgMixtureLearner *l, int x, int y, int z, uint32_t bin)
-{
-    const uint32_t *s = l->view.stride[bin];
-    return l->view.base[bin] + (uint32_t)x * s[0] + (uint32_t)y * s[1] + (uint32_t)z * s[2];
-}
-
 SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest, uint32_t tiles,
                                             int initial, SgError *err)
 {
@@ -189,7 +182,8 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
                 size_t c = ((size_t)(z / COARSE) * l->coarse_cells[1] + y / COARSE) * l->coarse_cells[0] +
                            x / COARSE;
                 for (int bin = 0; bin < 6; bin++)
-                    l->coarse_of[region_of(l, x, y, z, bin)] = (uint32_t)(c * 6 + bin);
+                    l->coarse_of[sg_mixture_region_of_cell(&l->view, (uint32_t)x, (uint32_t)y, (uint32_t)z,
+                                                           (uint32_t)bin)] = (uint32_t)(c * 6 + bin);
             }
     memset(l->choice, -1, l->region_count);
     memset(l->state, STATE_INITIAL | (sg_mixture_candidates[initial].alpha < 1.0f ? SG_MIXTURE_STATE_LOBE : 0),
@@ -534,7 +528,7 @@ void sg_mixture_learn(SgMixtureLearner *l)
         for (int z = cz * COARSE; z < (cz + 1) * COARSE && z < l->cells[2]; z++)
             for (int y = cy * COARSE; y < (cy + 1) * COARSE && y < l->cells[1]; y++)
                 for (int x = cx * COARSE; x < (cx + 1) * COARSE && x < l->cells[0]; x++) {
-                    uint32_t f = region_of(l, x, y, z, bin);
+                    uint32_t f = sg_mixture_region_of_cell(&l->view, (uint32_t)x, (uint32_t)y, (uint32_t)z, bin);
                     if (rechosen && l->choice[f] < 0)
                         refresh_state(l, f);
                     if (answers_radiance && !(l->flags[f] & REGION_OWN_RADIANCE))

@@ -138,6 +138,13 @@ static inline uint32_t sg_mixture_normal_bin(Vec3 n)
     float ax = n.x < 0.0f ? -n.x : n.x, ay = n.y < 0.0f ? -n.y : n.y, az = n.z < 0.0f ? -n.z : n.z;
     return ax >= ay && ax >= az ? (n.x < 0.0f) : ay >= az ? 2u + (n.y < 0.0f) : 4u + (n.z < 0.0f);
 }
+/* The region of cell (x, y, z) (inside the grid) in normal bin `bin`. */
+static inline uint32_t sg_mixture_region_of_cell(const SgMixtureView *v, uint32_t x, uint32_t y, uint32_t z,
+                                                 uint32_t bin)
+{
+    const uint32_t *s = v->stride[bin];
+    return v->base[bin] + x * s[0] + y * s[1] + z * s[2];
+}
 /* The region of p whose normal falls in `bin` (a point outside the grid
  * counts in the nearest cell); v->state[region] tells the rest. */
 static inline uint32_t sg_mixture_region_at(const SgMixtureView *v, Vec3 p, uint32_t bin)
@@ -147,8 +154,7 @@ static inline uint32_t sg_mixture_region_at(const SgMixtureView *v, Vec3 p, uint
     float x = sg_minf(sg_maxf((p.x - v->lo.x) * v->inv_size, 0.0f), v->cell_max[0]),
           y = sg_minf(sg_maxf((p.y - v->lo.y) * v->inv_size, 0.0f), v->cell_max[1]),
           z = sg_minf(sg_maxf((p.z - v->lo.z) * v->inv_size, 0.0f), v->cell_max[2]);
-    const uint32_t *s = v->stride[bin];
-    return v->base[bin] + (uint32_t)x * s[0] + (uint32_t)y * s[1] + (uint32_t)z * s[2];
+    return sg_mixture_region_of_cell(v, (uint32_t)x, (uint32_t)y, (uint32_t)z, bin);
 }
 /* The same, with the region's mixture and whether it still learns. */
 static inline uint32_t sg_mixture_lookup(const SgMixtureView *v, Vec3 p, uint32_t bin, SgMixtureCandidate *choice,
