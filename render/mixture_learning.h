@@ -28,10 +28,10 @@
  * bounces weigh little in the image cannot pay for the cache query however
  * much it would lower its own variance.
  *
- * Every vertex of a learning path also reports what left it (its
- * next-event estimate and all after, per unit throughput); each region's
- * root mean square of that drives the guided mode's learned Russian
- * roulette (render/renderer.c).
+ * Every vertex of a learning path also reports what its bounce brought
+ * back (all that came after the bounce, per unit throughput of the
+ * bounce); each region's root mean square of that drives the guided
+ * mode's learned Russian roulette (render/renderer.c).
  *
  * Unbiased: a pass uses only the choices made after the previous passes,
  * which are fixed before it starts, so each pass is an unbiased estimate.
@@ -73,8 +73,8 @@ extern const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES];
  * what left it, and, where the bounce was guided, how it was drawn. */
 typedef struct SgMixtureRecord {
     uint32_t region;
-    /* the vertex's outgoing radiance toward the path (luminance, per unit
-     * throughput): its next-event estimate and all that came after; < 0
+    /* what the vertex's bounce brought back (luminance, per unit
+     * throughput of the bounce): all that came after the bounce; < 0
      * unknown. Its regional second moment drives the learned roulette. */
     float radiance;
     bool lobe;       /* the bounce was guided: the fields below are set */
@@ -115,7 +115,7 @@ typedef struct SgMixtureView {
     uint32_t stride[6][3];
     const uint8_t *state;          /* per region: SG_MIXTURE_STATE_* bits */
     SgMixtureCandidate of_state[8];
-    /* per region: root mean square of the outgoing radiance per unit
+    /* per region: root mean square of what a bounce brings back per unit
      * throughput (its coarse region's where it has too few samples), < 0:
      * see global_radiance (sg_mixture_radiance) */
     const float *radiance;
@@ -166,9 +166,8 @@ static inline uint32_t sg_mixture_lookup(const SgMixtureView *v, Vec3 p, uint32_
     *learning = !(st & SG_MIXTURE_STATE_SETTLED);
     return region;
 }
-/* What leaves a region (SG_NO_REGION: the scene), as the learned roulette
- * reads it: the root mean square of the outgoing radiance per unit
- * throughput, the coarse region's or the scene's where the region has too
+/* What a bounce from a region brings back (SG_NO_REGION: the scene), as
+ * the learned roulette reads it: the root mean square per unit throughput, the coarse region's or the scene's where the region has too
  * few samples; < 0 unknown. */
 static inline float sg_mixture_radiance(const SgMixtureView *v, uint32_t region)
 {

@@ -28,7 +28,7 @@ static SgMixtureLearner *unit_learner(void) { return unit_learner_from(0); }
  * share `lit` of them land in a small bright cone carrying value
  * f cos L = g, at cosine `cos_light` from the lobe's axis; the others miss
  * it at cosine 0.3. */
-static void feed(SgMixtureLearner *l, uint32_t region, int count, double lit, float cos_light, uint64_t seed)
+static void feed_records(SgMixtureLearner *l, uint32_t region, int count, double lit, float cos_light, uint64_t seed)
 {
     SgRng rng;
     sg_rng_seed(&rng, seed, 7);
@@ -45,7 +45,43 @@ static void feed(SgMixtureLearner *l, uint32_t region, int count, double lit, fl
                                .weight = 1.0f};
         sg_mixture_record(l, (uint32_t)(i & 1), &rec);
     }
+}
+
+/* The same, learned at once. */
+static void feed(SgMixtureLearner *l, uint32_t region, int count, double lit, float cos_light, uint64_t seed)
+{
+    feed_records(l, region, count, lit, cos_light, seed);
     sg_mixture_update(l);
+}
+
+/* The renderer's split update: a pass's records are learned while the next
+ * pass renders and reach the view (what bounces read) only when that pass
+ * ends, so that the view never changes during a pass. */
+Test(render_learning, learned_choices_reach_the_view_between_passes)
+{
+    SgMixtureLearner *l = unit_learner();
+    const Vec3 p = v3(0.3f, 0.3f, 0.3f), n = v3(0, 1, 0);
+    const SgMixtureView *view = sg_mixture_view(l);
+    uint32_t r = sg_mixture_region(l, p, n);
+    SgMixtureCandidate seen;
+    bool learning;
+    feed_records(l, r, 4000, 0.05, 0.995f, 1); /* pass 1 renders */
+    sg_mixture_end_pass(l);
+    sg_mixture_learn(l); /* during pass 2 */
+    sg_mixture_lookup(view, p, sg_mixture_normal_bin(n), &seen, &learning);
+    cr_assert_float_eq(seen.alpha, 1.0f, 0.0f, "the view changed during a pass");
+    SgMixtureCandidate c = sg_mixture_choice(l, r);
+    cr_assert(c.alpha == 0.6f && c.exponent == 64.0f, "learned: alpha %g exponent %g", c.alpha, c.exponent);
+    sg_mixture_end_pass(l); /* pass 2 ends */
+    sg_mixture_lookup(view, p, sg_mixture_normal_bin(n), &seen, &learning);
+    cr_assert(seen.alpha == 0.6f && seen.exponent == 64.0f, "view after the pass: alpha %g exponent %g", seen.alpha,
+              seen.exponent);
+    /* records left unlearned are learned when the next pass ends, not lost */
+    feed_records(l, r, 1000, 0.05, 0.995f, 2);
+    sg_mixture_end_pass(l);
+    sg_mixture_end_pass(l);
+    cr_assert_eq(sg_mixture_region_samples(l, r), 5000);
+    sg_mixture_learner_free(l);
 }
 
 Test(render_learning, the_lobe_wins_where_the_light_comes_along_the_guide)
