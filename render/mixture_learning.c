@@ -27,6 +27,7 @@ static const float exponents[EXPONENTS] = {4.0f, 16.0f, 64.0f};
 #define STATE_SETTLED SG_MIXTURE_STATE_SETTLED
 #define REGION_SEEN 1u         /* has records (listed in seen) */
 #define REGION_OWN_RADIANCE 2u /* enough of them for its own radiance estimate */
+#define REGION_CHANGED 4u      /* listed in changed: its view entry is stale */
 
 /* A record as kept: its terms computed by the thread that made it, so that
  * the sequential sum after the pass is only additions. */
@@ -101,8 +102,7 @@ struct SgMixtureLearner {
      * sg_mixture_end_pass, so that learning can run while a pass renders */
     uint8_t *view_state;
     float *view_radiance;
-    uint32_t *changed;     /* fine regions whose state or radiance changed since */
-    uint8_t *is_changed;
+    uint32_t *changed;     /* fine regions whose state or radiance changed since (REGION_CHANGED) */
     uint32_t changed_count;
     /* per fine region, REGION_* bits: what the update would otherwise read
      * from the region's statistics (a cache miss each; most of them are
@@ -157,12 +157,11 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->view_state = malloc(l->region_count);
     l->view_radiance = malloc(sizeof *l->view_radiance * l->region_count);
     l->changed = malloc(sizeof *l->changed * l->region_count);
-    l->is_changed = calloc(l->region_count, 1);
     l->flags = calloc(l->region_count, 1);
     l->seen = malloc(sizeof *l->seen * l->region_count);
     if (!l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
         !l->coarse_touched || !l->stats || !l->coarse || !l->coarse_of || !l->buffers || !l->view_state ||
-        !l->view_radiance || !l->changed || !l->is_changed || !l->flags || !l->seen) {
+        !l->view_radiance || !l->changed || !l->flags || !l->seen) {
         sg_mixture_learner_free(l);
         return sg_fail(err, "mixture learner: out of memory for %u regions", (unsigned)(cells * 6)), NULL;
     }
@@ -227,7 +226,6 @@ void sg_mixture_learner_free(SgMixtureLearner *l)
     free(l->view_state);
     free(l->view_radiance);
     free(l->changed);
-    free(l->is_changed);
     free(l->flags);
     free(l->seen);
     free(l);
@@ -255,8 +253,8 @@ const SgMixtureView *sg_mixture_view(const SgMixtureLearner *l) { return &l->vie
 /* The region's view entry is stale until the next sg_mixture_end_pass. */
 static void mark_changed(SgMixtureLearner *l, uint32_t region)
 {
-    if (!l->is_changed[region]) {
-        l->is_changed[region] = 1;
+    if (!(l->flags[region] & REGION_CHANGED)) {
+        l->flags[region] |= REGION_CHANGED;
         l->changed[l->changed_count++] = region;
     }
 }
@@ -430,14 +428,14 @@ static void publish(SgMixtureLearner *l)
     if (l->changed_count > l->region_count / 8) {
         memcpy(l->view_state, l->state, l->region_count);
         memcpy(l->view_radiance, l->radiance, sizeof *l->radiance * l->region_count);
-        memset(l->is_changed, 0, l->region_count);
     } else
         for (uint32_t i = 0; i < l->changed_count; i++) {
             uint32_t r = l->changed[i];
             l->view_state[r] = l->state[r];
             l->view_radiance[r] = l->radiance[r];
-            l->is_changed[r] = 0;
         }
+    for (uint32_t i = 0; i < l->changed_count; i++)
+        l->flags[l->changed[i]] &= (uint8_t)~REGION_CHANGED;
     l->changed_count = 0;
     l->view.global_radiance = l->global_radiance;
 }
