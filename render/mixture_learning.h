@@ -167,8 +167,9 @@ static inline uint32_t sg_mixture_lookup(const SgMixtureView *v, Vec3 p, uint32_
     return region;
 }
 /* What a bounce from a region brings back (SG_NO_REGION: the scene), as
- * the learned roulette reads it: the root mean square per unit throughput, the coarse region's or the scene's where the region has too
- * few samples; < 0 unknown. */
+ * the learned roulette reads it: the root mean square per unit throughput,
+ * the coarse region's or the scene's where the region has too few samples;
+ * < 0 unknown. */
 static inline float sg_mixture_radiance(const SgMixtureView *v, uint32_t region)
 {
     float m = region != SG_NO_REGION ? v->radiance[region] : -1.0f;

@@ -918,9 +918,8 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     pr = &pending[pending_count++];
                     pr->region = region;
                     pr->lobe = false;
-                    pr->beta = beta;
-                    pr->radiance = radiance;
-                    pr->cut = false;
+                    pr->beta = beta; /* before the roulette: the weight of a bounce it cuts */
+                    pr->cut = false; /* beta and radiance of a bounce taken: set after the roulette */
                 }
             }
             bool guided = mode == SG_SAMPLING_SKELETON || (mode == SG_SAMPLING_GUIDED && (lobe_region || learn));
