@@ -380,9 +380,15 @@ int main(int argc, char **argv)
     else
         snprintf(alpha_s, sizeof alpha_s, "%g", o.alpha);
     /* the learned roulette needs the learner: elsewhere paths are cut by albedo */
-    const char *roulette = sg_roulette_name(o.sampling == SG_SAMPLING_GUIDED && o.alpha == SG_ALPHA_LEARNED
-                                                ? o.roulette
-                                                : SG_ROULETTE_ALBEDO);
+    SgRoulette roulette_used =
+        o.sampling == SG_SAMPLING_GUIDED && o.alpha == SG_ALPHA_LEARNED ? o.roulette : SG_ROULETTE_ALBEDO;
+    char roulette[80], branches_s[32];
+    snprintf(branches_s, sizeof branches_s, "%.3f", sg_renderer_branches_per_path(r));
+    if (roulette_used == SG_ROULETTE_LEARNED) /* it also splits paths */
+        snprintf(roulette, sizeof roulette, "%s (%.2f branches split off a path)", sg_roulette_name(roulette_used),
+                 sg_renderer_branches_per_path(r));
+    else
+        snprintf(roulette, sizeof roulette, "%s", sg_roulette_name(roulette_used));
     SgImageAttribute attrs[] = {
         {"spp", spp_s},
         {"seconds", sec_s},
@@ -391,7 +397,8 @@ int main(int argc, char **argv)
         {"sg:max_depth", depth_s},
         {"sg:lobe_exponent", exp_s},
         {"sg:alpha", alpha_s},
-        {"sg:roulette", roulette},
+        {"sg:roulette", sg_roulette_name(roulette_used)},
+        {"sg:branches_per_path", branches_s},
         {"sg:nonfinite_samples", nonfinite_s},
         {"sg:clamping", "none"},
         {"sg:scene", a.scene},

@@ -110,6 +110,8 @@ double sg_renderer_backface_fraction(const SgRenderer *r);
 double sg_renderer_guided_fraction(const SgRenderer *r);
 /* Rays traced so far (camera, bounce and shadow rays). */
 uint64_t sg_renderer_rays(const SgRenderer *r);
+/* Branches the learned roulette split off, per camera path, so far. */
+double sg_renderer_branches_per_path(const SgRenderer *r);
 
 #ifdef __cplusplus
 }

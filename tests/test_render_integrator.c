@@ -15,6 +15,7 @@ typedef struct Stats {
     double std_error; /* of the luminance-free channel-0 mean over every sample */
     double min_pixel, max_pixel;
     uint64_t nonfinite;
+    double branches; /* split off per camera path */
 } Stats;
 
 /* Renders `spp` passes; the mean over every sample of the image (or of
@@ -54,6 +55,7 @@ static Stats render_stats(SgScene *s, SgRenderOptions *o, int spp, int x0, int y
             st.max_pixel = fmax(st.max_pixel, v);
         }
     st.nonfinite = sg_renderer_nonfinite(r);
+    st.branches = sg_renderer_branches_per_path(r);
     free(img);
     sg_renderer_free(r);
     return st;
@@ -92,10 +94,15 @@ static void furnace_case(SgSampling mode, double scale)
     o.lobe_exponent = 8;
     const int spp = 64;
     Stats st = render_stats(s, &o, spp, 0, 0, o.width, o.height);
-    cr_log_info("furnace %s scale %g: mean %.5f %.5f %.5f +- %.5f, pixels in [%.3f, %.3f]",
+    cr_log_info("furnace %s scale %g: mean %.5f %.5f %.5f +- %.5f, pixels in [%.3f, %.3f], %.2f branches "
+                "split off a path",
                 sg_sampling_name(mode), scale, st.mean[0], st.mean[1], st.mean[2], st.std_error,
-                st.min_pixel, st.max_pixel);
+                st.min_pixel, st.max_pixel, st.branches);
     cr_assert_eq(st.nonfinite, 0);
+    /* guided's learned roulette splits paths here, so the exact answer
+     * checks the branches' weights too */
+    if (mode == SG_SAMPLING_GUIDED)
+        cr_assert_gt(st.branches, 0.2, "furnace guided: %.3f branches split off a path", st.branches);
     /* the mean over 49152 samples: within 4 standard errors of exactly 1 */
     cr_assert(fabs(st.mean[0] - 1.0) < 4.0 * st.std_error + 1e-6,
               "furnace %s: mean %.5f, expected 1 +- %.5f", sg_sampling_name(mode), st.mean[0],
