@@ -914,9 +914,16 @@ typedef struct SplitPoint {
  * from 0.93 to 0.98 and from 0.98 to 1.06 at 6 s, Sponza from 2.9 to 3.5,
  * the bathroom from 2.1 to 2.3, the corridor from 5.2 to 4.9 and the
  * staircase from 1.38 to 1.32; at 1.4 and 2.8 every scene lost (more
- * branches than their light was worth). A path splits into at most
- * SPLIT_BRANCHES_MAX branches, SPLIT_MAX at one vertex. */
+ * branches than their light was worth). Not before pass SPLIT_FROM_PASS:
+ * on the corridor, splitting on the first passes' estimates (the pixels'
+ * noise from a few samples, regions' M2 from their fallbacks) cost a fifth
+ * of the efficiency at 0.45 s (3.8x bsdf against 4.6x without splitting,
+ * 4.4x splitting from pass 16), where the Cornell box at 1.5 s lost 2%
+ * (1.05x from the first pass, 1.03x from pass 16, 0.98x without). A path
+ * splits into at most SPLIT_BRANCHES_MAX branches, SPLIT_MAX at one
+ * vertex. */
 #define SPLIT_GAIN 0.9f
+#define SPLIT_FROM_PASS 16
 #define SPLIT_MAX 4
 #define SPLIT_BRANCHES_MAX 16
 #define SPLIT_STACK 12
@@ -1120,7 +1127,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                             break;
                         }
                         ps.beta = v3_scale(ps.beta, 1.0f / q);
-                    } else if (split > 1.0f && split_count < SPLIT_STACK) {
+                    } else if (split > 1.0f && split_count < SPLIT_STACK && r->spp >= SPLIT_FROM_PASS) {
                         split = sg_minf(split, sg_minf((float)SPLIT_MAX, (float)(1 + SPLIT_BRANCHES_MAX - branches)));
                         int n_branches = (int)split + (sg_rng_float(rng) < split - floorf(split));
                         ps.beta = v3_scale(ps.beta, 1.0f / split);
