@@ -68,10 +68,34 @@ precompute() { # scene outdir -> outdir/importance.cache
   "$bin/importance" "$dir/medium.vdb" "$dir/skeleton.ply" -o "$dir/importance.cache" >/dev/null 2>&1
 }
 
-echo
+# measure "MODES" SPP ROUNDS: renders scene $sc with each mode in turn,
+# ROUNDS times interleaved, and prints a table row per mode (the best
+# µs/sample and µs/ray, kept in us[] and ur[]; bsdf first among MODES)
+measure() {
+  local modes=$1 n=$2 rounds=$3 mode line sps mr extra sampling
+  for mode in $modes; do us[$mode]=999999; ur[$mode]=999999; done
+  for _ in $(seq "$rounds"); do
+    for mode in $modes; do
+      extra=(); sampling=$mode
+      [ $mode = guided-albedo ] && { sampling=guided; extra=(--roulette albedo); }
+      line=$("$bin/render" "$sc" --cache "$out/$name/importance.cache" --sampling $sampling "${extra[@]}" \
+               --spp "$n" --max-depth 8 -o "$out/g.exr" 2>&1)
+      sps=$(field Msamples/s "$line"); mr=$(field Mrays/s "$line")
+      us[$mode]=$(awk -v a="${us[$mode]}" -v x="$sps" 'BEGIN{b=1/x; print (b<a)?b:a}')
+      ur[$mode]=$(awk -v a="${ur[$mode]}" -v x="$mr" 'BEGIN{b=1/x; print (b<a)?b:a}')
+    done
+  done
+  for mode in $modes; do
+    awk -v n="$name" -v m=$mode -v spp="$n" -v u="${us[$mode]}" -v r="${ur[$mode]}" \
+        -v bu="${us[bsdf]}" -v br="${ur[bsdf]}" \
+      'BEGIN{printf "| %s | %s | %d | %.4f | %.4f | %.2f | %+.1f%% | %+.1f%% |\n", n, m, spp, u, r, u/r, 100*(u/bu-1), 100*(r/br-1)}'
+  done
+}
+
 # 64 spp: guided's learner is still warming up (its initial mixture asks
 # the guide at every bounce until regions settle); the steady state too
 spp=64; steady_spp=256; [ "$quick" = 1 ] && { spp=16; steady_spp=64; }
+echo
 echo "### Per-sample cost of each mode"
 echo
 echo "Same spp, runs interleaved, best of each; the paper paid +25% per sample, target < +10% for guided."
@@ -95,44 +119,10 @@ else
     name=$(basename "$sc" .json)
     if ! precompute "$sc" "$out/$name"; then echo "| $name | precompute failed | | | | | | |"; continue; fi
     declare -A us=() ur=()
-    modes="bsdf skeleton guided guided-albedo"
-    for mode in $modes; do us[$mode]=999999; ur[$mode]=999999; done
-    for _ in $(seq $((runs + 1))); do
-      for mode in $modes; do
-        extra=(); sampling=$mode
-        [ $mode = guided-albedo ] && { sampling=guided; extra=(--roulette albedo); }
-        line=$("$bin/render" "$sc" --cache "$out/$name/importance.cache" --sampling $sampling "${extra[@]}" \
-                 --spp $spp --max-depth 8 -o "$out/g.exr" 2>&1)
-        sps=$(field Msamples/s "$line"); mr=$(field Mrays/s "$line")
-        us[$mode]=$(awk -v a="${us[$mode]}" -v x="$sps" 'BEGIN{b=1/x; print (b<a)?b:a}')
-        ur[$mode]=$(awk -v a="${ur[$mode]}" -v x="$mr" 'BEGIN{b=1/x; print (b<a)?b:a}')
-      done
-    done
-    for mode in $modes; do
-      awk -v n="$name" -v m=$mode -v spp=$spp -v u="${us[$mode]}" -v r="${ur[$mode]}" \
-          -v bu="${us[bsdf]}" -v br="${ur[bsdf]}" \
-        'BEGIN{printf "| %s | %s | %d | %.4f | %.4f | %.2f | %+.1f%% | %+.1f%% |\n", n, m, spp, u, r, u/r, 100*(u/bu-1), 100*(r/br-1)}'
-    done
+    measure "bsdf skeleton guided guided-albedo" $spp $((runs + 1))
     warm=$(awk -v g="${us[guided-albedo]}" -v b="${us[bsdf]}" 'BEGIN{printf "%+.1f%%", 100*(g/b-1)}')
     # the steady state: the target's pair only, over a longer run
-    steady="bsdf guided-albedo"
-    for mode in $steady; do us[$mode]=999999; ur[$mode]=999999; done
-    for _ in $(seq $runs); do
-      for mode in $steady; do
-        extra=(); sampling=$mode
-        [ $mode = guided-albedo ] && { sampling=guided; extra=(--roulette albedo); }
-        line=$("$bin/render" "$sc" --cache "$out/$name/importance.cache" --sampling $sampling "${extra[@]}" \
-                 --spp $steady_spp --max-depth 8 -o "$out/g.exr" 2>&1)
-        sps=$(field Msamples/s "$line"); mr=$(field Mrays/s "$line")
-        us[$mode]=$(awk -v a="${us[$mode]}" -v x="$sps" 'BEGIN{b=1/x; print (b<a)?b:a}')
-        ur[$mode]=$(awk -v a="${ur[$mode]}" -v x="$mr" 'BEGIN{b=1/x; print (b<a)?b:a}')
-      done
-    done
-    for mode in $steady; do
-      awk -v n="$name" -v m=$mode -v spp=$steady_spp -v u="${us[$mode]}" -v r="${ur[$mode]}" \
-          -v bu="${us[bsdf]}" -v br="${ur[bsdf]}" \
-        'BEGIN{printf "| %s | %s | %d | %.4f | %.4f | %.2f | %+.1f%% | %+.1f%% |\n", n, m, spp, u, r, u/r, 100*(u/bu-1), 100*(r/br-1)}'
-    done
+    measure "bsdf guided-albedo" $steady_spp $runs
     verdicts+=("$(awk -v g="${us[guided-albedo]}" -v b="${us[bsdf]}" -v n="$name" -v s=$steady_spp -v w="$warm" -v spp=$spp \
       'BEGIN{c=100*(g/b-1); printf "%s: guided-albedo %+.1f%% per sample at %d spp (%s at %d): %s", n, c, s, w, spp, (c<10)?"ok":"MISSED"}')")
   done
