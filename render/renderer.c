@@ -784,8 +784,9 @@ typedef struct PendingRecord {
 #define MAX_PENDING 32
 
 /* Learned roulette (efficiency-aware, after Rath et al. 2022; its
- * splitting half is below, SPLIT_GAIN): from the third vertex on (as albedo roulette), after its
- * next-event estimate, a path's bounce survives with probability
+ * splitting half is below, SPLIT_GAIN): from the third vertex on (as
+ * albedo roulette), after its next-event estimate, a path's bounce
+ * survives with probability
  *     q = min(1, ROULETTE_GAIN |beta| sqrt(M2(region)) / sigma(pixel)),
  * M2 the region's second moment of what a bounce brings back per unit
  * throughput, sigma the noise the pixel has anyway (estimate_deviations).
