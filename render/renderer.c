@@ -682,40 +682,17 @@ typedef struct PathStats {
     uint64_t branches; /* made by splitting, beyond the path itself */
 } PathStats;
 
-/* A guide query in parts, around the bounce's region lookup and shadow
- * ray: guide_locate starts loading the cache's voxel, guide_begin picks the
- * light, guide_end reads the voxel (by then in cache) and makes the lobe's
- * axis. */
+/* A guide query in two halves, around the bounce's shadow ray: the first
+ * picks the light and starts loading the cache's voxel, the second reads
+ * it (by then in cache) and makes the lobe's axis. */
 typedef struct GuideQuery {
     uint32_t light;
     float voxel[3]; /* the query point in the cache's voxel units */
     int64_t index;  /* its voxel in the decoded table, -1: ask the cache */
 } GuideQuery;
 
-/* Where the guide would be asked at p: its voxel, whose table entry starts
- * loading at once (before the region lookup and the shadow ray, which hide
- * the wait; a vertex that ends up not asking wastes only the prefetch). */
-static void guide_locate(const SgRenderer *r, Vec3 p, Vec3 n, GuideQuery *gq)
-{
-    const CacheGuide *g = &r->cache_guide;
-    gq->index = -1;
-    if (!g->points)
-        return;
-    Vec3 w = v3_add(p, v3_scale(n, g->offset));
-    gq->voxel[0] = (w.x - g->origin.x) * g->inv_voxel;
-    gq->voxel[1] = (w.y - g->origin.y) * g->inv_voxel;
-    gq->voxel[2] = (w.z - g->origin.z) * g->inv_voxel;
-    const float *v = gq->voxel;
-    if (g->decoded && v[0] >= 0.0f && v[1] >= 0.0f && v[2] >= 0.0f && v[0] < g->extent[0] &&
-        v[1] < g->extent[1] && v[2] < g->extent[2]) {
-        /* v >= 0: truncation is floor */
-        gq->index = (int64_t)(int)v[0] + g->stride[1] * (int)v[1] + g->stride[2] * (int)v[2];
-        __builtin_prefetch(g->decoded + gq->index);
-    }
-}
-
-/* Picks the light to follow (after guide_locate); false: none. */
-static bool guide_begin(const SgRenderer *r, SgRng *rng, GuideQuery *gq)
+/* False: no light to follow. */
+static bool guide_begin(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, GuideQuery *gq)
 {
     float u = sg_rng_float(rng); /* drawn always: keeps the streams aligned */
     if (!r->light_count || r->follow_cdf[r->light_count - 1] <= 0.0)
@@ -723,6 +700,21 @@ static bool guide_begin(const SgRenderer *r, SgRng *rng, GuideQuery *gq)
     gq->light = r->light_count == 1
                     ? 0
                     : pick_cdf(r->follow_cdf, r->light_count, u * r->follow_cdf[r->light_count - 1]);
+    const CacheGuide *g = &r->cache_guide;
+    if (g->points) {
+        Vec3 w = v3_add(p, v3_scale(n, g->offset));
+        gq->voxel[0] = (w.x - g->origin.x) * g->inv_voxel;
+        gq->voxel[1] = (w.y - g->origin.y) * g->inv_voxel;
+        gq->voxel[2] = (w.z - g->origin.z) * g->inv_voxel;
+        const float *v = gq->voxel;
+        gq->index = -1;
+        if (g->decoded && v[0] >= 0.0f && v[1] >= 0.0f && v[2] >= 0.0f && v[0] < g->extent[0] &&
+            v[1] < g->extent[1] && v[2] < g->extent[2]) {
+            /* v >= 0: truncation is floor */
+            gq->index = (int64_t)(int)v[0] + g->stride[1] * (int)v[1] + g->stride[2] * (int)v[2];
+            __builtin_prefetch(g->decoded + gq->index);
+        }
+    }
     return true;
 }
 
@@ -1023,9 +1015,6 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 v.bs = (BounceSampler){0, &v.lobe, {n, 0.0f, 0.0f, 0.0f, -1}, 1.0f};
                 v.n = n;
                 v.p = h.p;
-                GuideQuery gq;
-                if (mode != SG_SAMPLING_BSDF)
-                    guide_locate(r, h.p, n, &gq);
                 Vec3 axis;
                 /* guided: the region's learned alpha; where it is the BSDF
                  * alone the guide is asked only by paths that learn */
@@ -1054,7 +1043,8 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     }
                 }
                 v.guided = mode == SG_SAMPLING_SKELETON || (mode == SG_SAMPLING_GUIDED && (lobe_region || learn));
-                v.guided = v.guided && guide_begin(r, rng, &gq);
+                GuideQuery gq;
+                v.guided = v.guided && guide_begin(r, h.p, n, rng, &gq);
                 v.origin = offset_origin(r, h.p, n);
 
                 /* next-event estimation */
