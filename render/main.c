@@ -382,11 +382,12 @@ int main(int argc, char **argv)
     /* the learned roulette needs the learner: elsewhere paths are cut by albedo */
     SgRoulette roulette_used =
         o.sampling == SG_SAMPLING_GUIDED && o.alpha == SG_ALPHA_LEARNED ? o.roulette : SG_ROULETTE_ALBEDO;
+    double branches = sg_renderer_branches_per_path(r);
     char roulette[80], branches_s[32];
-    snprintf(branches_s, sizeof branches_s, "%.3f", sg_renderer_branches_per_path(r));
+    snprintf(branches_s, sizeof branches_s, "%.3f", branches);
     if (roulette_used == SG_ROULETTE_LEARNED) /* it also splits paths */
         snprintf(roulette, sizeof roulette, "%s (%.2f branches split off a path)", sg_roulette_name(roulette_used),
-                 sg_renderer_branches_per_path(r));
+                 branches);
     else
         snprintf(roulette, sizeof roulette, "%s", sg_roulette_name(roulette_used));
     SgImageAttribute attrs[] = {
