@@ -36,6 +36,7 @@ struct SgImportanceCache {
     double inv_voxel_size;
     bool one_component; /* every node in one component: no need to read the node */
     uint32_t *decoded;  /* sg_cache_decode: node per voxel, x fastest; NULL: read the blocks */
+    uint32_t *octants;  /* sg_cache_decode: 8 per mixed wall voxel (sg_cache_decoded_octants) */
 };
 
 static bool range_ok(const SgCacheRange *r, uint64_t header_size, uint64_t file_size)
@@ -232,6 +233,7 @@ void sg_cache_close(SgImportanceCache *cache)
     if (cache->mapped)
         munmap((void *)cache->data, cache->size);
     free(cache->decoded);
+    free(cache->octants);
     free(cache);
 }
 
@@ -314,6 +316,61 @@ static inline uint32_t voxel_node(const SgImportanceCache *c, int i, int j, int 
     return packed_voxel_node(c, i, j, k);
 }
 
+/* The answer of neighbour_node for every point in one octant of a wall
+ * voxel, if there is one (octant bit a set where the point's coordinate a
+ * is at least the voxel's centre). Per axis a neighbour's offset is 0,
+ * toward the octant (near) or away (far), its rank 0, 1, 2: in the octant
+ * the squared distances along the axis keep that order (f^2 <= (1-|f|)^2
+ * <= (1+|f|)^2 for |f| <= 1/2). So a medium neighbour no later on any
+ * axis than another is never farther from any point: the search returns a
+ * neighbour that no other dominates so (of equal distances it keeps the
+ * first, in rank order), and when all those have one node, every point of
+ * the octant gets it. From the entries of the 3x3x3 voxels around the
+ * wall (x fastest; SG_CACHE_WALL_BIT set where solid or outside the grid).
+ * SG_CACHE_NONE: they disagree (search), or no neighbour is medium. */
+typedef struct OctantOrder {
+    uint8_t at[8][27]; /* octant o's neighbour of rank cell r (x's rank slowest): its index in around[] */
+    uint32_t beyond[27]; /* rank cells no earlier on any axis than r, r excluded */
+} OctantOrder;
+
+static void octant_order(OctantOrder *ord)
+{
+    for (int r = 0; r < 27; r++) {
+        int rank[3] = {r / 9, r / 3 % 3, r % 3};
+        ord->beyond[r] = 0;
+        for (int q = 0; q < 27; q++)
+            if (q != r && q / 9 >= rank[0] && q / 3 % 3 >= rank[1] && q % 3 >= rank[2])
+                ord->beyond[r] |= 1u << q;
+        for (unsigned o = 0; o < 8; o++) {
+            int index = 0, scale[3] = {1, 3, 9};
+            for (int a = 0; a < 3; a++) {
+                int toward = o >> a & 1 ? 1 : -1;
+                int step = rank[a] == 0 ? 0 : rank[a] == 1 ? toward : -toward;
+                index += (step + 1) * scale[a];
+            }
+            ord->at[o][r] = (uint8_t)index;
+        }
+    }
+}
+
+static uint32_t octant_node(const OctantOrder *ord, const uint32_t around[27], unsigned octant)
+{
+    uint32_t medium = 0, dominated = 0;
+    for (int r = 0; r < 27; r++)
+        if (!(around[ord->at[octant][r]] & SG_CACHE_WALL_BIT)) { /* the voxel itself is a wall */
+            medium |= 1u << r;
+            dominated |= ord->beyond[r];
+        }
+    uint32_t common = SG_CACHE_NONE;
+    for (uint32_t first = medium & ~dominated; first; first &= first - 1) {
+        uint32_t m = around[ord->at[octant][__builtin_ctz(first)]];
+        if (common != SG_CACHE_NONE && m != common)
+            return SG_CACHE_NONE;
+        common = m;
+    }
+    return common;
+}
+
 bool sg_cache_decode(SgImportanceCache *c, uint64_t max_bytes)
 {
     if (c->decoded)
@@ -338,8 +395,15 @@ bool sg_cache_decode(SgImportanceCache *c, uint64_t max_bytes)
             }
     /* A wall voxel whose medium neighbours (of 26) all have one node: any
      * point in it gets that node (neighbour_node could pick no other), so
-     * the entry says so and a lookup there needs no search. */
-    if (c->header.node_count < SG_CACHE_WALL_BIT)
+     * the entry says so and a lookup there needs no search. Where they
+     * disagree (next to an edge of the skeleton's regions), each octant of
+     * the voxel usually still has one answer (octant_node): the entry then
+     * points to the voxel's eight. */
+    uint32_t *octants = NULL;
+    size_t mixed = 0, capacity = 0;
+    OctantOrder order;
+    octant_order(&order);
+    if (c->header.node_count < SG_CACHE_MIXED_BIT)
         for (int k = 0; k < nz; k++)
             for (int j = 0; j < ny; j++)
                 for (int i = 0; i < nx; i++) {
@@ -347,9 +411,9 @@ bool sg_cache_decode(SgImportanceCache *c, uint64_t max_bytes)
                     if (t[at] != SG_CACHE_NONE)
                         continue;
                     uint32_t common = SG_CACHE_NONE;
-                    bool mixed = false;
-                    for (int dz = -1; dz <= 1 && !mixed; dz++)
-                        for (int dy = -1; dy <= 1 && !mixed; dy++)
+                    bool is_mixed = false;
+                    for (int dz = -1; dz <= 1 && !is_mixed; dz++)
+                        for (int dy = -1; dy <= 1 && !is_mixed; dy++)
                             for (int dx = -1; dx <= 1; dx++) {
                                 int a = i + dx, b = j + dy, e = k + dz;
                                 if ((unsigned)a >= (unsigned)nx || (unsigned)b >= (unsigned)ny ||
@@ -359,16 +423,55 @@ bool sg_cache_decode(SgImportanceCache *c, uint64_t max_bytes)
                                 if (m & SG_CACHE_WALL_BIT)
                                     continue; /* solid (maybe marked already) */
                                 if (common != SG_CACHE_NONE && m != common) {
-                                    mixed = true;
+                                    is_mixed = true;
                                     break;
                                 }
                                 common = m;
                             }
-                    if (!mixed && common != SG_CACHE_NONE)
-                        t[at] = common | SG_CACHE_WALL_BIT;
+                    if (!is_mixed) {
+                        if (common != SG_CACHE_NONE)
+                            t[at] = common | SG_CACHE_WALL_BIT;
+                        continue;
+                    }
+                    if (mixed >= SG_CACHE_MIXED_INDEX)
+                        continue; /* no index left: the search answers */
+                    if (mixed == capacity) {
+                        size_t grown = capacity ? 2 * capacity : 1024;
+                        uint32_t *more = realloc(octants, grown * 8 * sizeof *more);
+                        if (!more)
+                            continue; /* no memory: the search answers */
+                        octants = more;
+                        capacity = grown;
+                    }
+                    uint32_t around[27]; /* the 3x3x3 voxels, x fastest; SG_CACHE_NONE: solid */
+                    for (int dz = -1; dz <= 1; dz++)
+                        for (int dy = -1; dy <= 1; dy++)
+                            for (int dx = -1; dx <= 1; dx++) {
+                                int a = i + dx, b = j + dy, e = k + dz;
+                                bool inside = (unsigned)a < (unsigned)nx && (unsigned)b < (unsigned)ny &&
+                                              (unsigned)e < (unsigned)nz;
+                                around[(dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)] =
+                                    inside ? t[grid_index(nx, ny, a, b, e)] : SG_CACHE_NONE;
+                            }
+                    for (unsigned o = 0; o < 8; o++)
+                        octants[8 * mixed + o] = octant_node(&order, around, o);
+                    t[at] = SG_CACHE_WALL_BIT | SG_CACHE_MIXED_BIT | (uint32_t)mixed++;
                 }
     c->decoded = t;
+    c->octants = octants;
     return true;
+}
+
+/* The entry's node for a point whose octant in the voxel is `octant`
+ * (bit a: v[a] at least the voxel's centre): SG_CACHE_NONE where the
+ * neighbours must be searched. */
+static inline uint32_t decoded_node(const SgImportanceCache *c, uint32_t entry, unsigned octant)
+{
+    if (!(entry & SG_CACHE_WALL_BIT) || entry == SG_CACHE_NONE)
+        return entry; /* medium, or none */
+    if (entry & SG_CACHE_MIXED_BIT)
+        return c->octants[8 * (size_t)(entry & SG_CACHE_MIXED_INDEX) + octant];
+    return entry & ~SG_CACHE_WALL_BIT; /* a wall whose neighbours agree */
 }
 
 /* Voxel indices of v (voxel units), false outside the range any grid can
@@ -385,6 +488,7 @@ static inline bool voxel_of(const double v[3], int ijk[3])
 }
 
 const uint32_t *sg_cache_decoded(const SgImportanceCache *c) { return c->decoded; }
+const uint32_t *sg_cache_decoded_octants(const SgImportanceCache *c) { return c->octants; }
 
 /* A surface point lies in a solid voxel (conservative voxelization): take
  * the medium voxel among the 26 neighbours of ijk whose centre is nearest
@@ -449,9 +553,8 @@ static inline bool nearest_node_voxel(const SgImportanceCache *c, const double v
         return false;
     uint32_t n;
     if (c->decoded && in_grid(c, ijk[0], ijk[1], ijk[2])) {
-        n = c->decoded[grid_index(c->header.nx, c->header.ny, ijk[0], ijk[1], ijk[2])];
-        if (n != SG_CACHE_NONE)
-            n &= ~SG_CACHE_WALL_BIT; /* medium, or a wall whose neighbours agree */
+        unsigned octant = (v[0] >= ijk[0] + 0.5) | (v[1] >= ijk[1] + 0.5) << 1 | (v[2] >= ijk[2] + 0.5) << 2;
+        n = decoded_node(c, c->decoded[grid_index(c->header.nx, c->header.ny, ijk[0], ijk[1], ijk[2])], octant);
     } else {
         n = voxel_node(c, ijk[0], ijk[1], ijk[2]);
     }

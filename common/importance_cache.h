@@ -19,6 +19,8 @@ typedef struct SgImportanceCache SgImportanceCache;
 
 #define SG_CACHE_NO_NODE 0xffffffffu  /* a voxel that is not medium (sg_cache_decoded) */
 #define SG_CACHE_WALL_BIT 0x80000000u /* marks a wall's entry in sg_cache_decoded */
+#define SG_CACHE_MIXED_BIT 0x40000000u /* ... whose octants have their own nodes */
+#define SG_CACHE_MIXED_INDEX 0x3fffffffu /* ... at 8 times this part (sg_cache_decoded_octants) */
 
 SgImportanceCache *sg_cache_open(const char *path, SgError *err);
 void sg_cache_close(SgImportanceCache *cache);
@@ -64,12 +66,18 @@ bool sg_cache_nearest_node(const SgImportanceCache *cache, const double p[3], ui
  * (sg_cache_grid): for callers that keep their own frame (render's hot loop). */
 bool sg_cache_nearest_node_voxel(const SgImportanceCache *cache, const float v[3], uint32_t *node);
 /* The unpacked table (sg_cache_decode; NULL before), entry of voxel
- * (i, j, k) at i + nx (j + ny k): its node where the voxel is medium; where
- * it is a wall, node | SG_CACHE_WALL_BIT if all its medium neighbours have
- * that node (the answer for any point in it), else SG_CACHE_NO_NODE
- * (sg_cache_nearest_node_voxel then searches the neighbours). For a hot
- * loop that reads it inline (and prefetches). */
+ * (i, j, k) at i + nx (j + ny k): its node where the voxel is medium. Where
+ * it is a wall (a surface point's voxel), SG_CACHE_WALL_BIT and:
+ * - node, if all its medium neighbours have that node (the answer for any
+ *   point in it);
+ * - else SG_CACHE_MIXED_BIT and an index e (the entry's SG_CACHE_MIXED_INDEX
+ *   bits): a point of the voxel in octant o (bit a set where its coordinate
+ *   a is at least the voxel's centre) has node octants[8 e + o];
+ * where that is SG_CACHE_NO_NODE, or the entry is, no one node answers for
+ * the whole octant: sg_cache_nearest_node_voxel then searches the
+ * neighbours. For a hot loop that reads it inline (and prefetches). */
 const uint32_t *sg_cache_decoded(const SgImportanceCache *cache);
+const uint32_t *sg_cache_decoded_octants(const SgImportanceCache *cache);
 bool sg_cache_node_position(const SgImportanceCache *cache, uint32_t node, double p[3]);
 /* Importance point of a node for a light; false if the light cannot reach it. */
 bool sg_cache_node_importance_point(const SgImportanceCache *cache, uint32_t node,

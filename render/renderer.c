@@ -41,6 +41,7 @@ typedef struct CacheGuide {
     float *points;     /* [node][light][3] importance points, local; NaN: the
                         * light cannot be reached from the node */
     const uint32_t *decoded; /* node per voxel (sg_cache_decoded), or NULL */
+    const uint32_t *octants; /* of its mixed wall voxels (sg_cache_decoded_octants) */
     float extent[3];   /* the grid's size in voxels */
     int64_t stride[3]; /* of x, y, z in the decoded table */
 } CacheGuide;
@@ -279,6 +280,7 @@ static bool setup_cache_guide(SgRenderer *r, const char *path, SgError *err)
     double origin[3];
     sg_cache_grid(c, dims, origin);
     g->decoded = sg_cache_decoded(c);
+    g->octants = sg_cache_decoded_octants(c);
     for (int a = 0; a < 3; a++)
         g->extent[a] = (float)dims[a];
     g->stride[0] = 1;
@@ -724,10 +726,18 @@ static bool importance_point(const SgRenderer *r, const GuideQuery *gq, Vec3 p, 
     const CacheGuide *g = &r->cache_guide;
     if (g->points) {
         uint32_t node = gq->index >= 0 ? g->decoded[gq->index] : SG_CACHE_NO_NODE;
-        if (node != SG_CACHE_NO_NODE)
-            node &= ~SG_CACHE_WALL_BIT; /* medium, or a wall whose neighbours agree */
-        /* in another wall or outside the grid: the cache searches the neighbours */
-        else if (!sg_cache_nearest_node_voxel(g->cache, gq->voxel, &node))
+        if ((node & SG_CACHE_WALL_BIT) && node != SG_CACHE_NO_NODE) { /* a wall */
+            if (node & SG_CACHE_MIXED_BIT) { /* the node of the point's octant */
+                const float *v = gq->voxel;
+                unsigned octant = (v[0] - (float)(int)v[0] >= 0.5f) | (v[1] - (float)(int)v[1] >= 0.5f) << 1 |
+                                  (v[2] - (float)(int)v[2] >= 0.5f) << 2;
+                node = g->octants[8 * (size_t)(node & SG_CACHE_MIXED_INDEX) + octant];
+            } else {
+                node &= ~SG_CACHE_WALL_BIT; /* its neighbours agree */
+            }
+        }
+        /* no one node for the octant, or outside the grid: the cache searches the neighbours */
+        if (node == SG_CACHE_NO_NODE && !sg_cache_nearest_node_voxel(g->cache, gq->voxel, &node))
             return false;
         const float *pt = g->points + 3 * ((size_t)node * g->lights + gq->light);
         *q = v3(pt[0], pt[1], pt[2]);

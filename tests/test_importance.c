@@ -675,14 +675,18 @@ Test(importance_cache, a_point_in_a_wall_takes_the_nearest_medium_neighbour)
 
 /* sg_cache_decode unpacks the node table for render: every lookup answers
  * as from the packed blocks (medium voxels, wall points, points outside),
- * the table holds each voxel's node, and a budget too small leaves the
- * cache packed and working. */
+ * the table holds each voxel's node, a wall's entry (one node, or one per
+ * octant) is what the search gives anywhere in the wall or its octant, and
+ * a budget too small leaves the cache packed and working. */
 Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
 {
     LScene s;
     l_scene(&s);
     char path[256];
     SgImportanceCache *c = build_and_open(&s.medium, &s.skeleton, "decode", 1, path, sizeof path);
+    SgError err = {0};
+    SgImportanceCache *packed = sg_cache_open(path, &err); /* never decoded: searches */
+    cr_assert_not_null(packed, "%s", err.message);
     const SgGrid *g = &s.medium.grid;
     enum { POINTS = 20000 };
     double (*p)[3] = malloc(sizeof *p * POINTS);
@@ -700,9 +704,8 @@ Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
     cr_assert_not(sg_cache_decode(c, 1024), "a 1 KB budget cannot hold %d voxels", g->nx * g->ny * g->nz);
     cr_assert_null(sg_cache_decoded(c));
     cr_assert(sg_cache_decode(c, 1u << 20));
-    const uint32_t *table = sg_cache_decoded(c);
+    const uint32_t *table = sg_cache_decoded(c), *octants = sg_cache_decoded_octants(c);
     cr_assert_not_null(table);
-    int medium = 0, walls = 0, marked = 0;
     for (int i = 0; i < POINTS; i++) {
         uint32_t n = SG_CACHE_NO_NODE;
         cr_assert_eq(sg_cache_nearest_node(c, p[i], &n), found[i], "point %d", i);
@@ -714,24 +717,39 @@ Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
         if (found[i])
             cr_assert_eq(nv, node[i]);
     }
+    int medium = 0, walls = 0, marked = 0, mixed = 0, resolved = 0;
     for (int k = 0; k < g->nz; k++)
         for (int j = 0; j < g->ny; j++)
             for (int i = 0; i < g->nx; i++) {
                 uint32_t t = table[i + g->nx * (j + g->ny * k)];
                 if (!sg_grid_get(g, i, j, k)) {
-                    /* a wall: no node, or the node every point in it gets */
-                    cr_assert(t == SG_CACHE_NO_NODE || (t & SG_CACHE_WALL_BIT), "solid voxel %d %d %d", i, j, k);
-                    if (t != SG_CACHE_NO_NODE) {
-                        for (int q = 0; q < 8; q++) {
-                            double corner[3] = {i + 0.05 + 0.9 * (q & 1), j + 0.05 + 0.9 * (q >> 1 & 1),
-                                                k + 0.05 + 0.9 * (q >> 2)};
-                            uint32_t n;
-                            cr_assert(sg_cache_nearest_node(c, corner, &n));
-                            cr_assert_eq(n, t & ~SG_CACHE_WALL_BIT, "wall voxel %d %d %d", i, j, k);
-                        }
-                        marked++;
-                    }
+                    cr_assert(t & SG_CACHE_WALL_BIT, "solid voxel %d %d %d", i, j, k);
                     walls++;
+                    if (t == SG_CACHE_NO_NODE)
+                        continue;
+                    bool split = t & SG_CACHE_MIXED_BIT;
+                    cr_assert(!split || octants, "a mixed wall and no octants");
+                    mixed += split;
+                    marked += !split;
+                    /* in each octant, its corner and random points: the search's answer */
+                    for (unsigned o = 0; o < 8; o++) {
+                        uint32_t want = split ? octants[8 * (size_t)(t & SG_CACHE_MIXED_INDEX) + o]
+                                              : t & ~SG_CACHE_WALL_BIT;
+                        if (want == SG_CACHE_NO_NODE)
+                            continue;
+                        resolved += split;
+                        for (int q = 0; q < 9; q++) {
+                            double x[3];
+                            const int ijk[3] = {i, j, k};
+                            for (int a = 0; a < 3; a++) {
+                                double f = q ? 0.5 * sg_rng_float(&rng) : 0.49; /* from the centre */
+                                x[a] = ijk[a] + 0.5 + ((o >> a & 1) ? f : -f - 1e-9);
+                            }
+                            uint32_t n;
+                            cr_assert(sg_cache_nearest_node(packed, x, &n));
+                            cr_assert_eq(n, want, "wall voxel %d %d %d octant %u", i, j, k, o);
+                        }
+                    }
                     continue;
                 }
                 double centre[3] = {i + 0.5, j + 0.5, k + 0.5};
@@ -743,9 +761,12 @@ Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
     cr_assert_gt(medium, 100);
     cr_assert_gt(walls, 100);
     cr_assert_gt(marked, 50, "walls whose neighbours agree: %d", marked);
+    cr_assert_gt(mixed, 5, "walls whose neighbours disagree: %d", mixed);
+    cr_assert_gt(resolved, 7 * mixed, "of %d mixed walls' octants, %d have one node", 8 * mixed, resolved);
     free(p);
     free(node);
     free(found);
+    sg_cache_close(packed);
     sg_cache_close(c);
     unlink(path);
     l_scene_free(&s);
