@@ -3,16 +3,26 @@
 #define SG_VECMATH_H
 
 #include <math.h>
+#ifdef __SSE__
+#include <xmmintrin.h>
+#endif
 
 typedef struct Vec3 {
     float x, y, z;
 } Vec3;
 
-/* max and min that compile to one instruction (fmaxf and fminf are libm
- * calls unless NaN semantics are given up for the whole build); a NaN in b
- * is returned, one in a is not. */
+/* max and min in one instruction (fmaxf and fminf are libm calls unless
+ * NaN semantics are given up for the whole build); a NaN in b is returned,
+ * one in a is not. The ternary means the same, but GCC often compiles it
+ * to a compare and a jump, mispredicted where the sign is random (a
+ * cosine clamped at 0); MAXSS and MINSS are that ternary exactly. */
+#ifdef __SSE__
+static inline float sg_maxf(float a, float b) { return _mm_cvtss_f32(_mm_max_ss(_mm_set_ss(a), _mm_set_ss(b))); }
+static inline float sg_minf(float a, float b) { return _mm_cvtss_f32(_mm_min_ss(_mm_set_ss(a), _mm_set_ss(b))); }
+#else
 static inline float sg_maxf(float a, float b) { return a > b ? a : b; }
 static inline float sg_minf(float a, float b) { return a < b ? a : b; }
+#endif
 
 static inline Vec3 v3(float x, float y, float z) { Vec3 r = {x, y, z}; return r; }
 static inline Vec3 v3_add(Vec3 a, Vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
