@@ -410,24 +410,28 @@ bool sg_cache_decode(SgImportanceCache *c, uint64_t max_bytes)
                     size_t at = grid_index(nx, ny, i, j, k);
                     if (t[at] != SG_CACHE_NONE)
                         continue;
+                    uint32_t around[27]; /* the 3x3x3 voxels, x fastest; SG_CACHE_NONE outside */
+                    for (int dz = -1; dz <= 1; dz++)
+                        for (int dy = -1; dy <= 1; dy++) {
+                            uint32_t *row = around + 3 * (dy + 1) + 9 * (dz + 1);
+                            int b = j + dy, e = k + dz;
+                            if ((unsigned)b >= (unsigned)ny || (unsigned)e >= (unsigned)nz) {
+                                row[0] = row[1] = row[2] = SG_CACHE_NONE;
+                                continue;
+                            }
+                            const uint32_t *x = t + grid_index(nx, ny, i, b, e);
+                            row[0] = i > 0 ? x[-1] : SG_CACHE_NONE;
+                            row[1] = x[0];
+                            row[2] = i + 1 < nx ? x[1] : SG_CACHE_NONE;
+                        }
                     uint32_t common = SG_CACHE_NONE;
                     bool is_mixed = false;
-                    for (int dz = -1; dz <= 1 && !is_mixed; dz++)
-                        for (int dy = -1; dy <= 1 && !is_mixed; dy++)
-                            for (int dx = -1; dx <= 1; dx++) {
-                                int a = i + dx, b = j + dy, e = k + dz;
-                                if ((unsigned)a >= (unsigned)nx || (unsigned)b >= (unsigned)ny ||
-                                    (unsigned)e >= (unsigned)nz)
-                                    continue;
-                                uint32_t m = t[grid_index(nx, ny, a, b, e)];
-                                if (m & SG_CACHE_WALL_BIT)
-                                    continue; /* solid (maybe marked already) */
-                                if (common != SG_CACHE_NONE && m != common) {
-                                    is_mixed = true;
-                                    break;
-                                }
-                                common = m;
-                            }
+                    for (int q = 0; q < 27 && !is_mixed; q++) {
+                        if (around[q] & SG_CACHE_WALL_BIT)
+                            continue; /* solid (maybe marked already), outside, or the voxel itself */
+                        is_mixed = common != SG_CACHE_NONE && around[q] != common;
+                        common = around[q];
+                    }
                     if (!is_mixed) {
                         if (common != SG_CACHE_NONE)
                             t[at] = common | SG_CACHE_WALL_BIT;
@@ -443,16 +447,6 @@ bool sg_cache_decode(SgImportanceCache *c, uint64_t max_bytes)
                         octants = more;
                         capacity = grown;
                     }
-                    uint32_t around[27]; /* the 3x3x3 voxels, x fastest; SG_CACHE_NONE: solid */
-                    for (int dz = -1; dz <= 1; dz++)
-                        for (int dy = -1; dy <= 1; dy++)
-                            for (int dx = -1; dx <= 1; dx++) {
-                                int a = i + dx, b = j + dy, e = k + dz;
-                                bool inside = (unsigned)a < (unsigned)nx && (unsigned)b < (unsigned)ny &&
-                                              (unsigned)e < (unsigned)nz;
-                                around[(dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)] =
-                                    inside ? t[grid_index(nx, ny, a, b, e)] : SG_CACHE_NONE;
-                            }
                     for (unsigned o = 0; o < 8; o++)
                         octants[8 * mixed + o] = octant_node(&order, around, o);
                     t[at] = SG_CACHE_WALL_BIT | SG_CACHE_MIXED_BIT | (uint32_t)mixed++;
@@ -460,18 +454,6 @@ bool sg_cache_decode(SgImportanceCache *c, uint64_t max_bytes)
     c->decoded = t;
     c->octants = octants;
     return true;
-}
-
-/* The entry's node for a point whose octant in the voxel is `octant`
- * (bit a: v[a] at least the voxel's centre): SG_CACHE_NONE where the
- * neighbours must be searched. */
-static inline uint32_t decoded_node(const SgImportanceCache *c, uint32_t entry, unsigned octant)
-{
-    if (!(entry & SG_CACHE_WALL_BIT) || entry == SG_CACHE_NONE)
-        return entry; /* medium, or none */
-    if (entry & SG_CACHE_MIXED_BIT)
-        return c->octants[8 * (size_t)(entry & SG_CACHE_MIXED_INDEX) + octant];
-    return entry & ~SG_CACHE_WALL_BIT; /* a wall whose neighbours agree */
 }
 
 /* Voxel indices of v (voxel units), false outside the range any grid can
@@ -554,7 +536,8 @@ static inline bool nearest_node_voxel(const SgImportanceCache *c, const double v
     uint32_t n;
     if (c->decoded && in_grid(c, ijk[0], ijk[1], ijk[2])) {
         unsigned octant = (v[0] >= ijk[0] + 0.5) | (v[1] >= ijk[1] + 0.5) << 1 | (v[2] >= ijk[2] + 0.5) << 2;
-        n = decoded_node(c, c->decoded[grid_index(c->header.nx, c->header.ny, ijk[0], ijk[1], ijk[2])], octant);
+        n = sg_cache_entry_node(c->decoded[grid_index(c->header.nx, c->header.ny, ijk[0], ijk[1], ijk[2])], c->octants,
+                                octant);
     } else {
         n = voxel_node(c, ijk[0], ijk[1], ijk[2]);
     }

@@ -78,6 +78,16 @@ bool sg_cache_nearest_node_voxel(const SgImportanceCache *cache, const float v[3
  * neighbours. For a hot loop that reads it inline (and prefetches). */
 const uint32_t *sg_cache_decoded(const SgImportanceCache *cache);
 const uint32_t *sg_cache_decoded_octants(const SgImportanceCache *cache);
+/* The node an entry of that table gives a point in octant `octant` of its
+ * voxel; SG_CACHE_NO_NODE: search the neighbours. */
+static inline uint32_t sg_cache_entry_node(uint32_t entry, const uint32_t *octants, unsigned octant)
+{
+    if (!(entry & SG_CACHE_WALL_BIT) || entry == SG_CACHE_NO_NODE)
+        return entry; /* medium, or no node */
+    if (entry & SG_CACHE_MIXED_BIT)
+        return octants[8 * (size_t)(entry & SG_CACHE_MIXED_INDEX) + octant];
+    return entry & ~SG_CACHE_WALL_BIT; /* a wall whose neighbours agree */
+}
 bool sg_cache_node_position(const SgImportanceCache *cache, uint32_t node, double p[3]);
 /* Importance point of a node for a light; false if the light cannot reach it. */
 bool sg_cache_node_importance_point(const SgImportanceCache *cache, uint32_t node,

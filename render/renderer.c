@@ -725,16 +725,12 @@ static bool importance_point(const SgRenderer *r, const GuideQuery *gq, Vec3 p, 
 {
     const CacheGuide *g = &r->cache_guide;
     if (g->points) {
-        uint32_t node = gq->index >= 0 ? g->decoded[gq->index] : SG_CACHE_NO_NODE;
-        if ((node & SG_CACHE_WALL_BIT) && node != SG_CACHE_NO_NODE) { /* a wall */
-            if (node & SG_CACHE_MIXED_BIT) { /* the node of the point's octant */
-                const float *v = gq->voxel;
-                unsigned octant = (v[0] - (float)(int)v[0] >= 0.5f) | (v[1] - (float)(int)v[1] >= 0.5f) << 1 |
-                                  (v[2] - (float)(int)v[2] >= 0.5f) << 2;
-                node = g->octants[8 * (size_t)(node & SG_CACHE_MIXED_INDEX) + octant];
-            } else {
-                node &= ~SG_CACHE_WALL_BIT; /* its neighbours agree */
-            }
+        uint32_t node = SG_CACHE_NO_NODE;
+        if (gq->index >= 0) {
+            const float *v = gq->voxel; /* v >= 0: truncation is floor */
+            unsigned octant = (v[0] - (float)(int)v[0] >= 0.5f) | (v[1] - (float)(int)v[1] >= 0.5f) << 1 |
+                              (v[2] - (float)(int)v[2] >= 0.5f) << 2;
+            node = sg_cache_entry_node(g->decoded[gq->index], g->octants, octant);
         }
         /* no one node for the octant, or outside the grid: the cache searches the neighbours */
         if (node == SG_CACHE_NO_NODE && !sg_cache_nearest_node_voxel(g->cache, gq->voxel, &node))
