@@ -316,18 +316,7 @@ static inline uint32_t voxel_node(const SgImportanceCache *c, int i, int j, int 
     return packed_voxel_node(c, i, j, k);
 }
 
-/* The answer of neighbour_node for every point in one octant of a wall
- * voxel, if there is one (octant bit a set where the point's coordinate a
- * is at least the voxel's centre). Per axis a neighbour's offset is 0,
- * toward the octant (near) or away (far), its rank 0, 1, 2: in the octant
- * the squared distances along the axis keep that order (f^2 <= (1-|f|)^2
- * <= (1+|f|)^2 for |f| <= 1/2). So a medium neighbour no later on any
- * axis than another is never farther from any point: the search returns a
- * neighbour that no other dominates so (of equal distances it keeps the
- * first, in rank order), and when all those have one node, every point of
- * the octant gets it. From the entries of the 3x3x3 voxels around the
- * wall (x fastest; SG_CACHE_WALL_BIT set where solid or outside the grid).
- * SG_CACHE_NONE: they disagree (search), or no neighbour is medium. */
+/* The order of a wall's neighbours as seen from each octant of it (octant_node). */
 typedef struct OctantOrder {
     uint8_t at[8][27]; /* octant o's neighbour of rank cell r (x's rank slowest): its index in around[] */
     uint32_t beyond[27]; /* rank cells no earlier on any axis than r, r excluded */
@@ -353,11 +342,23 @@ static void octant_order(OctantOrder *ord)
     }
 }
 
+/* The answer of neighbour_node for every point in one octant of a wall
+ * voxel, if there is one (octant bit a set where the point's coordinate a
+ * is at least the voxel's centre). Per axis a neighbour's offset is 0,
+ * toward the octant (near) or away (far), its rank 0, 1, 2: in the octant
+ * the squared distances along the axis keep that order (f^2 <= (1-|f|)^2
+ * <= (1+|f|)^2 for |f| <= 1/2). So a medium neighbour no later on any
+ * axis than another is never farther from any point: the search returns a
+ * neighbour that no other dominates so (of equal distances it keeps the
+ * first, in rank order), and when all those have one node, every point of
+ * the octant gets it. From the entries of the 3x3x3 voxels around the
+ * wall (x fastest; SG_CACHE_WALL_BIT set where solid or outside the grid).
+ * SG_CACHE_NONE: they disagree (search), or no neighbour is medium. */
 static uint32_t octant_node(const OctantOrder *ord, const uint32_t around[27], unsigned octant)
 {
     uint32_t medium = 0, dominated = 0;
     for (int r = 0; r < 27; r++)
-        if (!(around[ord->at[octant][r]] & SG_CACHE_WALL_BIT)) { /* the voxel itself is a wall */
+        if (!(around[ord->at[octant][r]] & SG_CACHE_WALL_BIT)) { /* medium (never the voxel itself) */
             medium |= 1u << r;
             dominated |= ord->beyond[r];
         }
@@ -536,8 +537,8 @@ static inline bool nearest_node_voxel(const SgImportanceCache *c, const double v
     uint32_t n;
     if (c->decoded && in_grid(c, ijk[0], ijk[1], ijk[2])) {
         unsigned octant = (v[0] >= ijk[0] + 0.5) | (v[1] >= ijk[1] + 0.5) << 1 | (v[2] >= ijk[2] + 0.5) << 2;
-        n = sg_cache_entry_node(c->decoded[grid_index(c->header.nx, c->header.ny, ijk[0], ijk[1], ijk[2])], c->octants,
-                                octant);
+        uint32_t entry = c->decoded[grid_index(c->header.nx, c->header.ny, ijk[0], ijk[1], ijk[2])];
+        n = sg_cache_entry_node(entry, c->octants, octant);
     } else {
         n = voxel_node(c, ijk[0], ijk[1], ijk[2]);
     }

@@ -17,8 +17,14 @@ typedef struct Vec3 {
  * to a compare and a jump, mispredicted where the sign is random (a
  * cosine clamped at 0); MAXSS and MINSS are that ternary exactly. */
 #ifdef __SSE__
-static inline float sg_maxf(float a, float b) { return _mm_cvtss_f32(_mm_max_ss(_mm_set_ss(a), _mm_set_ss(b))); }
-static inline float sg_minf(float a, float b) { return _mm_cvtss_f32(_mm_min_ss(_mm_set_ss(a), _mm_set_ss(b))); }
+static inline float sg_maxf(float a, float b)
+{
+    return _mm_cvtss_f32(_mm_max_ss(_mm_set_ss(a), _mm_set_ss(b)));
+}
+static inline float sg_minf(float a, float b)
+{
+    return _mm_cvtss_f32(_mm_min_ss(_mm_set_ss(a), _mm_set_ss(b)));
+}
 #else
 static inline float sg_maxf(float a, float b) { return a > b ? a : b; }
 static inline float sg_minf(float a, float b) { return a < b ? a : b; }
