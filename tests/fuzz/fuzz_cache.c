@@ -3,6 +3,7 @@
  * in bounds (built by `make fuzz`). A first input byte with bit 0 set asks
  * the target to repair the checksum first, so that the fuzzer also reaches
  * the structural checks behind it. */
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -51,6 +52,21 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             if (sg_cache_nearest_node(c, p, &n) && n >= sg_cache_node_count(c))
                 abort();
         }
+        /* the unpacked table (and its walls' octants) answers as the blocks */
+        bool found[64];
+        uint32_t node[64];
+        double at[64][3];
+        for (int i = 0; i < 64; i++) {
+            for (int a = 0; a < 3; a++) /* points in and around the grid, off the voxel centres */
+                at[i][a] = origin[a] + h * (dims[a] + 2.0) * (((i * 37 + a * 11) % 64) / 63.0) - h * 0.93;
+            found[i] = sg_cache_nearest_node(c, at[i], &node[i]);
+        }
+        if (sg_cache_decode(c, 64u << 20))
+            for (int i = 0; i < 64; i++) {
+                uint32_t n = SG_CACHE_NO_NODE;
+                if (sg_cache_nearest_node(c, at[i], &n) != found[i] || (found[i] && n != node[i]))
+                    abort();
+            }
         sg_cache_close(c);
     }
     free(copy);
