@@ -6,10 +6,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cache_guide.h"
 #include "cli.h"
 #include "error.h"
 #include "image_io.h"
-#include "importance_cache.h"
 #include "output_file.h"
 #include "progress.h"
 #include "renderer.h"
@@ -152,12 +152,6 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
     return true;
 }
 
-/* The cache as the renderer's guide. */
-static bool cache_guide(void *ctx, const double p[3], uint32_t light, double point[3])
-{
-    return sg_cache_importance_point(ctx, p, light, point);
-}
-
 typedef struct ErrorLog {
     SgOutputFile out;
     float *reference;
@@ -213,9 +207,8 @@ int main(int argc, char **argv)
     }
     int status = 1;
     SgScene *scene = NULL;
-    SgImportanceCache *cache = NULL;
+    SgCacheGuide guide = {0};
     SgRenderer *r = NULL;
-    double *follow = NULL;
     float *image = NULL;
     ErrorLog log = {0};
     bool log_open = false;
@@ -261,60 +254,12 @@ int main(int argc, char **argv)
     }
 
     if (a.cache && o.sampling != SG_SAMPLING_BSDF) {
-        cache = sg_cache_open(a.cache, &err);
-        if (!cache)
+        if (!sg_cache_guide_open(&guide, a.cache, scene, a.scene, &o.guide, &err))
             goto done;
-        if (sg_cache_geometry_hash(cache) != scene->geometry_hash) {
-            sg_fail(&err,
-                    "%s: built for other geometry (hash %016" PRIx64 ", %s has %016" PRIx64
-                    "): rebuild it with bin/importance",
-                    a.cache, sg_cache_geometry_hash(cache), a.scene, scene->geometry_hash);
-            goto done;
-        }
-        if (sg_cache_light_count(cache) != scene->light_count) {
-            sg_fail(&err, "%s: has %u lights, %s has %u: rebuild it with bin/importance", a.cache,
-                    sg_cache_light_count(cache), a.scene, scene->light_count);
-            goto done;
-        }
-        /* Follow each light in proportion to its power, but never a light
-         * that cannot reach the camera (the paper's litmus test). */
-        follow = calloc(scene->light_count ? scene->light_count : 1, sizeof *follow);
-        if (!follow) {
-            sg_fail(&err, "%s: out of memory", a.scene);
-            goto done;
-        }
-        uint32_t dropped = 0;
-        /* The litmus test needs the camera inside the voxel grid: one outside
-         * the scene's box (in front of an open box, say) cannot be tested,
-         * so every light is followed. Inside the box but outside the medium,
-         * the camera is in air no light reaches: nothing is followed. */
-        int dims[3];
-        double origin[3], h = sg_cache_voxel_size(cache);
-        sg_cache_grid(cache, dims, origin);
-        bool testable = true;
-        for (int a = 0; a < 3; a++)
-            if (!(scene->camera.position[a] >= origin[a] &&
-                  scene->camera.position[a] <= origin[a] + dims[a] * h))
-                testable = false;
-        for (uint32_t l = 0; l < scene->light_count; l++) {
-            if (!testable || sg_cache_light_reaches(cache, l, scene->camera.position))
-                follow[l] = scene->lights[l].power;
-            else
-                dropped++;
-        }
-        if (dropped)
+        if (guide.dropped)
             fprintf(stderr, "render: %u of %u lights cannot reach the camera: the guide does not follow them%s\n",
-                    dropped, scene->light_count,
-                    dropped == scene->light_count ? " (so it samples the BSDF only)" : "");
-        o.guide.importance_point = cache_guide;
-        o.guide.ctx = cache;
-        o.guide.cache = cache;
-        /* the node table unpacked: one read a query (Sponza: 1.8 MB; beyond
-         * 256 MB the packed blocks answer) */
-        sg_cache_decode(cache, 256u << 20);
-        o.guide.light_weight = follow;
-        /* 1.5 voxels: a wall on a voxel boundary makes both voxels beside it solid */
-        o.guide.query_offset = 1.5 * sg_cache_voxel_size(cache);
+                    guide.dropped, scene->light_count,
+                    guide.dropped == scene->light_count ? " (so it samples the BSDF only)" : "");
     }
 
     int spp_target = a.spp > 0 ? (int)a.spp : scene->render.spp > 0 ? scene->render.spp : 16;
@@ -403,7 +348,7 @@ int main(int argc, char **argv)
         {"sg:nonfinite_samples", nonfinite_s},
         {"sg:clamping", "none"},
         {"sg:scene", a.scene},
-        {"sg:cache", a.cache && cache ? a.cache : ""},
+        {"sg:cache", guide.cache ? a.cache : ""},
     };
     /* The EXR last: it is make's target, so a run cut short before it
      * (a PNG or the curve written, then killed) is still run again. */
@@ -436,10 +381,8 @@ done:
         sg_output_abort(&log.out);
     free(log.reference);
     free(image);
-    free(follow);
     sg_renderer_free(r);
-    if (cache)
-        sg_cache_close(cache);
+    sg_cache_guide_close(&guide);
     if (scene)
         sg_scene_free(scene);
     return status;
