@@ -7,8 +7,9 @@
  * bsdf's own roulette (guided --roulette albedo: the same kind of paths,
  * so that the difference is the guide's cost), one pass of each in turn,
  * the order swapped every pass; each renderer's seconds are the sum of its
- * passes (as bin/render counts them). Separate runs of a few seconds each,
- * even interleaved, measured the same binaries from +5% to +11% apart.
+ * passes (as bin/render counts them). Separate runs of ~10 s each, even
+ * interleaved and best of 3, put the same binaries' corridor anywhere from
+ * +8.7% to +12.0% in one evening (Sponza +5.6% to +13.8%).
  * Prints a line per mode: its name, µs per sample, µs per ray, rays per
  * sample. */
 #include <stdio.h>

@@ -20,20 +20,17 @@ bool sg_cache_guide_open(SgCacheGuide *g, const char *path, const SgScene *scene
                 "%s: built for other geometry (hash %016" PRIx64 ", %s has %016" PRIx64
                 "): rebuild it with bin/importance",
                 path, sg_cache_geometry_hash(g->cache), scene_path, scene->geometry_hash);
-        sg_cache_guide_close(g);
-        return false;
+        goto fail;
     }
     if (sg_cache_light_count(g->cache) != scene->light_count) {
         sg_fail(err, "%s: has %u lights, %s has %u: rebuild it with bin/importance", path,
                 sg_cache_light_count(g->cache), scene_path, scene->light_count);
-        sg_cache_guide_close(g);
-        return false;
+        goto fail;
     }
     g->follow = calloc(scene->light_count ? scene->light_count : 1, sizeof *g->follow);
     if (!g->follow) {
         sg_fail(err, "%s: out of memory", scene_path);
-        sg_cache_guide_close(g);
-        return false;
+        goto fail;
     }
     /* The litmus test needs the camera inside the voxel grid: one outside
      * the scene's box (in front of an open box, say) cannot be tested,
@@ -62,6 +59,9 @@ bool sg_cache_guide_open(SgCacheGuide *g, const char *path, const SgScene *scene
     /* 1.5 voxels: a wall on a voxel boundary makes both voxels beside it solid */
     guide->query_offset = 1.5 * h;
     return true;
+fail:
+    sg_cache_guide_close(g);
+    return false;
 }
 
 void sg_cache_guide_close(SgCacheGuide *g)
