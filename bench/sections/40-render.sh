@@ -110,8 +110,8 @@ echo "every bounce, and the share of bounces that use the lobe falls as regions 
 echo "8 spp, 19% at 64, 15% at 256). The target is checked on the steady state: bsdf and"
 echo "guided-albedo again at $steady_spp spp (the whole run, warm-up included), rendered in one process"
 echo "(build/release/bench/render_cost), a pass of each in turn, so that the shared machine's slow"
-echo "spells fall on both alike (separate runs of the same binaries, even interleaved, ranged from +5%"
-echo "to +11% on the corridor); the median of $runs such runs."
+echo "spells fall on both alike (separate runs of the same binaries, even interleaved and best of 3,"
+echo "ranged from +8.7% to +12.0% on the corridor in one evening); the median of $runs such runs."
 echo
 if [ $have_pipeline = 0 ]; then
   echo "(needs bin/voxelize, bin/skeletonize, bin/importance)"
