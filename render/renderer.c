@@ -101,6 +101,7 @@ struct SgRenderer {
     _Atomic uint64_t rays;
     _Atomic uint64_t backface_hits;
     _Atomic uint64_t branches;
+    _Atomic uint64_t bounces, lobe_bounces;
     uint64_t first_pass_rays;
 };
 
@@ -652,8 +653,14 @@ static float light_pdf(const SgRenderer *r, uint32_t tri, float dist2, float cos
 }
 
 /* Which way does the bounce sample at a diffuse/glossy vertex go. */
+typedef enum BounceKind {
+    BOUNCE_BSDF,    /* the material's own sampler */
+    BOUNCE_LOBE,    /* the guide's lobe alone (the paper's rule, skeleton) */
+    BOUNCE_MIXTURE, /* BSDF with probability alpha, the lobe otherwise (guided) */
+} BounceKind;
+
 typedef struct BounceSampler {
-    int kind;                 /* 0 bsdf, 1 lobe only (skeleton), 2 mixture (guided) */
+    BounceKind kind;
     const SgGlossyLobe *bsdf; /* the material's lobe; bsdf->n is the shading normal */
     SgFoldedLobe lobe;        /* the guide's (kind 2) */
     float alpha;              /* the BSDF's share of the mixture */
@@ -663,25 +670,29 @@ static float bounce_pdf(const BounceSampler *b, Vec3 w, float wn)
 {
     float pdf_bsdf, c1, c2;
     switch (b->kind) {
-    case 1: return sg_pdf_cosine_power(b->lobe.axis, b->lobe.exponent, w);
-    case 2: return sg_pdf_mixture_at(b->bsdf, &b->lobe, b->alpha, w, wn, &pdf_bsdf, &c1, &c2);
-    default: return sg_pdf_glossy(b->bsdf, w);
+    case BOUNCE_LOBE: return sg_pdf_cosine_power(b->lobe.axis, b->lobe.exponent, w);
+    case BOUNCE_MIXTURE: return sg_pdf_mixture_at(b->bsdf, &b->lobe, b->alpha, w, wn, &pdf_bsdf, &c1, &c2);
+    case BOUNCE_BSDF: break;
     }
+    return sg_pdf_glossy(b->bsdf, w);
 }
 
 static Vec3 bounce_sample(const BounceSampler *b, float u0, float u1, float u2)
 {
     switch (b->kind) {
-    case 1: return sg_sample_cosine_power(b->lobe.axis, b->lobe.exponent, u1, u2);
-    case 2: return sg_sample_mixture_at(b->bsdf, &b->lobe, b->alpha, u0, u1, u2);
-    default: return sg_sample_glossy(b->bsdf, u0, u1, u2);
+    case BOUNCE_LOBE: return sg_sample_cosine_power(b->lobe.axis, b->lobe.exponent, u1, u2);
+    case BOUNCE_MIXTURE: return sg_sample_mixture_at(b->bsdf, &b->lobe, b->alpha, u0, u1, u2);
+    case BOUNCE_BSDF: break;
     }
+    return sg_sample_glossy(b->bsdf, u0, u1, u2);
 }
 
 typedef struct PathStats {
     uint64_t rays;
     uint64_t backface;
-    uint64_t branches; /* made by splitting, beyond the path itself */
+    uint64_t branches;     /* made by splitting, beyond the path itself */
+    uint64_t bounces;      /* diffuse and glossy bounces drawn */
+    uint64_t lobe_bounces; /* of which the guide's lobe drew the direction */
 } PathStats;
 
 /* A guide query in two halves, around the bounce's shadow ray: the first
@@ -831,7 +842,8 @@ static void finish_records(SgRenderer *r, const PendingRecord *pending, int from
         float t = luminance(pr->beta);
         /* the bounce's one-sample estimate: what came after, per unit throughput */
         float after = luminance(per_throughput(v3_sub(radiance, pr->radiance), pr->beta));
-        SgMixtureRecord rec = {pr->region, pr->cut ? -1.0f : after, pr->lobe, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, t * t};
+        SgMixtureRecord rec = {.region = pr->region, .radiance = pr->cut ? -1.0f : after, .lobe = pr->lobe,
+                               .weight = t * t};
         if (pr->lobe) {
             rec.pdf_bsdf = pr->pdf_bsdf;
             rec.cos_axis = pr->cos_axis;
@@ -868,14 +880,16 @@ typedef struct BounceVertex {
 
 /* Draws the vertex's bounce into the path state; false where the path
  * ends (below the surface). `pr`: the vertex's learning record, if any. */
-static bool take_bounce(BounceVertex *v, PathState *ps, SgRng *rng, PendingRecord *pr)
+static bool take_bounce(BounceVertex *v, PathState *ps, SgRng *rng, PendingRecord *pr, PathStats *st)
 {
     v->bs.bsdf = &v->lobe;
     float u0 = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
     Vec3 wi = bounce_sample(&v->bs, u0, u1, u2);
+    st->bounces++;
+    st->lobe_bounces += v->bs.kind == BOUNCE_LOBE || (v->bs.kind == BOUNCE_MIXTURE && !(u0 < v->bs.alpha));
     float cos_x = v3_dot(wi, v->n);
     float pdf, pdf_bsdf = 0.0f, c1 = 0.0f, c2 = 0.0f;
-    if (v->bs.kind == 2) /* with the BSDF's part and the cosines the learner needs */
+    if (v->bs.kind == BOUNCE_MIXTURE) /* with the BSDF's part and the cosines the learner needs */
         pdf = sg_pdf_mixture_at(&v->lobe, &v->bs.lobe, v->bs.alpha, wi, cos_x, &pdf_bsdf, &c1, &c2);
     else
         pdf = bounce_pdf(&v->bs, wi, cos_x);
@@ -1018,7 +1032,8 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 v.m = m;
                 v.lobe = sg_glossy_lobe(n, wo, m->type == SG_MATERIAL_GLOSSY ? m->exponent : 0.0f,
                                         m->diffuse_weight);
-                v.bs = (BounceSampler){0, &v.lobe, {n, 0.0f, 0.0f, 0.0f, -1}, 1.0f};
+                v.bs = (BounceSampler){.kind = BOUNCE_BSDF, .bsdf = &v.lobe, .lobe = {.axis = n, .squarings = -1},
+                                       .alpha = 1.0f};
                 v.n = n;
                 v.p = h.p;
                 Vec3 axis;
@@ -1101,11 +1116,13 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 if (v.guided) {
                     if (mode == SG_SAMPLING_SKELETON) {
                         if (!lit) /* the paper: lobe only where not directly lit */
-                            v.bs = (BounceSampler){1, &v.lobe, sg_folded_lobe(axis, n, r->opt.lobe_exponent), 0.0f};
+                            v.bs = (BounceSampler){.kind = BOUNCE_LOBE, .bsdf = &v.lobe,
+                                                   .lobe = sg_folded_lobe(axis, n, r->opt.lobe_exponent)};
                     } else {
                         /* alpha 1 (a learning path): the BSDF, with the lobe's
                          * densities at hand for the learner */
-                        v.bs = (BounceSampler){2, &v.lobe, sg_folded_lobe(axis, n, mix.exponent), mix.alpha};
+                        v.bs = (BounceSampler){.kind = BOUNCE_MIXTURE, .bsdf = &v.lobe,
+                                               .lobe = sg_folded_lobe(axis, n, mix.exponent), .alpha = mix.alpha};
                     }
                 }
                 if (nee_pdf > 0.0f) {
@@ -1149,7 +1166,8 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     roulette_done = true;
                     if (!albedo_roulette(&ps.beta, &ps.rr_beta, rng)) {
                         if (pr && v.guided) /* for the learner, a bounce that brought nothing back */
-                            *pr = (PendingRecord){pr->region, true, 0.0f, 0.0f, 0.0f, 0.0f, pr->beta, radiance, true};
+                            *pr = (PendingRecord){.region = pr->region, .lobe = true, .beta = pr->beta,
+                                                  .radiance = radiance, .cut = true};
                         else if (pr) /* nothing for M2, which is of surviving bounces (as above) */
                             pending_count--;
                         break;
@@ -1159,7 +1177,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     pr->beta = ps.beta;
                     pr->radiance = radiance;
                 }
-                if (!take_bounce(&v, &ps, rng, pr))
+                if (!take_bounce(&v, &ps, rng, pr, st))
                     break;
             }
 
@@ -1182,11 +1200,11 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
         PendingRecord *pr = NULL;
         if (sp->learn && pending_count < MAX_PENDING) {
             pr = &pending[pending_count++];
-            *pr = (PendingRecord){sp->region, false, 0.0f, 0.0f, 0.0f, 0.0f, ps.beta, radiance, false};
+            *pr = (PendingRecord){.region = sp->region, .beta = ps.beta, .radiance = radiance};
         }
         if (--sp->remaining == 0)
             split_count--;
-        alive = take_bounce(&v, &ps, rng, pr) && v3_max_component(ps.beta) > 0.0f;
+        alive = take_bounce(&v, &ps, rng, pr, st) && v3_max_component(ps.beta) > 0.0f;
         depth++;
     }
     finish_records(r, pending, 0, pending_count, radiance, learn_tile);
@@ -1290,6 +1308,9 @@ static void render_tile(PassCtx *pc, uint64_t index)
         atomic_fetch_add(&r->backface_hits, st.backface);
     if (st.branches)
         atomic_fetch_add(&r->branches, st.branches);
+    atomic_fetch_add(&r->bounces, st.bounces);
+    if (st.lobe_bounces)
+        atomic_fetch_add(&r->lobe_bounces, st.lobe_bounces);
     if (nonfinite)
         atomic_fetch_add(&r->nonfinite, nonfinite);
 }
@@ -1449,6 +1470,12 @@ double sg_renderer_branches_per_path(const SgRenderer *r)
 {
     double paths = (double)r->opt.width * r->opt.height * r->spp;
     return paths > 0.0 ? (double)atomic_load(&((SgRenderer *)r)->branches) / paths : 0.0;
+}
+
+double sg_renderer_lobe_share(const SgRenderer *r)
+{
+    uint64_t bounces = atomic_load(&((SgRenderer *)r)->bounces);
+    return bounces ? (double)atomic_load(&((SgRenderer *)r)->lobe_bounces) / (double)bounces : 0.0;
 }
 
 double sg_renderer_backface_fraction(const SgRenderer *r)

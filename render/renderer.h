@@ -108,6 +108,9 @@ double sg_renderer_backface_fraction(const SgRenderer *r);
 /* Guided with a learned alpha: the share of the learner's bounces that
  * fall where the mixture now uses the lobe (alpha < 1); -1 otherwise. */
 double sg_renderer_guided_fraction(const SgRenderer *r);
+/* The share of the diffuse and glossy bounces drawn so far whose direction
+ * the guide's lobe drew (the rest: the BSDF's sampler); 0 before any. */
+double sg_renderer_lobe_share(const SgRenderer *r);
 /* Rays traced so far (camera, bounce and shadow rays). */
 uint64_t sg_renderer_rays(const SgRenderer *r);
 /* Branches the learned roulette split off, per camera path, so far. */
