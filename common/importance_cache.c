@@ -16,7 +16,6 @@
 #include "hash.h"
 #include "importance_cache_format.h"
 
-_Static_assert(SG_CACHE_NO_NODE == SG_CACHE_NONE, "the public name of the format's 'none'");
 _Static_assert((SG_CACHE_NONE & SG_CACHE_WALL_BIT) != 0, "'none' reads as a wall entry");
 
 struct SgImportanceCache {

@@ -17,7 +17,9 @@ extern "C" {
 
 typedef struct SgImportanceCache SgImportanceCache;
 
-#define SG_CACHE_NO_NODE 0xffffffffu  /* a voxel that is not medium (sg_cache_decoded) */
+/* No node (a voxel that is not medium, in sg_cache_decoded and the file),
+ * no block, no component: one value, on disk too. */
+#define SG_CACHE_NONE 0xffffffffu
 #define SG_CACHE_WALL_BIT 0x80000000u /* marks a wall's entry in sg_cache_decoded */
 #define SG_CACHE_MIXED_BIT 0x40000000u /* ... whose octants have their own nodes */
 #define SG_CACHE_MIXED_INDEX 0x3fffffffu /* ... at 8 times this part (sg_cache_decoded_octants) */
@@ -73,16 +75,16 @@ bool sg_cache_nearest_node_voxel(const SgImportanceCache *cache, const float v[3
  * - else SG_CACHE_MIXED_BIT and an index e (the entry's SG_CACHE_MIXED_INDEX
  *   bits): a point of the voxel in octant o (bit a set where its coordinate
  *   a is at least the voxel's centre) has node octants[8 e + o];
- * where that is SG_CACHE_NO_NODE, or the entry is, no one node answers for
+ * where that is SG_CACHE_NONE, or the entry is, no one node answers for
  * the whole octant: sg_cache_nearest_node_voxel then searches the
  * neighbours. For a hot loop that reads it inline (and prefetches). */
 const uint32_t *sg_cache_decoded(const SgImportanceCache *cache);
 const uint32_t *sg_cache_decoded_octants(const SgImportanceCache *cache);
 /* The node an entry of that table gives a point in octant `octant` of its
- * voxel; SG_CACHE_NO_NODE: search the neighbours. */
+ * voxel; SG_CACHE_NONE: search the neighbours. */
 static inline uint32_t sg_cache_entry_node(uint32_t entry, const uint32_t *octants, unsigned octant)
 {
-    if (!(entry & SG_CACHE_WALL_BIT) || entry == SG_CACHE_NO_NODE)
+    if (!(entry & SG_CACHE_WALL_BIT) || entry == SG_CACHE_NONE)
         return entry; /* medium, or no node */
     if (entry & SG_CACHE_MIXED_BIT)
         return octants[8 * (size_t)(entry & SG_CACHE_MIXED_INDEX) + octant];

@@ -7,6 +7,8 @@
 
 #include <stdint.h>
 
+#include "importance_cache.h" /* SG_CACHE_NONE: no node / no block / no component */
+
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
 #error "importance.cache is read in place: a little-endian host is required"
 #endif
@@ -15,7 +17,6 @@
 #define SG_CACHE_VERSION 1u
 #define SG_CACHE_BLOCK 8             /* nearest-node table blocks are 8x8x8 voxels */
 #define SG_CACHE_BLOCK_VOXELS 512
-#define SG_CACHE_NONE 0xffffffffu    /* no node / no block / no component */
 #define SG_CACHE_ALIGN 16
 
 typedef enum SgCacheSection {

@@ -51,7 +51,8 @@ static const char *usage =
 
 typedef struct Args {
     const char *scene, *cache, *output, *png, *reference, *log;
-    const char *sampling, *roulette;
+    SgSampling sampling; /* bsdf, or guided with a cache, unless --sampling says */
+    SgRoulette roulette;
     long spp;
     double time;
     uint64_t seed;
@@ -63,6 +64,8 @@ typedef struct Args {
 static bool parse_args(int argc, char **argv, Args *a, SgError *err)
 {
     memset(a, 0, sizeof *a);
+    bool has_sampling = false;
+    a->roulette = SG_ROULETTE_LEARNED;
     a->spp = -1;
     a->time = -1;
     a->threads = 0;
@@ -76,8 +79,16 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
         i++;                                                         \
     } while (0)
         if (!strcmp(s, "--cache")) { NEED_VALUE(); a->cache = v; }
-        else if (!strcmp(s, "--sampling")) { NEED_VALUE(); a->sampling = v; }
-        else if (!strcmp(s, "--roulette")) { NEED_VALUE(); a->roulette = v; }
+        else if (!strcmp(s, "--sampling")) {
+            NEED_VALUE();
+            if (!sg_sampling_parse(v, &a->sampling))
+                return sg_fail(err, "--sampling: '%s' is not bsdf, skeleton or guided", v);
+            has_sampling = true;
+        } else if (!strcmp(s, "--roulette")) {
+            NEED_VALUE();
+            if (!sg_roulette_parse(v, &a->roulette))
+                return sg_fail(err, "--roulette: '%s' is not learned or albedo", v);
+        }
         else if (!strcmp(s, "-o") || !strcmp(s, "--output")) { NEED_VALUE(); a->output = v; }
         else if (!strcmp(s, "--png")) { NEED_VALUE(); a->png = v; }
         else if (!strcmp(s, "--reference")) { NEED_VALUE(); a->reference = v; }
@@ -149,6 +160,10 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
         return sg_fail(err, "--spp and --time: give one or the other");
     if (!a->reference != !a->log)
         return sg_fail(err, "--reference and --log go together");
+    if (!has_sampling)
+        a->sampling = a->cache ? SG_SAMPLING_GUIDED : SG_SAMPLING_BSDF;
+    if (a->sampling != SG_SAMPLING_BSDF && !a->cache)
+        return sg_fail(err, "--sampling %s needs --cache importance.cache", sg_sampling_name(a->sampling));
     return true;
 }
 
@@ -203,7 +218,7 @@ int main(int argc, char **argv)
     Args a;
     if (!parse_args(argc, argv, &a, &err)) {
         sg_error_print("render", &err);
-        return 1;
+        return 2; /* a usage error, as in every program */
     }
     int status = 1;
     SgScene *scene = NULL;
@@ -237,21 +252,10 @@ int main(int argc, char **argv)
         o.lobe_exponent = (float)a.exponent;
     if (a.has_alpha)
         o.alpha = (float)a.alpha;
-    o.sampling = a.cache ? SG_SAMPLING_GUIDED : SG_SAMPLING_BSDF;
-    if (a.sampling && !sg_sampling_parse(a.sampling, &o.sampling)) {
-        sg_fail(&err, "--sampling: '%s' is not bsdf, skeleton or guided", a.sampling);
-        goto done;
-    }
-    if (a.roulette && !sg_roulette_parse(a.roulette, &o.roulette)) {
-        sg_fail(&err, "--roulette: '%s' is not learned or albedo", a.roulette);
-        goto done;
-    }
+    o.sampling = a.sampling;
+    o.roulette = a.roulette;
     if (o.sampling == SG_SAMPLING_SKELETON && !a.has_exponent)
         o.lobe_exponent = 4.0f; /* the paper's p_skel for its corridor */
-    if (o.sampling != SG_SAMPLING_BSDF && !a.cache) {
-        sg_fail(&err, "--sampling %s needs --cache importance.cache", sg_sampling_name(o.sampling));
-        goto done;
-    }
 
     if (a.cache && o.sampling != SG_SAMPLING_BSDF) {
         if (!sg_cache_guide_open(&guide, a.cache, scene, a.scene, &o.guide, &err))

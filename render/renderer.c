@@ -736,7 +736,7 @@ static bool importance_point(const SgRenderer *r, const GuideQuery *gq, Vec3 p, 
 {
     const CacheGuide *g = &r->cache_guide;
     if (g->points) {
-        uint32_t node = SG_CACHE_NO_NODE;
+        uint32_t node = SG_CACHE_NONE;
         if (gq->index >= 0) {
             const float *v = gq->voxel; /* v >= 0: truncation is floor */
             unsigned octant = (v[0] - (float)(int)v[0] >= 0.5f) | (v[1] - (float)(int)v[1] >= 0.5f) << 1 |
@@ -744,7 +744,7 @@ static bool importance_point(const SgRenderer *r, const GuideQuery *gq, Vec3 p, 
             node = sg_cache_entry_node(g->decoded[gq->index], g->octants, octant);
         }
         /* no one node for the octant, or outside the grid: the cache searches the neighbours */
-        if (node == SG_CACHE_NO_NODE && !sg_cache_nearest_node_voxel(g->cache, gq->voxel, &node))
+        if (node == SG_CACHE_NONE && !sg_cache_nearest_node_voxel(g->cache, gq->voxel, &node))
             return false;
         const float *pt = g->points + 3 * ((size_t)node * g->lights + gq->light);
         *q = v3(pt[0], pt[1], pt[2]);

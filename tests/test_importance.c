@@ -707,12 +707,12 @@ Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
     const uint32_t *table = sg_cache_decoded(c), *octants = sg_cache_decoded_octants(c);
     cr_assert_not_null(table);
     for (int i = 0; i < POINTS; i++) {
-        uint32_t n = SG_CACHE_NO_NODE;
+        uint32_t n = SG_CACHE_NONE;
         cr_assert_eq(sg_cache_nearest_node(c, p[i], &n), found[i], "point %d", i);
         if (found[i])
             cr_assert_eq(n, node[i], "point %d: node %u unpacked, %u packed", i, n, node[i]);
         float v[3] = {(float)p[i][0], (float)p[i][1], (float)p[i][2]}; /* origin 0, voxel 1 */
-        uint32_t nv = SG_CACHE_NO_NODE;
+        uint32_t nv = SG_CACHE_NONE;
         cr_assert_eq(sg_cache_nearest_node_voxel(c, v, &nv), found[i], "point %d in voxel units", i);
         if (found[i])
             cr_assert_eq(nv, node[i]);
@@ -725,7 +725,7 @@ Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
                 if (!sg_grid_get(g, i, j, k)) {
                     cr_assert(t & SG_CACHE_WALL_BIT, "solid voxel %d %d %d", i, j, k);
                     walls++;
-                    if (t == SG_CACHE_NO_NODE)
+                    if (t == SG_CACHE_NONE)
                         continue;
                     bool split = t & SG_CACHE_MIXED_BIT;
                     cr_assert(!split || octants, "a mixed wall and no octants");
@@ -735,7 +735,7 @@ Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
                     for (unsigned o = 0; o < 8; o++) {
                         uint32_t want = split ? octants[8 * (size_t)(t & SG_CACHE_MIXED_INDEX) + o]
                                               : t & ~SG_CACHE_WALL_BIT;
-                        if (want == SG_CACHE_NO_NODE)
+                        if (want == SG_CACHE_NONE)
                             continue;
                         resolved += split;
                         for (int q = 0; q < 9; q++) {

@@ -63,7 +63,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
         if (sg_cache_decode(c, 64u << 20))
             for (int i = 0; i < 64; i++) {
-                uint32_t n = SG_CACHE_NO_NODE;
+                uint32_t n = SG_CACHE_NONE;
                 if (sg_cache_nearest_node(c, at[i], &n) != found[i] || (found[i] && n != node[i]))
                     abort();
             }
