@@ -62,6 +62,7 @@ struct SgRenderer {
 
     RTCDevice device;
     RTCScene rtc_scene;
+    SgThreadPool *pool;   /* its workers live across the passes */
 
     uint32_t triangle_count;
     Vec3 *vertices;       /* local coordinates */
@@ -481,6 +482,7 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         return NULL;
     }
 
+    r->pool = sg_thread_pool_create(o->threads);
     r->device = rtcNewDevice(NULL);
     if (!r->device) {
         sg_renderer_free(r);
@@ -515,6 +517,7 @@ void sg_renderer_free(SgRenderer *r)
         rtcReleaseScene(r->rtc_scene);
     if (r->device)
         rtcReleaseDevice(r->device);
+    sg_thread_pool_free(r->pool);
     free(r->vertices);
     free(r->indices);
     free(r->tris);
@@ -1409,7 +1412,7 @@ static double deviation_step(DeviationStep *d, int step)
 {
     d->step = step;
     int h = d->r->opt.height;
-    sg_parallel_for((uint64_t)h, d->r->opt.threads, deviation_row, d);
+    sg_thread_pool_run(d->r->pool, (uint64_t)h, deviation_row, d);
     double total = 0.0;
     for (int y = 0; y < h; y++)
         total += d->row_sum[y];
@@ -1439,7 +1442,7 @@ void sg_renderer_pass(SgRenderer *r)
                   learn_stride(r), 0, r->learner != NULL};
     pc.learn_below = UINT64_MAX / pc.learn_stride;
     int tiles_y = (r->opt.height + TILE - 1) / TILE;
-    sg_parallel_for((uint64_t)pc.tiles_x * tiles_y + pc.learn_job, r->opt.threads, pass_job, &pc);
+    sg_thread_pool_run(r->pool, (uint64_t)pc.tiles_x * tiles_y + pc.learn_job, pass_job, &pc);
     /* Each pass's records are learned during the next and used from the
      * one after: the update does not hold up the threads. */
     if (r->learner)
