@@ -4,6 +4,7 @@
 #   make demo       install missing packages, build, run the pipeline on data/corridor
 #   make scene SCENE=path/to/scene.json   build out/NAME/ (only steps whose inputs changed)
 #   make bench      speed and error benchmarks, writes bench/report.md (bench-quick, bench-long)
+#   make openpgl    build the Open PGL peer once (build/openpgl) and render --sampling openpgl
 #   make SANITIZE=1 ...  the same with AddressSanitizer + UBSan in build/asan
 
 SHELL := /bin/bash
@@ -43,6 +44,15 @@ CXXFLAGS += -std=c++17 $(OPT) -g $(WARN) $(SANFLAGS) -pthread -Wno-deprecated-de
 LDFLAGS += $(SANFLAGS) -pthread
 LDLIBS := -lembree3 -lopenvdb -ltbb -lOpenImageIO -lOpenImageIO_Util -lassimp -lcjson \
           -lcriterion -lstdc++ -lm
+
+# The Open PGL peer (render --sampling openpgl): linked where `make openpgl`
+# built it (or OPENPGL_DIR names an installed one); without it render/
+# openpgl_guide.cpp compiles to a stub that says how to get it.
+OPENPGL_PREFIX := $(if $(OPENPGL_DIR),$(OPENPGL_DIR),build/openpgl/install)
+ifneq ($(wildcard $(OPENPGL_PREFIX)/include/openpgl/openpgl.h),)
+OPENPGL_CPPFLAGS := -DSG_HAVE_OPENPGL -isystem $(OPENPGL_PREFIX)/include
+LDLIBS += -L$(OPENPGL_PREFIX)/lib -Wl,-rpath,$(abspath $(OPENPGL_PREFIX)/lib) -lopenpgl
+endif
 PROG_LDLIBS := $(filter-out -lcriterion,$(LDLIBS))
 
 ALL_STEPS := voxelize skeletonize importance render
@@ -54,9 +64,9 @@ COMMON_C := $(wildcard common/*.c)
 COMMON_CXX := $(wildcard common/*.cpp)
 COMMON_OBJ := $(COMMON_C:%.c=$(BUILD)/%.o) $(COMMON_CXX:%.cpp=$(BUILD)/%.o)
 
-# Each step: its library (every .c but main.c) and its program (main.c).
-step_lib_src = $(filter-out $(1)/main.c,$(wildcard $(1)/*.c))
-step_lib_obj = $(patsubst %.c,$(BUILD)/%.o,$(call step_lib_src,$(1)))
+# Each step: its library (every .c and .cpp but main.c) and its program (main.c).
+step_lib_src = $(filter-out $(1)/main.c,$(wildcard $(1)/*.c $(1)/*.cpp))
+step_lib_obj = $(patsubst %.cpp,$(BUILD)/%.o,$(patsubst %.c,$(BUILD)/%.o,$(call step_lib_src,$(1))))
 STEP_LIBS := $(foreach s,$(STEPS),$(BUILD)/lib$(s).a)
 
 TEST_SRC := $(wildcard tests/test_*.c)
@@ -68,7 +78,8 @@ TEST_SUPPORT_OBJ := $(TEST_SUPPORT_SRC:%.c=$(BUILD)/%.o)
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
-.PHONY: all test check-tests demo scene bench bench-quick bench-long deps bench-deps fuzz fuzz-run clean distclean FORCE
+.PHONY: all test check-tests demo scene bench bench-quick bench-long deps bench-deps fuzz fuzz-run clean distclean \
+        openpgl FORCE
 .DEFAULT_GOAL := all
 
 all: $(PROGRAMS)
@@ -95,6 +106,19 @@ $(BUILD)/%.o: %.c
 $(BUILD)/%.o: %.cpp
 	@mkdir -p $(@D)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -c -o $@ $<
+
+# The shim is the one file that sees Open PGL: it is rebuilt when the peer
+# comes or goes (the stamp holds the flags, rewritten only when they change).
+$(BUILD)/render/openpgl_guide.o: CPPFLAGS += $(OPENPGL_CPPFLAGS)
+$(BUILD)/render/openpgl_guide.o: $(BUILD)/openpgl.flags
+$(BUILD)/openpgl.flags: FORCE
+	@mkdir -p $(@D)
+	@echo '$(OPENPGL_CPPFLAGS)' > $@.new
+	@if cmp -s $@.new $@; then rm -f $@.new; else mv $@.new $@; fi
+
+openpgl:
+	@bash scripts/build-openpgl.sh
+	@$(MAKE) --no-print-directory all
 
 $(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_SUPPORT_OBJ) $(STEP_LIBS) $(BUILD)/libcommon.a
 	@mkdir -p $(@D)

@@ -10,13 +10,14 @@
 #include "cli.h"
 #include "error.h"
 #include "image_io.h"
+#include "openpgl_guide.h"
 #include "output_file.h"
 #include "progress.h"
 #include "renderer.h"
 #include "scene.h"
 
 static const char *usage =
-    "usage: render SCENE [--cache importance.cache] [--sampling bsdf|skeleton|guided]\n"
+    "usage: render SCENE [--cache importance.cache] [--sampling bsdf|skeleton|guided|openpgl]\n"
     "              [--spp N | --time SECONDS] [--seed N] [--threads N] -o image.exr\n"
     "              [--png image.png] [--exposure STOPS] [--reference ref.exr --log curve.csv]\n"
     "              [--max-depth N] [--exponent P] [--alpha A] [--roulette learned|albedo]\n"
@@ -27,7 +28,9 @@ static const char *usage =
     "  --sampling MODE   bsdf: BSDF sampling (default without a cache);\n"
     "                    guided: unbiased mixture of BSDF and a lobe toward the skeleton's\n"
     "                            importance point (default with a cache);\n"
-    "                    skeleton: the paper's rule as written (biased; for reproduction)\n"
+    "                    skeleton: the paper's rule as written (biased; for reproduction);\n"
+    "                    openpgl: the peer, Open PGL's learned guiding as Cycles uses it\n"
+    "                            (no cache; builds with `make openpgl`)\n"
     "  --spp N           samples per pixel (default: the scene's render.spp, else 16)\n"
     "  --time SECONDS    render progressive passes until this much time has passed\n"
     "  --seed N          random seed (default 0); the image depends only on the seed\n"
@@ -82,7 +85,7 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
         else if (!strcmp(s, "--sampling")) {
             NEED_VALUE();
             if (!sg_sampling_parse(v, &a->sampling))
-                return sg_fail(err, "--sampling: '%s' is not bsdf, skeleton or guided", v);
+                return sg_fail(err, "--sampling: '%s' is not bsdf, skeleton, guided or openpgl", v);
             has_sampling = true;
         } else if (!strcmp(s, "--roulette")) {
             NEED_VALUE();
@@ -162,7 +165,7 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
         return sg_fail(err, "--reference and --log go together");
     if (!has_sampling)
         a->sampling = a->cache ? SG_SAMPLING_GUIDED : SG_SAMPLING_BSDF;
-    if (a->sampling != SG_SAMPLING_BSDF && !a->cache)
+    if ((a->sampling == SG_SAMPLING_SKELETON || a->sampling == SG_SAMPLING_GUIDED) && !a->cache)
         return sg_fail(err, "--sampling %s needs --cache importance.cache", sg_sampling_name(a->sampling));
     return true;
 }
@@ -220,6 +223,10 @@ int main(int argc, char **argv)
         sg_error_print("render", &err);
         return 2; /* a usage error, as in every program */
     }
+    if (a.sampling == SG_SAMPLING_OPENPGL && !sg_pgl_require(&err)) { /* said before the scene is read */
+        fprintf(stderr, "render: --sampling openpgl: %s\n", err.message);
+        return 1;
+    }
     int status = 1;
     SgScene *scene = NULL;
     SgCacheGuide guide = {0};
@@ -257,7 +264,7 @@ int main(int argc, char **argv)
     if (o.sampling == SG_SAMPLING_SKELETON && !a.has_exponent)
         o.lobe_exponent = 4.0f; /* the paper's p_skel for its corridor */
 
-    if (a.cache && o.sampling != SG_SAMPLING_BSDF) {
+    if (a.cache && (o.sampling == SG_SAMPLING_SKELETON || o.sampling == SG_SAMPLING_GUIDED)) {
         if (!sg_cache_guide_open(&guide, a.cache, scene, a.scene, &o.guide, &err))
             goto done;
         if (guide.dropped)
@@ -328,6 +335,16 @@ int main(int argc, char **argv)
                  100.0 * fmax(0.0, sg_renderer_guided_fraction(r)));
     else
         snprintf(alpha_s, sizeof alpha_s, "%g", o.alpha);
+    /* what the guide did: the share of bounces it drew, and openpgl's training */
+    char guide_share_s[32], training_s[32], training_sec_s[32], guide_line[160] = "";
+    snprintf(guide_share_s, sizeof guide_share_s, "%.4f", sg_renderer_lobe_share(r));
+    snprintf(training_s, sizeof training_s, "%d", sg_renderer_training_passes(r));
+    snprintf(training_sec_s, sizeof training_sec_s, "%.3f", sg_renderer_training_seconds(r));
+    if (o.sampling == SG_SAMPLING_OPENPGL)
+        snprintf(guide_line, sizeof guide_line, ", field trained on %d passes (%.2f s), guide drew %.1f%% of bounces",
+                 sg_renderer_training_passes(r), sg_renderer_training_seconds(r), 100.0 * sg_renderer_lobe_share(r));
+    else if (o.sampling != SG_SAMPLING_BSDF)
+        snprintf(guide_line, sizeof guide_line, ", lobe drew %.1f%% of bounces", 100.0 * sg_renderer_lobe_share(r));
     /* the learned roulette needs the learner: elsewhere paths are cut by albedo */
     SgRoulette roulette_used =
         o.sampling == SG_SAMPLING_GUIDED && o.alpha == SG_ALPHA_LEARNED ? o.roulette : SG_ROULETTE_ALBEDO;
@@ -350,6 +367,9 @@ int main(int argc, char **argv)
         {"sg:roulette", sg_roulette_name(roulette_used)},
         {"sg:branches_per_path", branches_s},
         {"sg:nonfinite_samples", nonfinite_s},
+        {"sg:guide_share", guide_share_s},
+        {"sg:training_passes", training_s},
+        {"sg:training_seconds", training_sec_s},
         {"sg:clamping", "none"},
         {"sg:scene", a.scene},
         {"sg:cache", guide.cache ? a.cache : ""},
@@ -369,12 +389,12 @@ int main(int argc, char **argv)
     if (!a.quiet) {
         double paths = (double)o.width * o.height * sg_renderer_spp(r);
         fprintf(stderr,
-                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s, roulette %s, seed "
+                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s%s, roulette %s, seed "
                 "%s, %s NaN/inf samples\n",
                 o.width, o.height, sg_renderer_spp(r), render_seconds, paths / render_seconds * 1e-6,
                 (double)sg_renderer_rays(r) / render_seconds * 1e-6, sg_sampling_name(o.sampling),
                 o.sampling == SG_SAMPLING_GUIDED ? ", alpha " : "", o.sampling == SG_SAMPLING_GUIDED ? alpha_s : "",
-                roulette, seed_s, nonfinite_s);
+                guide_line, roulette, seed_s, nonfinite_s);
     }
     status = 0;
 

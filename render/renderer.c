@@ -9,6 +9,8 @@
 
 #include "memory.h"
 #include "mixture_learning.h"
+#include "openpgl_guide.h"
+#include "progress.h"
 #include "rng.h"
 #include "sampling.h"
 #include "threads.h"
@@ -51,6 +53,7 @@ typedef struct Material {
     Vec3 kd, ks, emission;
     float exponent, ior;
     float diffuse_weight; /* probability of sampling the diffuse part */
+    float roughness;      /* for Open PGL: 1 diffuse, sqrt(2 / (p + 2)) a Phong lobe alone */
     bool emissive;
     bool black;           /* no scattering at all */
 } Material;
@@ -79,6 +82,9 @@ struct SgRenderer {
     double *light_tri_cdf;  /* per light, cumulative area fractions */
     double *follow_cdf;     /* guide: cumulative follow probability per light */
     CacheGuide cache_guide; /* cache_guide.points NULL: the guide function answers */
+    /* openpgl: the peer's field, learning while the first passes record */
+    SgPglField *pgl;
+    double pgl_seconds;
     /* Guided mode with a learned alpha: per-region choice of the mixture. */
     SgMixtureLearner *learner;
     const SgMixtureView *mixture_view; /* the learner's, read at every bounce */
@@ -112,13 +118,15 @@ const char *sg_sampling_name(SgSampling s)
     case SG_SAMPLING_BSDF: return "bsdf";
     case SG_SAMPLING_SKELETON: return "skeleton";
     case SG_SAMPLING_GUIDED: return "guided";
+    case SG_SAMPLING_OPENPGL: return "openpgl";
+    case SG_SAMPLING_COUNT: break;
     }
     return "?";
 }
 
 bool sg_sampling_parse(const char *name, SgSampling *s)
 {
-    for (int i = 0; i <= SG_SAMPLING_GUIDED; i++)
+    for (int i = 0; i < SG_SAMPLING_COUNT; i++)
         if (strcmp(name, sg_sampling_name((SgSampling)i)) == 0) {
             *s = (SgSampling)i;
             return true;
@@ -180,6 +188,7 @@ static void setup_material(Material *m, const SgMaterial *src)
         m->diffuse_weight = m->black ? 1.0f : ld / (ld + ls);
         if (ls <= 0.0f)
             m->type = SG_MATERIAL_DIFFUSE;
+        m->roughness = m->diffuse_weight > 0.0f ? 1.0f : sqrtf(2.0f / (m->exponent + 2.0f));
     } else if (m->type == SG_MATERIAL_MIRROR) {
         if (v3_max_component(m->ks) <= 0.0f)
             m->ks = v3(1, 1, 1); /* a mirror given without Ks reflects fully */
@@ -334,17 +343,25 @@ static void setup_camera(SgRenderer *r, const SgScene *s)
     r->aspect = (float)r->opt.width / (float)r->opt.height;
 }
 
+/* The triangles' bounds, local coordinates. */
+static void triangle_bounds(const SgRenderer *r, Vec3 *lo, Vec3 *hi)
+{
+    *lo = v3(INFINITY, INFINITY, INFINITY);
+    *hi = v3(-INFINITY, -INFINITY, -INFINITY);
+    for (uint32_t t = 0; t < r->triangle_count; t++)
+        for (int k = 0; k < 3; k++) {
+            Vec3 v = r->vertices[r->indices[3 * t + k]];
+            *lo = v3(fminf(lo->x, v.x), fminf(lo->y, v.y), fminf(lo->z, v.z));
+            *hi = v3(fmaxf(hi->x, v.x), fmaxf(hi->y, v.y), fmaxf(hi->z, v.z));
+        }
+}
+
 /* The learner's grid covers the triangles' bounds (local coordinates):
  * 32 cells along the longest side, a few thousand regions in a room. */
 static bool setup_learner(SgRenderer *r, const char *path, SgError *err)
 {
-    Vec3 lo = v3(INFINITY, INFINITY, INFINITY), hi = v3(-INFINITY, -INFINITY, -INFINITY);
-    for (uint32_t t = 0; t < r->triangle_count; t++)
-        for (int k = 0; k < 3; k++) {
-            Vec3 v = r->vertices[r->indices[3 * t + k]];
-            lo = v3(fminf(lo.x, v.x), fminf(lo.y, v.y), fminf(lo.z, v.z));
-            hi = v3(fmaxf(hi.x, v.x), fmaxf(hi.y, v.y), fmaxf(hi.z, v.z));
-        }
+    Vec3 lo, hi;
+    triangle_bounds(r, &lo, &hi);
     SgError e;
     r->learner = sg_mixture_learner_create(lo, hi, 32, (uint32_t)(r->tiles_x * r->tiles_y),
                                            SG_MIXTURE_INITIAL, &e);
@@ -374,7 +391,7 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         return sg_fail(err, "%s: bad image size %dx%d", path, o->width, o->height), NULL;
     if (o->max_depth < 1)
         return sg_fail(err, "%s: max depth must be at least 1", path), NULL;
-    if (o->sampling != SG_SAMPLING_BSDF && !o->guide.importance_point)
+    if ((o->sampling == SG_SAMPLING_SKELETON || o->sampling == SG_SAMPLING_GUIDED) && !o->guide.importance_point)
         return sg_fail(err, "%s: %s sampling needs an importance cache", path,
                        sg_sampling_name(o->sampling)), NULL;
     if (o->sampling == SG_SAMPLING_GUIDED && o->alpha != SG_ALPHA_LEARNED && !(o->alpha > 0.0f && o->alpha <= 1.0f))
@@ -476,13 +493,23 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         return NULL;
     }
     setup_camera(r, s);
+    r->pool = sg_thread_pool_create(o->threads);
+    if (o->sampling == SG_SAMPLING_OPENPGL) {
+        Vec3 lo, hi;
+        triangle_bounds(r, &lo, &hi);
+        SgError e = {0};
+        r->pgl = sg_pgl_field_create(lo, hi, sg_thread_pool_size(r->pool), &e);
+        if (!r->pgl) {
+            sg_renderer_free(r);
+            return sg_fail(err, "%s: --sampling openpgl: %s", path, e.message), NULL;
+        }
+    }
     if (o->sampling == SG_SAMPLING_GUIDED && o->alpha == SG_ALPHA_LEARNED && r->light_count &&
         !setup_learner(r, path, err)) {
         sg_renderer_free(r);
         return NULL;
     }
 
-    r->pool = sg_thread_pool_create(o->threads);
     r->device = rtcNewDevice(NULL);
     if (!r->device) {
         sg_renderer_free(r);
@@ -518,6 +545,7 @@ void sg_renderer_free(SgRenderer *r)
     if (r->device)
         rtcReleaseDevice(r->device);
     sg_thread_pool_free(r->pool);
+    sg_pgl_field_free(r->pgl);
     free(r->vertices);
     free(r->indices);
     free(r->tris);
@@ -660,6 +688,7 @@ typedef enum BounceKind {
     BOUNCE_BSDF,    /* the material's own sampler */
     BOUNCE_LOBE,    /* the guide's lobe alone (the paper's rule, skeleton) */
     BOUNCE_MIXTURE, /* BSDF with probability alpha, the lobe otherwise (guided) */
+    BOUNCE_OPENPGL, /* BSDF with probability alpha, Open PGL's distribution otherwise */
 } BounceKind;
 
 typedef struct BounceSampler {
@@ -667,6 +696,8 @@ typedef struct BounceSampler {
     const SgGlossyLobe *bsdf; /* the material's lobe; bsdf->n is the shading normal */
     SgFoldedLobe lobe;        /* the guide's (kind 2) */
     float alpha;              /* the BSDF's share of the mixture */
+    SgPglField *pgl;          /* BOUNCE_OPENPGL: the field, prepared at the vertex by `thread` */
+    int thread;
 } BounceSampler;
 
 static float bounce_pdf(const BounceSampler *b, Vec3 w, float wn)
@@ -675,6 +706,8 @@ static float bounce_pdf(const BounceSampler *b, Vec3 w, float wn)
     switch (b->kind) {
     case BOUNCE_LOBE: return sg_pdf_cosine_power(b->lobe.axis, b->lobe.exponent, w);
     case BOUNCE_MIXTURE: return sg_pdf_mixture_at(b->bsdf, &b->lobe, b->alpha, w, wn, &pdf_bsdf, &c1, &c2);
+    case BOUNCE_OPENPGL:
+        return b->alpha * sg_pdf_glossy(b->bsdf, w) + (1.0f - b->alpha) * sg_pgl_guide_pdf(b->pgl, b->thread, w);
     case BOUNCE_BSDF: break;
     }
     return sg_pdf_glossy(b->bsdf, w);
@@ -685,6 +718,11 @@ static Vec3 bounce_sample(const BounceSampler *b, float u0, float u1, float u2)
     switch (b->kind) {
     case BOUNCE_LOBE: return sg_sample_cosine_power(b->lobe.axis, b->lobe.exponent, u1, u2);
     case BOUNCE_MIXTURE: return sg_sample_mixture_at(b->bsdf, &b->lobe, b->alpha, u0, u1, u2);
+    case BOUNCE_OPENPGL:
+        if (u0 < b->alpha)
+            return sg_sample_glossy(b->bsdf, u0 / b->alpha, u1, u2);
+        float pdf;
+        return sg_pgl_guide_sample(b->pgl, b->thread, u1, u2, &pdf);
     case BOUNCE_BSDF: break;
     }
     return sg_sample_glossy(b->bsdf, u0, u1, u2);
@@ -811,15 +849,21 @@ typedef struct PendingRecord {
  * toward the light live on, where albedo roulette would cut them. Never
  * below ROULETTE_MIN_SURVIVAL, so that a region whose estimate is wrongly
  * low cannot make fireflies. */
+/* Open PGL's share of a diffuse bounce: Cycles' default surface guiding
+ * probability. */
+#define OPENPGL_GUIDING_PROBABILITY 0.5f
+
 #define ROULETTE_DEPTH 2
 #define ROULETTE_GAIN 2.8f
 #define ROULETTE_MIN_SURVIVAL 0.05f
 
 /* Russian roulette after a few bounces, on the product of albedos:
  * unbiased (the survivor is divided by its survival probability). */
-static bool albedo_roulette(Vec3 *beta, Vec3 *rr_beta, SgRng *rng)
+static bool albedo_roulette(Vec3 *beta, Vec3 *rr_beta, SgRng *rng, SgPglSegment *seg)
 {
     float q = sg_minf(0.95f, v3_max_component(*rr_beta));
+    if (seg) /* openpgl: the field learns what survivors carry */
+        sg_pgl_segment_survival(seg, q);
     if (!(sg_rng_float(rng) < q))
         return false;
     *beta = v3_scale(*beta, 1.0f / q);
@@ -879,6 +923,7 @@ typedef struct BounceVertex {
     BounceSampler bs; /* bs.bsdf points at lobe: set again where the vertex is copied */
     Vec3 n, origin, p;
     bool guided;      /* bs is the guided mixture */
+    SgPglSegment *seg; /* openpgl, recording: the vertex's segment */
 } BounceVertex;
 
 /* Draws the vertex's bounce into the path state; false where the path
@@ -889,7 +934,8 @@ static bool take_bounce(BounceVertex *v, PathState *ps, SgRng *rng, PendingRecor
     float u0 = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
     Vec3 wi = bounce_sample(&v->bs, u0, u1, u2);
     st->bounces++;
-    st->lobe_bounces += v->bs.kind == BOUNCE_LOBE || (v->bs.kind == BOUNCE_MIXTURE && !(u0 < v->bs.alpha));
+    st->lobe_bounces += v->bs.kind == BOUNCE_LOBE ||
+                        ((v->bs.kind == BOUNCE_MIXTURE || v->bs.kind == BOUNCE_OPENPGL) && !(u0 < v->bs.alpha));
     float cos_x = v3_dot(wi, v->n);
     float pdf, pdf_bsdf = 0.0f, c1 = 0.0f, c2 = 0.0f;
     if (v->bs.kind == BOUNCE_MIXTURE) /* with the BSDF's part and the cosines the learner needs */
@@ -906,7 +952,10 @@ static bool take_bounce(BounceVertex *v, PathState *ps, SgRng *rng, PendingRecor
         pr->pdf = pdf;
     }
     Vec3 f = eval_bsdf(v->m, &v->lobe, wi);
-    ps->beta = v3_mul(ps->beta, v3_scale(f, cos_x / pdf));
+    Vec3 weight = v3_scale(f, cos_x / pdf);
+    ps->beta = v3_mul(ps->beta, weight);
+    if (v->seg)
+        sg_pgl_segment_bounce(v->seg, wi, pdf, weight, false, 1.0f, v->m->roughness);
     ps->d = wi;
     ps->o = v->origin;
     ps->prev_pdf = pdf;
@@ -958,7 +1007,7 @@ typedef struct SplitPoint {
  * pixel's noise for the learned roulette (0: albedo roulette); `seen` gets
  * the emission the camera ray itself hit. */
 static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st, bool first_pass,
-                       int learn_tile, float pixel_deviation, Vec3 *seen)
+                       int learn_tile, float pixel_deviation, Vec3 *seen, int thread, bool record)
 {
     PendingRecord pending[MAX_PENDING];
     int pending_count = 0;
@@ -982,6 +1031,10 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             if (depth == 0 && first_pass && cos_o > 0.0f)
                 st->backface++;
             const Material *m = &r->materials[r->tris[h.tri].material];
+            Vec3 wo = v3_scale(ps.d, -1.0f);
+            Vec3 n = cos_o < 0.0f ? ng : v3_scale(ng, -1.0f); /* facing wo */
+            /* openpgl, a training pass: every vertex is a segment of the path's record */
+            SgPglSegment *seg = record ? sg_pgl_segment_next(r->pgl, thread, h.p, wo, n) : NULL;
 
             /* emission (one-sided, toward the winding normal) */
             if (m->emissive && cos_o < 0.0f) {
@@ -992,14 +1045,13 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     w = power_heuristic(ps.prev_pdf, pl);
                 }
                 radiance = v3_add(radiance, v3_scale(v3_mul(ps.beta, m->emission), w));
+                if (seg)
+                    sg_pgl_segment_emission(seg, m->emission, w);
             }
             if (depth == 0)
                 *seen = radiance; /* emission the camera sees directly */
             if (depth + 1 >= r->opt.max_depth)
                 break;
-
-            Vec3 wo = v3_scale(ps.d, -1.0f);
-            Vec3 n = cos_o < 0.0f ? ng : v3_scale(ng, -1.0f); /* facing wo */
 
             if (m->type == SG_MATERIAL_MIRROR) {
                 ps.d = v3_normalize(sg_reflect(wo, n));
@@ -1007,6 +1059,8 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 ps.rr_beta = v3_mul(ps.rr_beta, m->ks);
                 ps.o = offset_origin(r, h.p, n);
                 ps.specular_bounce = true;
+                if (seg)
+                    sg_pgl_segment_bounce(seg, ps.d, 1.0f, m->ks, true, 1.0f, 0.0f);
             } else if (m->type == SG_MATERIAL_DIELECTRIC) {
                 bool entering = cos_o < 0.0f;
                 float eta = entering ? 1.0f / m->ior : m->ior; /* eta_i / eta_t */
@@ -1019,15 +1073,20 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
                     fresnel = 0.5f * (rs * rs + rp * rp);
                 }
-                if (sg_rng_float(rng) < fresnel) {
+                Vec3 weight = v3(1, 1, 1);
+                bool refracted = !(sg_rng_float(rng) < fresnel);
+                if (!refracted) {
                     ps.d = v3_normalize(sg_reflect(wo, n));
                     ps.o = offset_origin(r, h.p, n);
                 } else {
                     ps.d = v3_normalize(v3_add(v3_scale(wo, -eta), v3_scale(n, eta * cos_i - cos_t)));
                     ps.o = offset_origin(r, h.p, v3_scale(n, -1.0f));
                     ps.beta = v3_scale(ps.beta, eta * eta); /* radiance is compressed entering glass */
+                    weight = v3(eta * eta, eta * eta, eta * eta);
                 }
                 ps.specular_bounce = true;
+                if (seg)
+                    sg_pgl_segment_bounce(seg, ps.d, 1.0f, weight, true, refracted ? 1.0f / eta : 1.0f, 0.0f);
             } else {
                 if (m->black)
                     break;
@@ -1039,6 +1098,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                                        .alpha = 1.0f};
                 v.n = n;
                 v.p = h.p;
+                v.seg = seg;
                 Vec3 axis;
                 /* guided: the region's learned alpha; where it is the BSDF
                  * alone the guide is asked only by paths that learn */
@@ -1128,9 +1188,21 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                                                .lobe = sg_folded_lobe(axis, n, mix.exponent), .alpha = mix.alpha};
                     }
                 }
+                if (mode == SG_SAMPLING_OPENPGL) {
+                    /* Cycles' share for the guide: its guiding probability
+                     * times the BSDF's diffuse share (a glossy lobe is not guided) */
+                    float share = OPENPGL_GUIDING_PROBABILITY * m->diffuse_weight;
+                    float u = sg_rng_float(rng);
+                    if (share > 0.0f && sg_pgl_guide_at(r->pgl, thread, h.p, n, u))
+                        v.bs = (BounceSampler){.kind = BOUNCE_OPENPGL, .bsdf = &v.lobe, .alpha = 1.0f - share,
+                                               .pgl = r->pgl, .thread = thread};
+                }
                 if (nee_pdf > 0.0f) {
                     float w = power_heuristic(nee_pdf, bounce_pdf(&v.bs, nee_dir, nee_cos));
-                    radiance = v3_add(radiance, v3_mul(ps.beta, v3_scale(nee, w)));
+                    Vec3 c = v3_scale(nee, w);
+                    radiance = v3_add(radiance, v3_mul(ps.beta, c));
+                    if (seg)
+                        sg_pgl_segment_scattered(seg, c);
                 }
 
                 /* Roulette after next-event estimation and before the bounce is
@@ -1167,7 +1239,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     }
                 } else if (depth >= ROULETTE_DEPTH) {
                     roulette_done = true;
-                    if (!albedo_roulette(&ps.beta, &ps.rr_beta, rng)) {
+                    if (!albedo_roulette(&ps.beta, &ps.rr_beta, rng, seg)) {
                         if (pr && v.guided) /* for the learner, a bounce that brought nothing back */
                             *pr = (PendingRecord){.region = pr->region, .lobe = true, .beta = pr->beta,
                                                   .radiance = radiance, .cut = true};
@@ -1185,7 +1257,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
             }
 
             /* after a specular bounce: the same roulette */
-            if (depth >= ROULETTE_DEPTH && !roulette_done && !albedo_roulette(&ps.beta, &ps.rr_beta, rng))
+            if (depth >= ROULETTE_DEPTH && !roulette_done && !albedo_roulette(&ps.beta, &ps.rr_beta, rng, seg))
                 break;
             if (!(v3_max_component(ps.beta) > 0.0f))
                 break;
@@ -1211,6 +1283,8 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
         depth++;
     }
     finish_records(r, pending, 0, pending_count, radiance, learn_tile);
+    if (record)
+        sg_pgl_path_end(r->pgl, thread);
     st->branches += (uint64_t)(branches - 1);
     return radiance;
 }
@@ -1223,6 +1297,7 @@ typedef struct PassCtx {
     uint64_t learn_stride;
     uint64_t learn_below; /* UINT64_MAX / learn_stride */
     bool learn_job;       /* job 0 runs sg_mixture_learn */
+    bool record;          /* openpgl: the paths train the field */
 } PassCtx;
 
 static uint64_t mix64(uint64_t x)
@@ -1268,7 +1343,7 @@ static bool learns(const PassCtx *pc, size_t pix)
     return pc->learn_stride == 1 || ((uint64_t)pix + pc->pass_key) * 0x9e3779b97f4a7c15ULL < pc->learn_below;
 }
 
-static void render_tile(PassCtx *pc, uint64_t index)
+static void render_tile(PassCtx *pc, uint64_t index, int thread)
 {
     SgRenderer *r = pc->r;
     const int w = r->opt.width, hgt = r->opt.height;
@@ -1288,7 +1363,8 @@ static void render_tile(PassCtx *pc, uint64_t index)
             int learn_tile = r->learner && learns(pc, pix) ? (int)index : -1;
             float deviation = r->pixel_deviation ? r->pixel_deviation[pix] : 0.0f;
             Vec3 seen = v3(0, 0, 0);
-            Vec3 L = trace_path(r, r->cam_pos, dir, &rng, &st, pc->first_pass, learn_tile, deviation, &seen);
+            Vec3 L = trace_path(r, r->cam_pos, dir, &rng, &st, pc->first_pass, learn_tile, deviation, &seen, thread,
+                                pc->record);
             if (!isfinite(L.x) || !isfinite(L.y) || !isfinite(L.z)) {
                 nonfinite++;
                 L = v3(0, 0, 0);
@@ -1322,7 +1398,6 @@ static void render_tile(PassCtx *pc, uint64_t index)
  * (taken first, it runs beside the tiles), then one job per tile. */
 static void pass_job(void *vctx, uint64_t index, int thread)
 {
-    (void)thread;
     PassCtx *pc = vctx;
     if (pc->learn_job) {
         if (index == 0) {
@@ -1331,7 +1406,7 @@ static void pass_job(void *vctx, uint64_t index, int thread)
         }
         index--;
     }
-    render_tile(pc, index);
+    render_tile(pc, index, thread);
 }
 
 /* The noise a path may add to each pixel, for the learned roulette:
@@ -1439,14 +1514,20 @@ void sg_renderer_pass(SgRenderer *r)
         estimate_deviations(r);
     PassCtx pc = {r, (r->opt.width + TILE - 1) / TILE,
                   mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1), r->spp == 0,
-                  learn_stride(r), 0, r->learner != NULL};
+                  learn_stride(r), 0, r->learner != NULL, false};
     pc.learn_below = UINT64_MAX / pc.learn_stride;
+    pc.record = r->pgl && r->spp < SG_OPENPGL_TRAINING_PASSES;
     int tiles_y = (r->opt.height + TILE - 1) / TILE;
     sg_thread_pool_run(r->pool, (uint64_t)pc.tiles_x * tiles_y + pc.learn_job, pass_job, &pc);
     /* Each pass's records are learned during the next and used from the
      * one after: the update does not hold up the threads. */
     if (r->learner)
         sg_mixture_end_pass(r->learner);
+    if (pc.record) { /* the next pass samples what this one taught */
+        double t0 = sg_seconds();
+        sg_pgl_field_update(r->pgl);
+        r->pgl_seconds += sg_seconds() - t0;
+    }
     r->spp++;
 }
 
@@ -1474,6 +1555,9 @@ double sg_renderer_branches_per_path(const SgRenderer *r)
     double paths = (double)r->opt.width * r->opt.height * r->spp;
     return paths > 0.0 ? (double)atomic_load(&((SgRenderer *)r)->branches) / paths : 0.0;
 }
+
+int sg_renderer_training_passes(const SgRenderer *r) { return r->pgl ? sg_pgl_field_updates(r->pgl) : 0; }
+double sg_renderer_training_seconds(const SgRenderer *r) { return r->pgl_seconds; }
 
 double sg_renderer_lobe_share(const SgRenderer *r)
 {

@@ -20,6 +20,8 @@ typedef enum SgSampling {
     SG_SAMPLING_BSDF,     /* BSDF sampling + next-event estimation with MIS */
     SG_SAMPLING_SKELETON, /* the paper's rule (section 3.4), biased */
     SG_SAMPLING_GUIDED,   /* one-sample mixture of BSDF and lobe, unbiased */
+    SG_SAMPLING_OPENPGL,  /* the peer: Open PGL's learned field mixed with the BSDF, as Cycles does */
+    SG_SAMPLING_COUNT
 } SgSampling;
 
 const char *sg_sampling_name(SgSampling s);
@@ -89,7 +91,8 @@ void sg_render_options_default(SgRenderOptions *o, const SgScene *scene);
 typedef struct SgRenderer SgRenderer;
 
 /* Fails on a scene without triangles or camera, a bad option, a guide
- * missing for a guided mode, or an Embree error. */
+ * missing for a guided mode, openpgl in a build without Open PGL, or an
+ * Embree error. */
 SgRenderer *sg_renderer_create(const SgScene *scene, const SgRenderOptions *o, SgError *err);
 void sg_renderer_free(SgRenderer *r);
 
@@ -111,6 +114,12 @@ double sg_renderer_guided_fraction(const SgRenderer *r);
 /* The share of the diffuse and glossy bounces drawn so far whose direction
  * the guide's lobe drew (the rest: the BSDF's sampler); 0 before any. */
 double sg_renderer_lobe_share(const SgRenderer *r);
+/* openpgl: the passes whose paths trained the field so far (it learns
+ * after each of the first SG_OPENPGL_TRAINING_PASSES), and the seconds
+ * its updates took; 0 in other modes. */
+#define SG_OPENPGL_TRAINING_PASSES 128
+int sg_renderer_training_passes(const SgRenderer *r);
+double sg_renderer_training_seconds(const SgRenderer *r);
 /* Rays traced so far (camera, bounce and shadow rays). */
 uint64_t sg_renderer_rays(const SgRenderer *r);
 /* Branches the learned roulette split off, per camera path, so far. */

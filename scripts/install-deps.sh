@@ -18,6 +18,9 @@ checks=(
   "libopenvdb-tools:/usr/bin/vdb_print"
   "openimageio-tools:/usr/bin/idiff"
 )
+if [ "${SG_WITH_OPENPGL:-0}" = 1 ]; then
+  checks+=("cmake:/usr/bin/cmake" "ninja-build:/usr/bin/ninja")
+fi
 if [ "${SG_WITH_BENCH_TOOLS:-0}" = 1 ]; then
   checks+=("embree-tools:/usr/bin/pathtracer" "python3:/usr/bin/python3" "time:/usr/bin/time" "gnuplot-nox:/usr/bin/gnuplot")
 fi

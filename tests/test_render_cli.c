@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../render/openpgl_guide.h"
 #include "../render/renderer.h"
 #include "image_io.h"
 #include "scene.h"
@@ -176,4 +177,21 @@ Test(render_cli, cornell_box_renders_without_nan)
     free(img);
     sg_renderer_free(r);
     sg_scene_free(s);
+}
+
+/* Without Open PGL, --sampling openpgl says how to get it, in one line,
+ * before reading the scene, and writes nothing. */
+Test(render_cli, openpgl_without_the_peer_says_how_to_build_it)
+{
+    if (sg_pgl_available())
+        cr_skip_test("this build has Open PGL: the message for a build without it cannot show");
+    char cmd[8192], err[4096];
+    const char *dir = sg_test_tmpdir();
+    snprintf(cmd, sizeof cmd, "%s %s/no-such-scene.json --sampling openpgl -o %s/pgl.exr", render_bin(), dir, dir);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 1, "%s", err);
+    cr_assert_eq(sg_test_count_lines(err), 1, "%s", err);
+    cr_assert(strstr(err, "make openpgl") != NULL, "%s", err);
+    char out[4200];
+    snprintf(out, sizeof out, "%s/pgl.exr", dir);
+    cr_assert_not(sg_test_exists(out));
 }

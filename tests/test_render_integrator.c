@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../render/openpgl_guide.h"
 #include "../render/renderer.h"
 #include "support_render.h"
 
@@ -135,8 +136,16 @@ static void hide_the_lights(SgScene *s)
     s->light_count = 1;
 }
 
+static void skip_without_openpgl(void)
+{
+    if (!sg_pgl_available())
+        cr_skip_test("this build has no Open PGL (make openpgl builds it)");
+}
+
 static void furnace_run(const FurnaceCase *fc)
 {
+    if (fc->mode == SG_SAMPLING_OPENPGL)
+        skip_without_openpgl();
     SgScene *s = furnace_scene();
     const double scale = fc->scale;
     const double offset[3] = {3e3 * scale, -1e3 * scale, 7e2 * scale};
@@ -220,6 +229,14 @@ Test(render_integrator, furnace_guided_alpha_half)
 Test(render_integrator, furnace_guided_alpha_quarter_narrow_lobe)
 {
     FurnaceCase fc = {SG_SAMPLING_GUIDED, 1.0, 0.25f, 16, NULL, 0.74, 0.76, 1024};
+    furnace_run(&fc);
+}
+
+/* The peer: Open PGL's field learns during the passes and draws up to
+ * half of the diffuse bounces (Cycles' guiding probability) once trained. */
+Test(render_integrator, furnace_openpgl)
+{
+    FurnaceCase fc = {SG_SAMPLING_OPENPGL, 1.0, SG_ALPHA_LEARNED, 8, NULL, 0.3, 0.5, 128};
     furnace_run(&fc);
 }
 
@@ -535,6 +552,67 @@ Test(render_integrator, guided_agrees_with_bsdf_in_dark_room)
     cr_assert(fabs(b.mean[0] - g.mean[0]) < 3.0 * se, "bsdf %.5f vs guided %.5f, 3 se = %.5f",
               b.mean[0], g.mean[0], 3 * se);
     cr_assert_eq(b.nonfinite + g.nonfinite, 0);
+    sgt_scene_free(s);
+}
+
+Test(render_integrator, openpgl_agrees_with_bsdf_in_dark_room)
+{
+    skip_without_openpgl();
+    SgScene *s = two_rooms();
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.max_depth = 8;
+    o.seed = 1;
+    Stats b = render_scene_stats(s, &o, 64, 0, 0, o.width, o.height);
+    o.sampling = SG_SAMPLING_OPENPGL;
+    o.seed = 2;
+    SgError err = {0};
+    SgRenderer *r = sg_renderer_create(s, &o, &err);
+    cr_assert_not_null(r, "%s", err.message);
+    Stats p = render_stats(r, &o, 64, 0, 0, o.width, o.height);
+    double share = sg_renderer_lobe_share(r);
+    int passes = sg_renderer_training_passes(r);
+    sg_renderer_free(r);
+    double se = sqrt(b.std_error * b.std_error + p.std_error * p.std_error);
+    cr_log_info("two rooms: bsdf %.5f +- %.5f, openpgl %.5f +- %.5f, guide drew %.3f, %d training passes", b.mean[0],
+                b.std_error, p.mean[0], p.std_error, share, passes);
+    cr_assert_eq(passes, 64, "the field learns after every pass: %d", passes);
+    cr_assert(share > 0.2, "the field guides: it drew %.3f of the bounces", share);
+    cr_assert(fabs(b.mean[0] - p.mean[0]) < 3.0 * se, "bsdf %.5f vs openpgl %.5f, 3 se = %.5f", b.mean[0],
+              p.mean[0], 3 * se);
+    cr_assert_eq(b.nonfinite + p.nonfinite, 0);
+    sgt_scene_free(s);
+}
+
+/* The same image for any thread count: openpgl's field is trained
+ * deterministically (its samples sorted) from every pass's paths. */
+Test(render_integrator, openpgl_same_image_for_any_thread_count)
+{
+    skip_without_openpgl();
+    SgScene *s = two_rooms();
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.sampling = SG_SAMPLING_OPENPGL;
+    o.seed = 42;
+    size_t n = (size_t)o.width * o.height * 3;
+    float *img[3];
+    const int threads[3] = {1, 2, 5};
+    for (int k = 0; k < 3; k++) {
+        o.threads = threads[k];
+        SgError err = {0};
+        SgRenderer *r = sg_renderer_create(s, &o, &err);
+        cr_assert_not_null(r, "%s", err.message);
+        for (int p = 0; p < 8; p++)
+            sg_renderer_pass(r);
+        cr_assert_gt(sg_renderer_lobe_share(r), 0.1, "the field guides in this test");
+        img[k] = malloc(n * sizeof(float));
+        sg_renderer_image(r, img[k]);
+        sg_renderer_free(r);
+    }
+    cr_assert(memcmp(img[0], img[1], n * sizeof(float)) == 0, "1 and 2 threads differ");
+    cr_assert(memcmp(img[0], img[2], n * sizeof(float)) == 0, "1 and 5 threads differ");
+    for (int k = 0; k < 3; k++)
+        free(img[k]);
     sgt_scene_free(s);
 }
 
