@@ -17,6 +17,7 @@ checks=(
   "libcriterion-dev:/usr/include/criterion/criterion.h"
   "libopenvdb-tools:/usr/bin/vdb_print"
   "openimageio-tools:/usr/bin/idiff"
+  "fonts-dejavu-core:/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"
 )
 if [ "${SG_WITH_OPENPGL:-0}" = 1 ]; then
   checks+=("cmake:/usr/bin/cmake" "ninja-build:/usr/bin/ninja")
