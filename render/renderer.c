@@ -8,8 +8,10 @@
 #include <string.h>
 
 #include "memory.h"
+#include "camera.h"
 #include "mixture_learning.h"
 #include "openpgl_guide.h"
+#include "pixel_noise.h"
 #include "progress.h"
 #include "rng.h"
 #include "sampling.h"
@@ -92,14 +94,10 @@ struct SgRenderer {
      * past the camera ray's own hit (emission seen directly is not what
      * roulette acts on) and of their squares; and the noise a path may add
      * there, made before each pass (0: unknown). */
-    double *sum_bounced, *sum_bounced_sq;
-    float *pixel_deviation;
-    double *deviation_rows; /* per image row, for the estimate's sums */
+    PixelNoise *noise;
     int tiles_x, tiles_y;
 
-    /* camera in local coordinates */
-    Vec3 cam_pos, cam_forward, cam_right, cam_up;
-    float tan_half_fov, aspect;
+    Camera camera;
 
     int spp;
     double *sum;           /* width * height * 3 */
@@ -315,34 +313,6 @@ static bool setup_cache_guide(SgRenderer *r, const char *path, SgError *err)
     return true;
 }
 
-static void setup_camera(SgRenderer *r, const SgScene *s)
-{
-    const SgCamera *c = &s->camera;
-    double pos[3], at[3];
-    for (int i = 0; i < 3; i++) {
-        pos[i] = c->position[i] - r->centre[i];
-        at[i] = c->look_at[i] - r->centre[i];
-    }
-    r->cam_pos = v3((float)pos[0], (float)pos[1], (float)pos[2]);
-    double f[3] = {at[0] - pos[0], at[1] - pos[1], at[2] - pos[2]};
-    double fl = d3_length(f);
-    Vec3 forward = fl > 0 ? v3((float)(f[0] / fl), (float)(f[1] / fl), (float)(f[2] / fl)) : v3(0, 0, -1);
-    Vec3 up = v3_normalize(v3((float)c->up[0], (float)c->up[1], (float)c->up[2]));
-    Vec3 right = v3_cross(forward, up);
-    if (v3_length(right) < 1e-6f) { /* up parallel to the view: pick any */
-        Vec3 t, b;
-        v3_basis(forward, &t, &b);
-        right = t;
-    }
-    right = v3_normalize(right);
-    r->cam_forward = forward;
-    r->cam_right = right;
-    r->cam_up = v3_cross(right, forward);
-    double fov = c->fov_deg > 0 && c->fov_deg < 180 ? c->fov_deg : 60.0;
-    r->tan_half_fov = (float)tan(fov * M_PI / 360.0);
-    r->aspect = (float)r->opt.width / (float)r->opt.height;
-}
-
 /* The triangles' bounds, local coordinates. */
 static void triangle_bounds(const SgRenderer *r, Vec3 *lo, Vec3 *hi)
 {
@@ -369,12 +339,8 @@ static bool setup_learner(SgRenderer *r, const char *path, SgError *err)
         return sg_fail(err, "%s: %s", path, e.message);
     r->mixture_view = sg_mixture_view(r->learner);
     if (r->opt.roulette == SG_ROULETTE_LEARNED) {
-        size_t pixels = (size_t)r->opt.width * r->opt.height;
-        r->pixel_deviation = calloc(2 * pixels, sizeof *r->pixel_deviation);
-        r->sum_bounced = calloc(pixels, sizeof *r->sum_bounced);
-        r->sum_bounced_sq = calloc(pixels, sizeof *r->sum_bounced_sq);
-        r->deviation_rows = calloc((size_t)r->opt.height, sizeof *r->deviation_rows);
-        if (!r->pixel_deviation || !r->sum_bounced || !r->sum_bounced_sq || !r->deviation_rows)
+        r->noise = pixel_noise_create(r->opt.width, r->opt.height);
+        if (!r->noise)
             return sg_fail(err, "%s: out of memory", path);
     }
     return true;
@@ -492,7 +458,7 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         sg_renderer_free(r);
         return NULL;
     }
-    setup_camera(r, s);
+    camera_init(&r->camera, &s->camera, r->centre, o->width, o->height);
     r->pool = sg_thread_pool_create(o->threads);
     if (o->sampling == SG_SAMPLING_OPENPGL) {
         Vec3 lo, hi;
@@ -557,10 +523,7 @@ void sg_renderer_free(SgRenderer *r)
     free(r->follow_cdf);
     free(r->cache_guide.points);
     sg_mixture_learner_free(r->learner);
-    free(r->pixel_deviation);
-    free(r->sum_bounced);
-    free(r->sum_bounced_sq);
-    free(r->deviation_rows);
+    pixel_noise_free(r->noise);
     free(r->sum);
     free(r->last);
     free(r);
@@ -839,7 +802,7 @@ typedef struct PendingRecord {
  * survives with probability
  *     q = min(1, ROULETTE_GAIN |beta| sqrt(M2(region)) / sigma(pixel)),
  * M2 the region's second moment of what a bounce brings back per unit
- * throughput, sigma the noise the pixel has anyway (estimate_deviations).
+ * throughput, sigma the noise the pixel has anyway (render/pixel_noise.h).
  * Cutting adds variance |beta|^2 M2 (1/q - 1) and saves the rest of the
  * path's cost; this q balances the two against the pixel's variance per
  * cost (the ratio of a whole path's cost to its rest folded into
@@ -884,7 +847,7 @@ static void finish_records(SgRenderer *r, const PendingRecord *pending, int from
 {
     for (int i = from; i < to; i++) {
         const PendingRecord *pr = &pending[i];
-        if (!pr->lobe && !r->pixel_deviation)
+        if (!pr->lobe && !r->noise)
             continue; /* only the learned roulette reads what left a vertex */
         float t = luminance(pr->beta);
         /* the bounce's one-sample estimate: what came after, per unit throughput */
@@ -1356,14 +1319,11 @@ static void render_tile(PassCtx *pc, uint64_t index, int thread)
             SgRng rng;
             sg_rng_seed(&rng, pc->pass_key, pix);
             float jx = sg_rng_float(&rng), jy = sg_rng_float(&rng);
-            float sx = (2.0f * ((float)x + jx) / (float)w - 1.0f) * r->tan_half_fov * r->aspect;
-            float sy = (1.0f - 2.0f * ((float)y + jy) / (float)hgt) * r->tan_half_fov;
-            Vec3 dir = v3_normalize(v3_add(r->cam_forward,
-                                           v3_add(v3_scale(r->cam_right, sx), v3_scale(r->cam_up, sy))));
+            Vec3 dir = camera_ray(&r->camera, x, y, jx, jy);
             int learn_tile = r->learner && learns(pc, pix) ? (int)index : -1;
-            float deviation = r->pixel_deviation ? r->pixel_deviation[pix] : 0.0f;
+            float deviation = r->noise ? pixel_noise_deviation(r->noise, pix) : 0.0f;
             Vec3 seen = v3(0, 0, 0);
-            Vec3 L = trace_path(r, r->cam_pos, dir, &rng, &st, pc->first_pass, learn_tile, deviation, &seen, thread,
+            Vec3 L = trace_path(r, r->camera.pos, dir, &rng, &st, pc->first_pass, learn_tile, deviation, &seen, thread,
                                 pc->record);
             if (!isfinite(L.x) || !isfinite(L.y) || !isfinite(L.z)) {
                 nonfinite++;
@@ -1376,11 +1336,8 @@ static void render_tile(PassCtx *pc, uint64_t index, int thread)
             r->sum[3 * pix] += L.x;
             r->sum[3 * pix + 1] += L.y;
             r->sum[3 * pix + 2] += L.z;
-            if (r->sum_bounced) {
-                double l = luminance(v3_sub(L, seen));
-                r->sum_bounced[pix] += l;
-                r->sum_bounced_sq[pix] += l * l;
-            }
+            if (r->noise)
+                pixel_noise_add(r->noise, pix, luminance(v3_sub(L, seen)));
         }
     atomic_fetch_add(&r->rays, st.rays);
     if (st.backface)
@@ -1409,109 +1366,12 @@ static void pass_job(void *vctx, uint64_t index, int thread)
     render_tile(pc, index, thread);
 }
 
-/* The noise a path may add to each pixel, for the learned roulette:
- * sqrt(V (I^2 + eps)), I the pixel's bounced light (a 5x5 box mean: one
- * pixel's own is too noisy in the first passes), V the image's mean
- * relative variance of one sample, eps (DEVIATION_FLOOR times the image's
- * mean)^2 so that near-black pixels count as relMSE counts them. A share of
- * the image's error per pixel, as efficiency-aware roulette has it (Rath et
- * al. 2022): one pixel's own variance is too noisy to steer by. Made before
- * the pass from the passes before it, so the pass stays unbiased and its
- * image independent of the thread count. */
-#define DEVIATION_RADIUS 2
-#define DEVIATION_FLOOR 0.25
-
-/* One step of estimate_deviations over the image's rows (run in parallel;
- * per-row sums are added in row order after, so the result does not depend
- * on the thread count). */
-typedef struct DeviationStep {
-    SgRenderer *r;
-    int step;      /* 0: horizontal box, 1: vertical box, 2: relative variance, 3: deviation */
-    double eps, relative;
-    double *row_sum;
-} DeviationStep;
-
-static void deviation_row(void *vctx, uint64_t row, int thread)
-{
-    (void)thread;
-    DeviationStep *d = vctx;
-    SgRenderer *r = d->r;
-    const int w = r->opt.width, h = r->opt.height, y = (int)row;
-    const double n = r->spp;
-    const size_t pixels = (size_t)w * h;
-    float *mean = r->pixel_deviation + (size_t)y * w, *rows = r->pixel_deviation + pixels;
-    const double *bounced = r->sum_bounced + (size_t)y * w;
-    double acc = 0.0;
-    switch (d->step) {
-    case 0: /* running sum along the row */
-        for (int x = 0; x < DEVIATION_RADIUS && x < w; x++)
-            acc += bounced[x];
-        for (int x = 0; x < w; x++) {
-            if (x + DEVIATION_RADIUS < w)
-                acc += bounced[x + DEVIATION_RADIUS];
-            if (x - DEVIATION_RADIUS - 1 >= 0)
-                acc -= bounced[x - DEVIATION_RADIUS - 1];
-            int lo = x - DEVIATION_RADIUS < 0 ? 0 : x - DEVIATION_RADIUS;
-            int hi = x + DEVIATION_RADIUS >= w ? w - 1 : x + DEVIATION_RADIUS;
-            rows[(size_t)y * w + x] = (float)(acc / (n * (hi - lo + 1)));
-        }
-        break;
-    case 1: {
-        int lo = y - DEVIATION_RADIUS < 0 ? 0 : y - DEVIATION_RADIUS;
-        int hi = y + DEVIATION_RADIUS >= h ? h - 1 : y + DEVIATION_RADIUS;
-        for (int x = 0; x < w; x++) {
-            float m = 0.0f;
-            for (int j = lo; j <= hi; j++)
-                m += rows[(size_t)j * w + x];
-            m /= (float)(hi - lo + 1);
-            mean[x] = m > 0.0f && isfinite(m) ? m : 0.0f;
-            acc += mean[x];
-        }
-        break;
-    }
-    case 2:
-        for (int x = 0; x < w; x++) {
-            double m = bounced[x] / n;
-            double var = (r->sum_bounced_sq[(size_t)y * w + x] - n * m * m) / (n - 1.0);
-            acc += (var > 0.0 ? var : 0.0) / ((double)mean[x] * mean[x] + d->eps);
-        }
-        break;
-    default:
-        for (int x = 0; x < w; x++)
-            mean[x] = (float)sqrt(d->relative * ((double)mean[x] * mean[x] + d->eps));
-    }
-    d->row_sum[y] = acc;
-}
-
-static double deviation_step(DeviationStep *d, int step)
-{
-    d->step = step;
-    int h = d->r->opt.height;
-    sg_thread_pool_run(d->r->pool, (uint64_t)h, deviation_row, d);
-    double total = 0.0;
-    for (int y = 0; y < h; y++)
-        total += d->row_sum[y];
-    return total;
-}
-
-static void estimate_deviations(SgRenderer *r)
-{
-    const double pixels = (double)r->opt.width * r->opt.height;
-    DeviationStep d = {r, 0, 0.0, 0.0, r->deviation_rows};
-    deviation_step(&d, 0);
-    double image_mean = deviation_step(&d, 1) / pixels;
-    d.eps = DEVIATION_FLOOR * image_mean * DEVIATION_FLOOR * image_mean;
-    double relative = deviation_step(&d, 2);
-    d.relative = d.eps > 0.0 && isfinite(relative) ? relative / pixels : 0.0;
-    deviation_step(&d, 3);
-}
-
 void sg_renderer_pass(SgRenderer *r)
 {
     /* every pass at first, then at powers of two and every 16th: the
      * pixels' noise settles, and the passes wait for this */
-    if (r->pixel_deviation && r->spp > 1 && (r->spp < 8 || !(r->spp & (r->spp - 1)) || r->spp % 16 == 0))
-        estimate_deviations(r);
+    if (r->noise && r->spp > 1 && (r->spp < 8 || !(r->spp & (r->spp - 1)) || r->spp % 16 == 0))
+        pixel_noise_estimate(r->noise, r->spp, r->pool);
     PassCtx pc = {r, (r->opt.width + TILE - 1) / TILE,
                   mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1), r->spp == 0,
                   learn_stride(r), 0, r->learner != NULL, false};
