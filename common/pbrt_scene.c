@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "color.h"
 #include "image_io.h"
 #include "ply_mesh.h"
 #include "scene_builder.h"
@@ -771,7 +772,7 @@ static void blackbody_rgb(double kelvin, float out[3])
                      0.0557 * xyz[0] - 0.2040 * xyz[1] + 1.0570 * xyz[2]};
     for (int a = 0; a < 3; a++)
         rgb[a] = fmax(rgb[a], 0); /* outside the sRGB gamut: clip */
-    double y = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+    double y = sg_luminance(rgb[0], rgb[1], rgb[2]);
     for (int a = 0; a < 3; a++)
         out[a] = y > 0 ? (float)(rgb[a] / y) : 1.0f;
 }
@@ -905,11 +906,6 @@ static bool has_suffix(const char *s, const char *suffix)
     return true;
 }
 
-static double srgb_to_linear(double c)
-{
-    return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
-}
-
 /* The mean linear colour of an image file (cached by path). gamma: 0 for
  * linear data, -1 for sRGB, else the exponent. False if it cannot be read. */
 static bool image_average(Parser *p, const char *path, double gamma, float out[3])
@@ -931,7 +927,7 @@ static bool image_average(Parser *p, const char *path, double gamma, float out[3
             for (int c = 0; c < 3; c++) {
                 double v = rgb[3 * i + c];
                 v = !isfinite(v) || v < 0 ? 0 : v;
-                sum[c] += gamma == 0 ? v : gamma < 0 ? srgb_to_linear(v) : pow(v, gamma);
+                sum[c] += gamma == 0 ? v : gamma < 0 ? sg_srgb_to_linear(v) : pow(v, gamma);
             }
         for (int c = 0; c < 3; c++)
             out[c] = (float)(sum[c] / (double)(n ? n : 1));

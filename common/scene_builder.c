@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "color.h"
 #include "hash.h"
 #include "vecmath.h"
 
@@ -277,7 +278,7 @@ static bool group_lights(SgSceneBuilder *b, SgError *err)
             l->position[a] /= l->area;
             l->normal[a] = len > 0 ? l->normal[a] / len : 0;
         }
-        double lum = 0.2126 * l->radiance[0] + 0.7152 * l->radiance[1] + 0.0722 * l->radiance[2];
+        double lum = sg_luminance(l->radiance[0], l->radiance[1], l->radiance[2]);
         l->power = M_PI * l->area * lum;
     }
     free(parent);
