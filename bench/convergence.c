@@ -373,7 +373,8 @@ done:
 /* ---- strip --------------------------------------------------------------- */
 
 /* The square of side s where the relative squared error of x against ref
- * sums highest (a summed-area table, so every position is O(1)). */
+ * sums highest (a summed-area table, so every position is O(1)); the
+ * per-value error is relMSE's term (error_metrics.h) with the eps given. */
 static bool worst_square(const float *x, const float *ref, int w, int h, int s, double eps, int *bx,
                          int *by, SgError *err)
 {
@@ -387,7 +388,7 @@ static bool worst_square(const float *x, const float *ref, int w, int h, int s, 
             for (int c = 0; c < 3; c++) {
                 size_t i = ((size_t)y * w + xx) * 3 + c;
                 double d = (double)x[i] - ref[i];
-                e += d * d / ((double)ref[i] * ref[i] + eps);
+                e += sg_relmse_term(d, ref[i], eps);
             }
             sat[(y + 1) * stride + xx + 1] =
                 e + sat[y * stride + xx + 1] + sat[(y + 1) * stride + xx] - sat[y * stride + xx];

@@ -15,7 +15,9 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "color.h"
 #include "error.h"
+#include "error_metrics.h"
 
 enum { SG_METRIC_RELMSE, SG_METRIC_MSE8, SG_METRIC_COUNT };
 
@@ -86,10 +88,6 @@ void sg_reach_format(SgReach r, char *buf, size_t size);
  * "< 3.00" when a time is a bound, "0 (never)" when only the mode never
  * gets there, "-" when it cannot be said. */
 void sg_ratio_format(SgReach base, SgReach mode, char *buf, size_t size);
-
-/* The 8-bit value of render's PNG and of its mse8: linear * scale through
- * the sRGB curve, clamped, rounded. */
-int sg_srgb_byte(float linear);
 
 /* A reference made of two independent halves a and b (same spp) is
  * r = (a + b) / 2; (a - b)^2 / 4 estimates its squared error per value
@@ -461,24 +459,15 @@ void sg_ratio_format(SgReach base, SgReach mode, char *buf, size_t size)
     }
 }
 
-int sg_srgb_byte(float linear)
-{
-    if (!(linear > 0.0f))
-        return 0;
-    float s = linear <= 0.0031308f ? 12.92f * linear : 1.055f * powf(linear, 1.0f / 2.4f) - 0.055f;
-    float v = s * 255.0f + 0.5f;
-    return v >= 255.0f ? 255 : (int)v;
-}
-
 void sg_reference_from_halves(const float *a, const float *b, size_t n, float scale, float *ref,
                               double *relmse, double *mse8)
 {
     double rs = 0, s8 = 0;
-    double eps = 0.01 / ((double)scale * scale); /* render's relMSE: on the exposed image */
+    double eps = sg_relmse_epsilon(scale); /* render's relMSE: on the exposed image */
     for (size_t i = 0; i < n; i++) {
         double r = 0.5 * ((double)a[i] + b[i]);
         double half = 0.5 * ((double)a[i] - b[i]);
-        rs += half * half / (r * r + eps);
+        rs += sg_relmse_term(half, r, eps);
         double d8 = sg_srgb_byte(a[i] * scale) - sg_srgb_byte(b[i] * scale);
         s8 += 0.25 * d8 * d8;
         if (ref)

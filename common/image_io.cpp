@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "color.h"
 #include "output_file.h"
 
 using namespace OIIO;
@@ -79,16 +80,6 @@ bool check_size(const char *path, int width, int height, const float *rgb, SgErr
     return true;
 }
 
-unsigned char srgb_byte(float linear)
-{
-    if (!(linear > 0.0f)) // also maps NaN to 0
-        return 0;
-    float s = linear <= 0.0031308f ? 12.92f * linear
-                                   : 1.055f * std::pow(linear, 1.0f / 2.4f) - 0.055f;
-    float v = s * 255.0f + 0.5f;
-    return v >= 255.0f ? 255 : (unsigned char)v;
-}
-
 } // namespace
 
 extern "C" bool sg_image_write_exr(const char *path, int width, int height, const float *rgb,
@@ -113,7 +104,7 @@ extern "C" bool sg_image_write_png(const char *path, int width, int height, cons
     size_t n = (size_t)width * (size_t)height * 3;
     std::vector<unsigned char> bytes(n);
     for (size_t i = 0; i < n; i++)
-        bytes[i] = srgb_byte(rgb[i] * scale);
+        bytes[i] = (unsigned char)sg_srgb_byte(rgb[i] * scale);
     ImageSpec spec(width, height, 3, TypeDesc::UINT8);
     spec.attribute("oiio:ColorSpace", "sRGB");
     return write_through_temp(path, "png", spec, bytes.data(), TypeDesc::UINT8, err);

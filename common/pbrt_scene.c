@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "color.h"
 #include "image_io.h"
 #include "ply_mesh.h"
 #include "scene_builder.h"
@@ -54,10 +55,8 @@ typedef struct Param {
     const Source *source;
 } Param;
 
-typedef double Mat4[4][4];
-
 typedef struct GraphicsState {
-    Mat4 ctm;
+    SgTransform ctm;
     bool reverse_orientation;
     uint32_t material; /* index into Parser.materials */
     bool area_light;
@@ -95,7 +94,7 @@ typedef struct Texture {
 
 typedef struct NamedTransform {
     char *name;
-    Mat4 m;
+    SgTransform m;
 } NamedTransform;
 
 /* A shape of an object definition, in world space at its definition. */
@@ -168,7 +167,7 @@ typedef struct Parser {
     Token defining_begin;
 
     bool has_camera;
-    Mat4 camera_from_world;
+    SgTransform camera_from_world;
     double fov;
     int film_width, film_height;
 
@@ -771,7 +770,7 @@ static void blackbody_rgb(double kelvin, float out[3])
                      0.0557 * xyz[0] - 0.2040 * xyz[1] + 1.0570 * xyz[2]};
     for (int a = 0; a < 3; a++)
         rgb[a] = fmax(rgb[a], 0); /* outside the sRGB gamut: clip */
-    double y = 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+    double y = sg_luminance(rgb[0], rgb[1], rgb[2]);
     for (int a = 0; a < 3; a++)
         out[a] = y > 0 ? (float)(rgb[a] / y) : 1.0f;
 }
@@ -905,11 +904,6 @@ static bool has_suffix(const char *s, const char *suffix)
     return true;
 }
 
-static double srgb_to_linear(double c)
-{
-    return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
-}
-
 /* The mean linear colour of an image file (cached by path). gamma: 0 for
  * linear data, -1 for sRGB, else the exponent. False if it cannot be read. */
 static bool image_average(Parser *p, const char *path, double gamma, float out[3])
@@ -931,7 +925,7 @@ static bool image_average(Parser *p, const char *path, double gamma, float out[3
             for (int c = 0; c < 3; c++) {
                 double v = rgb[3 * i + c];
                 v = !isfinite(v) || v < 0 ? 0 : v;
-                sum[c] += gamma == 0 ? v : gamma < 0 ? srgb_to_linear(v) : pow(v, gamma);
+                sum[c] += gamma == 0 ? v : gamma < 0 ? sg_srgb_to_linear(v) : pow(v, gamma);
             }
         for (int c = 0; c < 3; c++)
             out[c] = (float)(sum[c] / (double)(n ? n : 1));
@@ -1418,66 +1412,11 @@ static bool area_light_statement(Parser *p, const Token *statement)
 
 /* ---- transforms --------------------------------------------------------- */
 
-static void mat_identity(Mat4 m)
-{
-    memset(m, 0, sizeof(Mat4));
-    m[0][0] = m[1][1] = m[2][2] = m[3][3] = 1;
-}
-
-/* a = a * b */
-static void mat_post_multiply(Mat4 a, Mat4 b)
-{
-    Mat4 r;
-    for (int i = 0; i < 4; i++)
-        for (int j = 0; j < 4; j++) {
-            double v = 0;
-            for (int k = 0; k < 4; k++)
-                v += a[i][k] * b[k][j];
-            r[i][j] = v;
-        }
-    memcpy(a, r, sizeof r);
-}
-
-/* Gauss-Jordan with partial pivoting; false if singular. */
-static bool mat_inverse(Mat4 m, Mat4 out)
-{
-    double a[4][8];
-    for (int i = 0; i < 4; i++)
-        for (int j = 0; j < 8; j++)
-            a[i][j] = j < 4 ? m[i][j] : (j - 4 == i);
-    for (int c = 0; c < 4; c++) {
-        int pivot = c;
-        for (int r = c + 1; r < 4; r++)
-            if (fabs(a[r][c]) > fabs(a[pivot][c]))
-                pivot = r;
-        if (!(fabs(a[pivot][c]) > 1e-300))
-            return false;
-        for (int j = 0; j < 8; j++) {
-            double t = a[c][j];
-            a[c][j] = a[pivot][j];
-            a[pivot][j] = t;
-        }
-        double inv = 1 / a[c][c];
-        for (int j = 0; j < 8; j++)
-            a[c][j] *= inv;
-        for (int r = 0; r < 4; r++)
-            if (r != c) {
-                double f = a[r][c];
-                for (int j = 0; j < 8; j++)
-                    a[r][j] -= f * a[c][j];
-            }
-    }
-    for (int i = 0; i < 4; i++)
-        for (int j = 0; j < 4; j++)
-            out[i][j] = a[i][j + 4];
-    return true;
-}
-
-static bool finite_matrix(Mat4 m)
+static bool finite_matrix(const SgTransform *m)
 {
     for (int i = 0; i < 4; i++)
         for (int j = 0; j < 4; j++)
-            if (!isfinite(m[i][j]))
+            if (!isfinite(m->m[i][j]))
                 return false;
     return true;
 }
@@ -1485,49 +1424,41 @@ static bool finite_matrix(Mat4 m)
 /* The CTM as an affine transform for shapes. */
 static bool shape_transform(Parser *p, const Token *at, SgTransform *xf)
 {
-    Mat4 *m = &p->state.ctm;
-    double w = (*m)[3][3];
-    if (fabs((*m)[3][0]) > 1e-12 || fabs((*m)[3][1]) > 1e-12 || fabs((*m)[3][2]) > 1e-12 ||
+    const double(*m)[4] = p->state.ctm.m;
+    double w = m[3][3];
+    if (fabs(m[3][0]) > 1e-12 || fabs(m[3][1]) > 1e-12 || fabs(m[3][2]) > 1e-12 ||
         !(fabs(w) > 1e-300))
         return fail_at(p, at, "the current transform is projective: shapes need an affine one");
+    sg_transform_identity(xf);
     for (int r = 0; r < 3; r++)
         for (int c = 0; c < 4; c++)
-            xf->m[r][c] = (*m)[r][c] / w;
+            xf->m[r][c] = m[r][c] / w;
     return true;
 }
 
 static bool transform_statement(Parser *p, const Token *t)
 {
-    Mat4 m;
-    mat_identity(m);
+    SgTransform m;
+    sg_transform_identity(&m);
     if (token_is(t, "Translate")) {
         double v[3];
         if (!need_number(p, t, &v[0]) || !need_number(p, t, &v[1]) || !need_number(p, t, &v[2]))
             return false;
         for (int a = 0; a < 3; a++)
-            m[a][3] = v[a];
+            m.m[a][3] = v[a];
     } else if (token_is(t, "Scale")) {
         double v[3];
         if (!need_number(p, t, &v[0]) || !need_number(p, t, &v[1]) || !need_number(p, t, &v[2]))
             return false;
         for (int a = 0; a < 3; a++)
-            m[a][a] = v[a];
+            m.m[a][a] = v[a];
     } else if (token_is(t, "Rotate")) {
         double v[4];
         for (int i = 0; i < 4; i++)
             if (!need_number(p, t, &v[i]))
                 return false;
-        double len = sqrt(v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
-        if (!(len > 0))
+        if (!sg_transform_rotation(&m, v[0], v + 1))
             return fail_at(p, t, "Rotate: the axis is zero");
-        double x = v[1] / len, y = v[2] / len, z = v[3] / len;
-        double a = v[0] * M_PI / 180, c = cos(a), s = sin(a), C = 1 - c;
-        double r[3][3] = {{x * x * C + c, x * y * C - z * s, x * z * C + y * s},
-                          {y * x * C + z * s, y * y * C + c, y * z * C - x * s},
-                          {z * x * C - y * s, z * y * C + x * s, z * z * C + c}};
-        for (int i = 0; i < 3; i++)
-            for (int j = 0; j < 3; j++)
-                m[i][j] = r[i][j];
     } else if (token_is(t, "LookAt")) {
         double v[9];
         for (int i = 0; i < 9; i++)
@@ -1550,15 +1481,15 @@ static bool transform_statement(Parser *p, const Token *t)
         for (int a = 0; a < 3; a++)
             right[a] /= rl;
         d3_cross(dir, right, new_up);
-        Mat4 world_from_camera;
-        mat_identity(world_from_camera);
+        SgTransform world_from_camera;
+        sg_transform_identity(&world_from_camera);
         for (int a = 0; a < 3; a++) {
-            world_from_camera[a][0] = right[a];
-            world_from_camera[a][1] = new_up[a];
-            world_from_camera[a][2] = dir[a];
-            world_from_camera[a][3] = pos[a];
+            world_from_camera.m[a][0] = right[a];
+            world_from_camera.m[a][1] = new_up[a];
+            world_from_camera.m[a][2] = dir[a];
+            world_from_camera.m[a][3] = pos[a];
         }
-        if (!mat_inverse(world_from_camera, m))
+        if (!sg_transform_inverse(&world_from_camera, &m))
             return fail_at(p, t, "LookAt: singular view");
     } else { /* Transform, ConcatTransform: 16 numbers, column by column */
         double v[16];
@@ -1566,15 +1497,15 @@ static bool transform_statement(Parser *p, const Token *t)
             return false;
         for (int i = 0; i < 4; i++)
             for (int j = 0; j < 4; j++)
-                m[i][j] = v[4 * j + i];
+                m.m[i][j] = v[4 * j + i];
         if (token_is(t, "Transform")) {
-            memcpy(p->state.ctm, m, sizeof m);
+            p->state.ctm = m;
             return true;
         }
     }
-    if (!finite_matrix(m))
+    if (!finite_matrix(&m))
         return fail_at(p, t, "%.*s: non-finite numbers", (int)t->len, t->s);
-    mat_post_multiply(p->state.ctm, m);
+    sg_transform_multiply(&p->state.ctm, &m, &p->state.ctm);
     return true;
 }
 
@@ -1586,7 +1517,7 @@ static NamedTransform *find_coordinate_system(Parser *p, const Token *name)
     return NULL;
 }
 
-static bool set_coordinate_system(Parser *p, const Token *name, Mat4 m)
+static bool set_coordinate_system(Parser *p, const Token *name, const SgTransform *m)
 {
     NamedTransform *n = find_coordinate_system(p, name);
     if (!n) {
@@ -1598,7 +1529,7 @@ static bool set_coordinate_system(Parser *p, const Token *name, Mat4 m)
             return sg_fail(p->err, "%s: out of memory", p->core.path);
         p->coordinate_system_count++;
     }
-    memcpy(n->m, m, sizeof(Mat4));
+    n->m = *m;
     return true;
 }
 
@@ -1621,7 +1552,7 @@ static bool pop_state(Parser *p, const Token *t, bool transform_only)
                        transform_only ? "TransformBegin" : "AttributeBegin");
     GraphicsState *s = &p->saved[--p->saved_count].state;
     if (transform_only)
-        memcpy(p->state.ctm, s->ctm, sizeof s->ctm);
+        p->state.ctm = s->ctm;
     else
         p->state = *s;
     return true;
@@ -1656,13 +1587,6 @@ static bool emit_mesh(Parser *p, const Token *at, const char *what, const double
     if (emissive) {
         double det = sg_transform_determinant(&xf);
         bool flip_all = p->state.reverse_orientation != (det < 0);
-        /* Normals transform by the cofactor matrix (inverse transpose * det). */
-        double cof[3][3];
-        for (int r = 0; r < 3; r++)
-            for (int c = 0; c < 3; c++) {
-                int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-                cof[r][c] = xf.m[r1][c1] * xf.m[r2][c2] - xf.m[r1][c2] * xf.m[r2][c1];
-            }
         for (uint32_t t = 0; t < triangle_count; t++) {
             uint32_t *idx = indices + 3 * (size_t)t;
             bool flip = flip_all;
@@ -1676,11 +1600,7 @@ static bool emit_mesh(Parser *p, const Token *at, const char *what, const double
                 d3_sub(wp[1], wp[0], e1);
                 d3_sub(wp[2], wp[0], e2);
                 d3_cross(e1, e2, n);
-                for (int r = 0; r < 3; r++)
-                    nw[r] = cof[r][0] * ns[0] + cof[r][1] * ns[1] + cof[r][2] * ns[2];
-                if (det < 0)
-                    for (int a = 0; a < 3; a++)
-                        nw[a] = -nw[a];
+                sg_transform_normal(&xf, ns, nw);
                 if (d3_length(nw) > 0) /* else: the winding decides */
                     flip = d3_dot(n, nw) < 0;
             }
@@ -1917,14 +1837,14 @@ static bool camera_statement(Parser *p, const Token *statement)
         warn_at(p, statement, "depth of field (lensradius) is ignored: pinhole camera");
     if (find_param(p, "screenwindow") || find_param(p, "frameaspectratio"))
         warn_at(p, statement, "Camera screenwindow/frameaspectratio are ignored");
-    memcpy(p->camera_from_world, p->state.ctm, sizeof(Mat4));
-    Mat4 world_from_camera;
-    if (!mat_inverse(p->camera_from_world, world_from_camera))
+    p->camera_from_world = p->state.ctm;
+    SgTransform world_from_camera;
+    if (!sg_transform_inverse(&p->camera_from_world, &world_from_camera))
         return fail_at(p, statement, "Camera: the camera transform is singular");
     p->has_camera = true;
     p->fov = fov;
     Token camera_name = {.s = "camera", .len = 6, .quoted = true};
-    return set_coordinate_system(p, &camera_name, world_from_camera);
+    return set_coordinate_system(p, &camera_name, &world_from_camera);
 }
 
 static bool film_statement(Parser *p, const Token *statement)
@@ -1979,7 +1899,7 @@ static bool statement(Parser *p, const Token *t)
         token_is(t, "LookAt") || token_is(t, "Transform") || token_is(t, "ConcatTransform"))
         return transform_statement(p, t);
     if (token_is(t, "Identity")) {
-        mat_identity(p->state.ctm);
+        sg_transform_identity(&p->state.ctm);
         return true;
     }
     if (token_is(t, "CoordinateSystem") || token_is(t, "CoordSysTransform")) {
@@ -1987,12 +1907,12 @@ static bool statement(Parser *p, const Token *t)
         if (!need_string(p, t, &name))
             return false;
         if (token_is(t, "CoordinateSystem"))
-            return set_coordinate_system(p, &name, p->state.ctm);
+            return set_coordinate_system(p, &name, &p->state.ctm);
         NamedTransform *n = find_coordinate_system(p, &name);
         if (!n)
             return fail_at(p, &name, "CoordSysTransform \"%.*s\": no such coordinate system",
                            (int)name.len, name.s);
-        memcpy(p->state.ctm, n->m, sizeof(Mat4));
+        p->state.ctm = n->m;
         return true;
     }
     if (token_is(t, "ReverseOrientation")) {
@@ -2003,9 +1923,9 @@ static bool statement(Parser *p, const Token *t)
         if (p->in_world)
             return fail_at(p, t, "WorldBegin twice");
         p->in_world = true;
-        mat_identity(p->state.ctm);
+        sg_transform_identity(&p->state.ctm);
         Token world = {.s = "world", .len = 5, .quoted = true};
-        return set_coordinate_system(p, &world, p->state.ctm);
+        return set_coordinate_system(p, &world, &p->state.ctm);
     }
     if (token_is(t, "WorldEnd")) /* pbrt-v3 */
         return true;
@@ -2119,23 +2039,23 @@ static bool finish_camera(Parser *p)
     SgScene *s = p->core.scene;
     s->camera.width = p->film_width;
     s->camera.height = p->film_height;
-    Mat4 w;
+    SgTransform w;
     if (!p->has_camera) { /* pbrt's default: at the origin looking down +z */
-        mat_identity(p->camera_from_world);
+        sg_transform_identity(&p->camera_from_world);
         p->fov = 90;
     }
-    if (!mat_inverse(p->camera_from_world, w))
+    if (!sg_transform_inverse(&p->camera_from_world, &w))
         return sg_fail(p->err, "%s: the camera transform is singular", p->core.path);
     double pos[4], dir[3], up[3], right[3];
     for (int r = 0; r < 4; r++)
-        pos[r] = w[r][3];
+        pos[r] = w.m[r][3];
     if (!(fabs(pos[3]) > 1e-300))
         return sg_fail(p->err, "%s: the camera transform is projective", p->core.path);
     for (int a = 0; a < 3; a++) {
         pos[a] /= pos[3];
-        right[a] = w[a][0];
-        up[a] = w[a][1];
-        dir[a] = w[a][2];
+        right[a] = w.m[a][0];
+        up[a] = w.m[a][1];
+        dir[a] = w.m[a][2];
     }
     double dl = d3_length(dir), ul = d3_length(up);
     if (!(dl > 0 && ul > 0))
@@ -2216,7 +2136,7 @@ SgScene *sg_pbrt_scene_load(const char *path, SgError *err)
     p.film_width = 1280; /* pbrt's defaults */
     p.film_height = 720;
     s->render.max_depth = 5;
-    mat_identity(p.state.ctm);
+    sg_transform_identity(&p.state.ctm);
     PbrtMaterial fallback; /* pbrt's default: diffuse 0.5 */
     memset(&fallback, 0, sizeof fallback);
     sg_material_default(&fallback.material, "default");

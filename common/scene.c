@@ -305,17 +305,8 @@ static bool parse_transform(const char *path, const cJSON *obj, const char *owne
                                owner);
             v[i] = x->valuedouble;
         }
-        double len = sqrt(v[1] * v[1] + v[2] * v[2] + v[3] * v[3]);
-        if (len == 0)
+        if (!sg_transform_rotation(&rot, v[0], v + 1))
             return sg_fail(err, "%s: %s.transform.rotate axis is zero", path, owner);
-        double x = v[1] / len, y = v[2] / len, z = v[3] / len;
-        double a = v[0] * M_PI / 180, c = cos(a), sn = sin(a), C = 1 - c;
-        double r[3][3] = {{x * x * C + c, x * y * C - z * sn, x * z * C + y * sn},
-                          {y * x * C + z * sn, y * y * C + c, y * z * C - x * sn},
-                          {z * x * C - y * sn, z * y * C + x * sn, z * z * C + c}};
-        for (int i = 0; i < 3; i++)
-            for (int j = 0; j < 3; j++)
-                rot.m[i][j] = r[i][j];
     }
     double translate[3];
     bool has_translate;
@@ -325,8 +316,8 @@ static bool parse_transform(const char *path, const cJSON *obj, const char *owne
         for (int a = 0; a < 3; a++)
             tr.m[a][3] = translate[a];
     SgTransform rs;
-    sg_transform_compose(&rot, &s, &rs);
-    sg_transform_compose(&tr, &rs, t);
+    sg_transform_multiply(&rot, &s, &rs);
+    sg_transform_multiply(&tr, &rs, t);
     return true;
 }
 

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "color.h"
 #include "hash.h"
 #include "vecmath.h"
 
@@ -75,41 +76,6 @@ bool sg_builder_add_material(SgSceneBuilder *b, const SgMaterial *m, uint32_t *i
     s->materials[s->material_count] = *m;
     *id = s->material_count++;
     return true;
-}
-
-void sg_transform_identity(SgTransform *t)
-{
-    memset(t, 0, sizeof *t);
-    t->m[0][0] = t->m[1][1] = t->m[2][2] = 1;
-}
-
-void sg_transform_point(const SgTransform *t, const double p[3], double out[3])
-{
-    for (int r = 0; r < 3; r++)
-        out[r] = t->m[r][0] * p[0] + t->m[r][1] * p[1] + t->m[r][2] * p[2] + t->m[r][3];
-}
-
-/* out = a * b (apply b first). */
-void sg_transform_compose(const SgTransform *a, const SgTransform *b, SgTransform *out)
-{
-    SgTransform r;
-    for (int i = 0; i < 3; i++) {
-        for (int j = 0; j < 4; j++) {
-            double v = (j == 3) ? a->m[i][3] : 0;
-            for (int k = 0; k < 3; k++)
-                v += a->m[i][k] * b->m[k][j];
-            r.m[i][j] = v;
-        }
-    }
-    *out = r;
-}
-
-double sg_transform_determinant(const SgTransform *t)
-{
-    const double(*a)[4] = t->m;
-    return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
-           a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
-           a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
 }
 
 static bool is_degenerate(const double *a, const double *b, const double *c)
@@ -277,7 +243,7 @@ static bool group_lights(SgSceneBuilder *b, SgError *err)
             l->position[a] /= l->area;
             l->normal[a] = len > 0 ? l->normal[a] / len : 0;
         }
-        double lum = 0.2126 * l->radiance[0] + 0.7152 * l->radiance[1] + 0.0722 * l->radiance[2];
+        double lum = sg_luminance(l->radiance[0], l->radiance[1], l->radiance[2]);
         l->power = M_PI * l->area * lum;
     }
     free(parent);

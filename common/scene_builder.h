@@ -10,18 +10,7 @@
 
 #include "error.h"
 #include "scene.h"
-
-/* Row-major affine transform. */
-typedef struct SgTransform {
-    double m[3][4];
-} SgTransform;
-
-void sg_transform_identity(SgTransform *t);
-void sg_transform_point(const SgTransform *t, const double p[3], double out[3]);
-/* out = a * b (b is applied first); out may alias a or b. */
-void sg_transform_compose(const SgTransform *a, const SgTransform *b, SgTransform *out);
-/* Determinant of the linear part: negative when the transform mirrors. */
-double sg_transform_determinant(const SgTransform *t);
+#include "transform.h"
 
 typedef struct SgSceneBuilder {
     SgScene *scene;

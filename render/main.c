@@ -8,7 +8,9 @@
 
 #include "cache_guide.h"
 #include "cli.h"
+#include "color.h"
 #include "error.h"
+#include "error_metrics.h"
 #include "image_io.h"
 #include "openpgl_guide.h"
 #include "output_file.h"
@@ -177,30 +179,18 @@ typedef struct ErrorLog {
     size_t values;
 } ErrorLog;
 
-/* The 8-bit value of the PNG (exposure, sRGB curve, clamp, round), for the
- * paper's MSE on tone-mapped images ("MSE 100" ~ 28 dB PSNR). */
-static int error_srgb_byte(float linear)
-{
-    if (!(linear > 0.0f))
-        return 0;
-    float s = linear <= 0.0031308f ? 12.92f * linear : 1.055f * powf(linear, 1.0f / 2.4f) - 0.055f;
-    float v = s * 255.0f + 0.5f;
-    return v >= 255.0f ? 255 : (int)v;
-}
-
 static void error_metrics(const float *x, const float *ref, size_t n, float scale, double *mse,
                           double *relmse, double *mse8)
 {
-    /* relMSE's 0.01 keeps black pixels finite; it is taken on the image as
-     * exposed (x 2^exposure), so that a dark scene shown at +6 stops is
-     * measured relatively too, not as 100x its plain MSE */
-    double eps = 0.01 / ((double)scale * scale);
+    /* relMSE on the image as exposed (error_metrics.h); mse8 on the PNG's
+     * bytes, the paper's MSE on tone-mapped images ("MSE 100" ~ 28 dB PSNR) */
+    double eps = sg_relmse_epsilon(scale);
     double s = 0.0, rs = 0.0, s8 = 0.0;
     for (size_t i = 0; i < n; i++) {
         double d = (double)x[i] - ref[i];
         s += d * d;
-        rs += d * d / ((double)ref[i] * ref[i] + eps);
-        double d8 = error_srgb_byte(x[i] * scale) - error_srgb_byte(ref[i] * scale);
+        rs += sg_relmse_term(d, ref[i], eps);
+        double d8 = sg_srgb_byte(x[i] * scale) - sg_srgb_byte(ref[i] * scale);
         s8 += d8 * d8;
     }
     *mse = s / n;

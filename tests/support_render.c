@@ -4,6 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "color.h"
+
 SgScene *sgt_scene_new(void)
 {
     SgScene *s = calloc(1, sizeof *s);
@@ -142,8 +144,7 @@ void sgt_finish(SgScene *s)
             L->radiance[i] = m->emission[i];
         }
         L->area = area;
-        L->power = M_PI * area *
-                   (0.2126 * m->emission[0] + 0.7152 * m->emission[1] + 0.0722 * m->emission[2]);
+        L->power = M_PI * area * sg_luminance(m->emission[0], m->emission[1], m->emission[2]);
         s->light_count++;
     }
 }

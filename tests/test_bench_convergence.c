@@ -195,7 +195,7 @@ Test(bench_convergence, reference_error_from_two_halves_matches_its_true_error)
     for (size_t i = 0; i < n; i++) {
         cr_assert_float_eq(ref[i], 0.5f * (a[i] + b[i]), 1e-6);
         double d = (double)ref[i] - truth[i];
-        true_rel += d * d / ((double)ref[i] * ref[i] + 0.01) / (double)n;
+        true_rel += sg_relmse_term(d, ref[i], sg_relmse_epsilon(1.0f)) / (double)n;
         double d8 = sg_srgb_byte(ref[i]) - sg_srgb_byte(truth[i]);
         true8 += d8 * d8 / (double)n;
     }

@@ -10,6 +10,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "color.h"
 #include "image_io.h"
 #include "scene.h"
 #include "support_files.h"
@@ -485,10 +486,7 @@ Test(pbrt_lights, radiance_scale_and_emitting_side)
     sg_scene_free(s);
 }
 
-static double rgb_luminance(const float c[3])
-{
-    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
-}
+static double rgb_luminance(const float c[3]) { return sg_luminance(c[0], c[1], c[2]); }
 
 Test(pbrt_lights, blackbody_has_luminance_one_and_two_sided_warns)
 {
