@@ -9,6 +9,8 @@
 
 #include "memory.h"
 #include "camera.h"
+#include "lights.h"
+#include "material.h"
 #include "mixture_learning.h"
 #include "openpgl_guide.h"
 #include "pixel_noise.h"
@@ -20,11 +22,6 @@
 
 #define TILE 16
 
-typedef struct LightTable {
-    double pick_pdf;      /* probability that NEE picks this light */
-    float inv_area;       /* 1 / area, in local (float) coordinates */
-    uint32_t first, count; /* its triangles in r->light_tris / r->light_tri_cdf */
-} LightTable;
 
 typedef struct TriInfo {
     Vec3 normal;       /* unit geometric normal (winding order) */
@@ -50,15 +47,6 @@ typedef struct CacheGuide {
     int64_t stride[3]; /* of x, y, z in the decoded table */
 } CacheGuide;
 
-typedef struct Material {
-    SgMaterialType type;
-    Vec3 kd, ks, emission;
-    float exponent, ior;
-    float diffuse_weight; /* probability of sampling the diffuse part */
-    float roughness;      /* for Open PGL: 1 diffuse, sqrt(2 / (p + 2)) a Phong lobe alone */
-    bool emissive;
-    bool black;           /* no scattering at all */
-} Material;
 
 struct SgRenderer {
     SgRenderOptions opt;
@@ -77,12 +65,7 @@ struct SgRenderer {
     uint32_t material_count;
     Material *materials;
 
-    uint32_t light_count;
-    LightTable *lights;
-    double *light_cdf;      /* light_count: by power */
-    uint32_t *light_tris;   /* triangle ids grouped by light */
-    double *light_tri_cdf;  /* per light, cumulative area fractions */
-    double *follow_cdf;     /* guide: cumulative follow probability per light */
+    LightSet lights;
     CacheGuide cache_guide; /* cache_guide.points NULL: the guide function answers */
     /* openpgl: the peer's field, learning while the first passes record */
     SgPglField *pgl;
@@ -157,115 +140,10 @@ bool sg_roulette_parse(const char *name, SgRoulette *r)
     return true;
 }
 
-static float luminance(Vec3 c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 /* ---- setup ---------------------------------------------------------------- */
 
-static void setup_material(Material *m, const SgMaterial *src)
-{
-    memset(m, 0, sizeof *m);
-    m->type = src->type;
-    m->kd = v3(fmaxf(0, src->diffuse[0]), fmaxf(0, src->diffuse[1]), fmaxf(0, src->diffuse[2]));
-    m->ks = v3(fmaxf(0, src->specular[0]), fmaxf(0, src->specular[1]), fmaxf(0, src->specular[2]));
-    m->emission = v3(fmaxf(0, src->emission[0]), fmaxf(0, src->emission[1]),
-                     fmaxf(0, src->emission[2]));
-    m->emissive = v3_max_component(m->emission) > 0.0f;
-    m->exponent = src->exponent > 0 ? fminf(src->exponent, 1e5f) : 1.0f;
-    m->ior = src->ior > 1.0f ? src->ior : 1.5f;
-    if (m->type == SG_MATERIAL_DIFFUSE)
-        m->ks = v3(0, 0, 0);
-    if (m->type == SG_MATERIAL_DIFFUSE || m->type == SG_MATERIAL_GLOSSY) {
-        /* energy conservation: kd + ks <= 1 per channel */
-        float worst = v3_max_component(v3_add(m->kd, m->ks));
-        if (worst > 1.0f) {
-            m->kd = v3_scale(m->kd, 1.0f / worst);
-            m->ks = v3_scale(m->ks, 1.0f / worst);
-        }
-        float ld = luminance(m->kd), ls = luminance(m->ks);
-        m->black = ld + ls <= 0.0f;
-        m->diffuse_weight = m->black ? 1.0f : ld / (ld + ls);
-        if (ls <= 0.0f)
-            m->type = SG_MATERIAL_DIFFUSE;
-        m->roughness = m->diffuse_weight > 0.0f ? 1.0f : sqrtf(2.0f / (m->exponent + 2.0f));
-    } else if (m->type == SG_MATERIAL_MIRROR) {
-        if (v3_max_component(m->ks) <= 0.0f)
-            m->ks = v3(1, 1, 1); /* a mirror given without Ks reflects fully */
-        m->ks = v3(fminf(m->ks.x, 1), fminf(m->ks.y, 1), fminf(m->ks.z, 1));
-    }
-}
 
-static bool setup_lights(SgRenderer *r, const SgScene *s, SgError *err)
-{
-    r->light_count = s->light_count;
-    if (!r->light_count)
-        return true;
-    r->lights = calloc(r->light_count, sizeof *r->lights);
-    r->light_cdf = calloc(r->light_count, sizeof *r->light_cdf);
-    r->follow_cdf = calloc(r->light_count, sizeof *r->follow_cdf);
-    uint32_t total_tris = 0;
-    for (uint32_t l = 0; l < s->light_count; l++)
-        total_tris += s->lights[l].triangle_count;
-    r->light_tris = calloc(total_tris ? total_tris : 1, sizeof *r->light_tris);
-    r->light_tri_cdf = calloc(total_tris ? total_tris : 1, sizeof *r->light_tri_cdf);
-    if (!r->lights || !r->light_cdf || !r->follow_cdf || !r->light_tris || !r->light_tri_cdf)
-        return sg_fail(err, "%s: out of memory for the light table", s->path);
-    double total_power = 0.0;
-    double *power = calloc(r->light_count, sizeof *power);
-    if (!power)
-        return sg_fail(err, "%s: out of memory", s->path);
-    uint32_t k = 0;
-    for (uint32_t l = 0; l < s->light_count; l++) {
-        const SgLight *L = &s->lights[l];
-        LightTable *lt = &r->lights[l];
-        lt->first = k;
-        double area = 0.0;
-        for (uint32_t i = 0; i < L->triangle_count; i++) {
-            uint32_t t = s->light_triangles[L->first_triangle + i];
-            if (t >= r->triangle_count) {
-                free(power);
-                return sg_fail(err, "%s: light %u names triangle %u of %u", s->path, l, t,
-                               r->triangle_count);
-            }
-            const Vec3 *v = r->vertices;
-            const uint32_t *id = r->indices + 3 * t;
-            float a = 0.5f * v3_length(v3_cross(v3_sub(v[id[1]], v[id[0]]), v3_sub(v[id[2]], v[id[0]])));
-            area += a;
-            r->light_tris[k] = t;
-            r->light_tri_cdf[k] = area;
-            k++;
-        }
-        lt->count = k - lt->first;
-        for (uint32_t i = lt->first; i < k; i++)
-            r->light_tri_cdf[i] = area > 0 ? r->light_tri_cdf[i] / area : (double)(i - lt->first + 1) / lt->count;
-        lt->inv_area = area > 0 ? (float)(1.0 / area) : 0.0f;
-        /* power from what the renderer will emit: the material's emission */
-        Vec3 e = v3(0, 0, 0);
-        if (L->triangle_count) {
-            uint32_t t0 = s->light_triangles[L->first_triangle];
-            e = r->materials[r->tris[t0].material].emission;
-        }
-        power[l] = area > 0 ? area * luminance(e) : 0.0;
-        total_power += power[l];
-    }
-    double acc = 0.0;
-    for (uint32_t l = 0; l < r->light_count; l++) {
-        r->lights[l].pick_pdf = total_power > 0 ? power[l] / total_power : 0.0;
-        acc += r->lights[l].pick_pdf;
-        r->light_cdf[l] = acc;
-    }
-    /* guide: which light to follow */
-    const double *w = r->opt.guide.light_weight ? r->opt.guide.light_weight : power;
-    double wsum = 0.0;
-    for (uint32_t l = 0; l < r->light_count; l++)
-        wsum += w[l] > 0 ? w[l] : 0.0;
-    acc = 0.0;
-    for (uint32_t l = 0; l < r->light_count; l++) {
-        acc += wsum > 0 && w[l] > 0 ? w[l] / wsum : 0.0;
-        r->follow_cdf[l] = acc;
-    }
-    free(power);
-    return true;
-}
 
 /* The cache guide's table; a table too large for memory leaves the guide
  * function to answer (same answers, slower). */
@@ -276,9 +154,9 @@ static bool setup_cache_guide(SgRenderer *r, const char *path, SgError *err)
     if (!c || r->opt.sampling == SG_SAMPLING_BSDF)
         return true;
     uint32_t nodes = sg_cache_node_count(c), lights = sg_cache_light_count(c);
-    if (lights != r->light_count)
+    if (lights != r->lights.count)
         return sg_fail(err, "%s: the importance cache has %u lights, the scene %u", path, lights,
-                       r->light_count);
+                       r->lights.count);
     double floats = 3.0 * nodes * lights;
     if (!nodes || !lights || floats * sizeof(float) > 256.0 * 1024 * 1024)
         return true;
@@ -427,7 +305,7 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         return sg_fail(err, "%s: no materials", path), NULL;
     }
     for (uint32_t m = 0; m < s->material_count; m++)
-        setup_material(&r->materials[m], &s->materials[m]);
+        material_init(&r->materials[m], &s->materials[m]);
     for (uint32_t t = 0; t < s->triangle_count; t++) {
         const uint32_t *id = s->indices + 3 * t;
         if (id[0] >= s->vertex_count || id[1] >= s->vertex_count || id[2] >= s->vertex_count ||
@@ -450,7 +328,7 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         r->tris[t].normal = nl > 0 ? v3((float)(n[0] / nl), (float)(n[1] / nl), (float)(n[2] / nl)) : v3(0, 0, 1);
         r->tris[t].normal_bin = (uint8_t)sg_mixture_normal_bin(r->tris[t].normal);
     }
-    if (!setup_lights(r, s, err)) {
+    if (!light_set_init(&r->lights, s, r->vertices, r->materials, r->opt.guide.light_weight, path, err)) {
         sg_renderer_free(r);
         return NULL;
     }
@@ -470,7 +348,7 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
             return sg_fail(err, "%s: --sampling openpgl: %s", path, e.message), NULL;
         }
     }
-    if (o->sampling == SG_SAMPLING_GUIDED && o->alpha == SG_ALPHA_LEARNED && r->light_count &&
+    if (o->sampling == SG_SAMPLING_GUIDED && o->alpha == SG_ALPHA_LEARNED && r->lights.count &&
         !setup_learner(r, path, err)) {
         sg_renderer_free(r);
         return NULL;
@@ -516,11 +394,7 @@ void sg_renderer_free(SgRenderer *r)
     free(r->indices);
     free(r->tris);
     free(r->materials);
-    free(r->lights);
-    free(r->light_cdf);
-    free(r->light_tris);
-    free(r->light_tri_cdf);
-    free(r->follow_cdf);
+    light_set_free(&r->lights);
     free(r->cache_guide.points);
     sg_mixture_learner_free(r->learner);
     pixel_noise_free(r->noise);
@@ -604,32 +478,7 @@ static bool occluded(const SgRenderer *r, Vec3 o, Vec3 d, float tfar)
     return ray.tfar < 0.0f;
 }
 
-static uint32_t pick_cdf(const double *cdf, uint32_t n, double u)
-{
-    uint32_t lo = 0, hi = n - 1;
-    while (lo < hi) {
-        uint32_t mid = (lo + hi) / 2;
-        if (u < cdf[mid])
-            hi = mid;
-        else
-            lo = mid + 1;
-    }
-    return lo;
-}
 
-/* BSDF value (times nothing) of a diffuse/glossy material, wi above the surface. */
-static Vec3 eval_bsdf(const Material *m, const SgGlossyLobe *lobe, Vec3 wi)
-{
-    Vec3 f = v3_scale(m->kd, SG_INV_PI);
-    if (m->type == SG_MATERIAL_GLOSSY) {
-        float c = v3_dot(wi, lobe->r);
-        if (c > 0.0f) {
-            float s = (m->exponent + 2.0f) * (0.5f * SG_INV_PI) * sg_pow_exponent(sg_minf(c, 1.0f), m->exponent);
-            f = v3_add(f, v3_scale(m->ks, s));
-        }
-    }
-    return f;
-}
 
 static inline float power_heuristic(float a, float b)
 {
@@ -637,14 +486,6 @@ static inline float power_heuristic(float a, float b)
     return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
 }
 
-/* The light's solid-angle pdf of reaching point y on triangle tri from x. */
-static float light_pdf(const SgRenderer *r, uint32_t tri, float dist2, float cos_light)
-{
-    uint32_t l = r->tris[tri].light;
-    if (l == SG_NO_LIGHT || cos_light <= 0.0f)
-        return 0.0f;
-    return (float)r->lights[l].pick_pdf * r->lights[l].inv_area * dist2 / cos_light;
-}
 
 /* Which way does the bounce sample at a diffuse/glossy vertex go. */
 typedef enum BounceKind {
@@ -712,11 +553,11 @@ typedef struct GuideQuery {
 static bool guide_begin(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, GuideQuery *gq)
 {
     float u = sg_rng_float(rng); /* drawn always: keeps the streams aligned */
-    if (!r->light_count || r->follow_cdf[r->light_count - 1] <= 0.0)
+    if (!r->lights.count || r->lights.follow_cdf[r->lights.count - 1] <= 0.0)
         return false;
-    gq->light = r->light_count == 1
+    gq->light = r->lights.count == 1
                     ? 0
-                    : pick_cdf(r->follow_cdf, r->light_count, u * r->follow_cdf[r->light_count - 1]);
+                    : pick_cdf(r->lights.follow_cdf, r->lights.count, u * r->lights.follow_cdf[r->lights.count - 1]);
     const CacheGuide *g = &r->cache_guide;
     if (g->points) {
         Vec3 w = v3_add(p, v3_scale(n, g->offset));
@@ -914,7 +755,7 @@ static bool take_bounce(BounceVertex *v, PathState *ps, SgRng *rng, PendingRecor
         pr->cos_mirror = c2;
         pr->pdf = pdf;
     }
-    Vec3 f = eval_bsdf(v->m, &v->lobe, wi);
+    Vec3 f = material_eval(v->m, &v->lobe, wi);
     Vec3 weight = v3_scale(f, cos_x / pdf);
     ps->beta = v3_mul(ps->beta, weight);
     if (v->seg)
@@ -1004,7 +845,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 float w = 1.0f;
                 if (!ps.specular_bounce) {
                     Vec3 dp = v3_sub(h.p, ps.prev_p);
-                    float pl = light_pdf(r, h.tri, v3_dot(dp, dp), -cos_o);
+                    float pl = light_set_pdf(&r->lights, r->tris[h.tri].light, v3_dot(dp, dp), -cos_o);
                     w = power_heuristic(ps.prev_pdf, pl);
                 }
                 radiance = v3_add(radiance, v3_scale(v3_mul(ps.beta, m->emission), w));
@@ -1101,16 +942,9 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 bool lit = false;
                 float ul = sg_rng_float(rng), ut = sg_rng_float(rng);
                 float ua = sg_rng_float(rng), ub = sg_rng_float(rng);
-                if (r->light_count && r->light_cdf[r->light_count - 1] > 0.0) {
-                    uint32_t l = pick_cdf(r->light_cdf, r->light_count, ul * r->light_cdf[r->light_count - 1]);
-                    const LightTable *lt = &r->lights[l];
-                    uint32_t k = lt->first + pick_cdf(r->light_tri_cdf + lt->first, lt->count, ut);
-                    uint32_t t = r->light_tris[k];
-                    const uint32_t *id = r->indices + 3 * t;
-                    float su = sqrtf(ua);
-                    float b0 = 1.0f - su, b1 = ub * su;
-                    Vec3 y = v3_add(v3_add(v3_scale(r->vertices[id[0]], b0), v3_scale(r->vertices[id[1]], b1)),
-                                    v3_scale(r->vertices[id[2]], 1.0f - b0 - b1));
+                uint32_t t;
+                Vec3 y;
+                if (light_set_sample(&r->lights, r->vertices, r->indices, ul, ut, ua, ub, &t, &y)) {
                     Vec3 to = v3_sub(y, v.origin);
                     float dist2 = v3_dot(to, to);
                     float dist = sqrtf(dist2);
@@ -1127,8 +961,8 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                         if (!occluded(r, v.origin, wi, dist * (1.0f - 1e-4f))) {
                             lit = true;
                             if (cos_x > 0.0f) {
-                                float pl = light_pdf(r, t, dist2, cos_l);
-                                Vec3 f = eval_bsdf(m, &v.lobe, wi);
+                                float pl = light_set_pdf(&r->lights, r->tris[t].light, dist2, cos_l);
+                                Vec3 f = material_eval(m, &v.lobe, wi);
                                 nee = v3_scale(v3_mul(f, lm->emission), cos_x / pl);
                                 nee_dir = wi;
                                 nee_cos = cos_x;

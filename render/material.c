@@ -1,0 +1,37 @@
+#include "material.h"
+
+#include <math.h>
+#include <string.h>
+
+void material_init(Material *m, const SgMaterial *src)
+{
+    memset(m, 0, sizeof *m);
+    m->type = src->type;
+    m->kd = v3(fmaxf(0, src->diffuse[0]), fmaxf(0, src->diffuse[1]), fmaxf(0, src->diffuse[2]));
+    m->ks = v3(fmaxf(0, src->specular[0]), fmaxf(0, src->specular[1]), fmaxf(0, src->specular[2]));
+    m->emission = v3(fmaxf(0, src->emission[0]), fmaxf(0, src->emission[1]),
+                     fmaxf(0, src->emission[2]));
+    m->emissive = v3_max_component(m->emission) > 0.0f;
+    m->exponent = src->exponent > 0 ? fminf(src->exponent, 1e5f) : 1.0f;
+    m->ior = src->ior > 1.0f ? src->ior : 1.5f;
+    if (m->type == SG_MATERIAL_DIFFUSE)
+        m->ks = v3(0, 0, 0);
+    if (m->type == SG_MATERIAL_DIFFUSE || m->type == SG_MATERIAL_GLOSSY) {
+        /* energy conservation: kd + ks <= 1 per channel */
+        float worst = v3_max_component(v3_add(m->kd, m->ks));
+        if (worst > 1.0f) {
+            m->kd = v3_scale(m->kd, 1.0f / worst);
+            m->ks = v3_scale(m->ks, 1.0f / worst);
+        }
+        float ld = luminance(m->kd), ls = luminance(m->ks);
+        m->black = ld + ls <= 0.0f;
+        m->diffuse_weight = m->black ? 1.0f : ld / (ld + ls);
+        if (ls <= 0.0f)
+            m->type = SG_MATERIAL_DIFFUSE;
+        m->roughness = m->diffuse_weight > 0.0f ? 1.0f : sqrtf(2.0f / (m->exponent + 2.0f));
+    } else if (m->type == SG_MATERIAL_MIRROR) {
+        if (v3_max_component(m->ks) <= 0.0f)
+            m->ks = v3(1, 1, 1); /* a mirror given without Ks reflects fully */
+        m->ks = v3(fminf(m->ks.x, 1), fminf(m->ks.y, 1), fminf(m->ks.z, 1));
+    }
+}
