@@ -1090,6 +1090,7 @@ typedef struct PassCtx {
     SgRenderer *r;
     int tiles_x;
     uint64_t pass_key;
+    uint64_t jitter_key;  /* the seed's: the same for every pass */
     bool first_pass;
     uint64_t learn_stride;
     uint64_t learn_below; /* UINT64_MAX / learn_stride */
@@ -1140,6 +1141,26 @@ static bool learns(const PassCtx *pc, size_t pix)
     return pc->learn_stride == 1 || ((uint64_t)pix + pc->pass_key) * 0x9e3779b97f4a7c15ULL < pc->learn_below;
 }
 
+/* Where in its pixel pass n's camera ray goes: the n-th point of the R2
+ * sequence (Roberts 2018, the plastic number's powers) shifted by an
+ * offset drawn per pixel and seed (a Cranley-Patterson rotation). Each pass
+ * alone is a uniform jitter, so each pass stays an unbiased estimate; over
+ * the passes a pixel's points cover it evenly, so an edge seen directly (a
+ * light's silhouette, whose in-or-out noise is otherwise most of the image's
+ * squared error) converges faster than with independent jitter. */
+static void pixel_jitter(uint64_t key, size_t pix, int pass, float *jx, float *jy)
+{
+    uint64_t h = mix64(key ^ ((uint64_t)pix * 0x9e3779b97f4a7c15ULL));
+    double x = (double)(h >> 40) * (1.0 / 16777216.0) + pass * 0.75487766624669276;
+    double y = (double)(h & 0xffffff) * (1.0 / 16777216.0) + pass * 0.56984029099805327;
+    *jx = (float)(x - floor(x));
+    *jy = (float)(y - floor(y));
+    if (!(*jx < 1.0f)) /* rounding to float */
+        *jx = 0.0f;
+    if (!(*jy < 1.0f))
+        *jy = 0.0f;
+}
+
 static void render_tile(PassCtx *pc, uint64_t index, int thread)
 {
     SgRenderer *r = pc->r;
@@ -1152,7 +1173,8 @@ static void render_tile(PassCtx *pc, uint64_t index, int thread)
             size_t pix = (size_t)y * w + x;
             SgRng rng;
             sg_rng_seed(&rng, pc->pass_key, pix);
-            float jx = sg_rng_float(&rng), jy = sg_rng_float(&rng);
+            float jx, jy;
+            pixel_jitter(pc->jitter_key, pix, r->spp, &jx, &jy);
             Vec3 dir = camera_ray(&r->camera, x, y, jx, jy);
             int learn_tile = r->learner && learns(pc, pix) ? (int)index : -1;
             float deviation = r->noise ? pixel_noise_deviation(r->noise, pix) : 0.0f;
@@ -1206,11 +1228,15 @@ void sg_renderer_pass(SgRenderer *r)
      * pixels' noise settles, and the passes wait for this */
     if (r->noise && r->spp > 1 && (r->spp < 8 || !(r->spp & (r->spp - 1)) || r->spp % 16 == 0))
         pixel_noise_estimate(r->noise, r->spp, r->pool);
-    PassCtx pc = {r, (r->opt.width + TILE - 1) / TILE,
-                  mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1), r->spp == 0,
-                  learn_stride(r), 0, r->learner != NULL, false};
+    PassCtx pc = {.r = r,
+                  .tiles_x = (r->opt.width + TILE - 1) / TILE,
+                  .pass_key = mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1),
+                  .jitter_key = mix64(r->opt.seed ^ 0x6a09e667f3bcc909ULL),
+                  .first_pass = r->spp == 0,
+                  .learn_stride = learn_stride(r),
+                  .learn_job = r->learner != NULL,
+                  .record = r->pgl && r->spp < SG_OPENPGL_TRAINING_PASSES};
     pc.learn_below = UINT64_MAX / pc.learn_stride;
-    pc.record = r->pgl && r->spp < SG_OPENPGL_TRAINING_PASSES;
     int tiles_y = (r->opt.height + TILE - 1) / TILE;
     sg_thread_pool_run(r->pool, (uint64_t)pc.tiles_x * tiles_y + pc.learn_job, pass_job, &pc);
     /* Each pass's records are learned during the next and used from the

@@ -504,6 +504,54 @@ Test(render_integrator, emitter_in_a_glass_slab)
     sgt_scene_free(s);
 }
 
+/* A light's edge through the middle of a column of pixels: each of them
+ * sees the light over exactly half its area, so its value is 0.5 Le. With
+ * independent jitter its error after n passes would be 0.5 Le / sqrt(n)
+ * (0.031 at 256); the passes' stratified jitter must do far better on
+ * every one of them (render_tile's pixel_jitter). */
+Test(render_integrator, a_lights_edge_converges_faster_than_independent_jitter)
+{
+    SgScene *s = sgt_scene_new();
+    const float black[3] = {0, 0, 0}, glow[3] = {1, 1, 1};
+    uint32_t lm = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, glow);
+    const int w = 8;
+    const double fov = 40.0, t = tan(fov * M_PI / 360.0);
+    const double edge = (2.0 * 3.5 / w - 1.0) * t; /* the middle of column 3 at distance 1 */
+    const double q[4][3] = {{edge, -10, -1}, {10, -10, -1}, {10, 10, -1}, {edge, 10, -1}}; /* faces the camera */
+    sgt_add_quad(s, q, lm);
+    const double pos[3] = {0, 0, 0}, at[3] = {0, 0, -1}, up[3] = {0, 1, 0};
+    sgt_set_camera(s, pos, at, up, fov, w, w);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.max_depth = 1;
+    o.seed = 3;
+    SgError err = {0};
+    SgRenderer *r = sg_renderer_create(s, &o, &err);
+    cr_assert_not_null(r, "%s", err.message);
+    const int passes = 256;
+    for (int p = 0; p < passes; p++)
+        sg_renderer_pass(r);
+    float img[3 * 8 * 8];
+    sg_renderer_image(r, img);
+    sg_renderer_free(r);
+    double worst = 0.0;
+    for (int y = 0; y < w; y++) {
+        for (int x = 0; x < w; x++) {
+            double v = img[3 * (y * w + x)], want = x < 3 ? 0.0 : x == 3 ? 0.5 : 1.0;
+            if (x != 3)
+                cr_assert_float_eq(v, want, 1e-6, "pixel (%d, %d) is %g, not %g", x, y, v, want);
+            else
+                worst = fmax(worst, fabs(v - want));
+        }
+    }
+    double independent = 0.5 / sqrt((double)passes);
+    cr_log_info("light's edge: worst pixel off by %.4f after %d passes (independent jitter: %.4f typical)", worst,
+                passes, independent);
+    cr_assert_lt(worst, independent / 3, "the edge's pixels are off by up to %.4f", worst);
+    sgt_scene_free(s);
+}
+
 /* A two-room scene: the light is in room A, the camera looks at a wall of
  * room B that only indirect light reaches, through a door. */
 static SgScene *two_rooms(void)
