@@ -632,6 +632,39 @@ Test(render_integrator, openpgl_agrees_with_bsdf_in_dark_room)
     sgt_scene_free(s);
 }
 
+/* Renders `passes` passes of s with 1, 2 and 5 threads, asserts the three
+ * images are the same bytes, and returns the first (the caller frees it).
+ * check(r) asserts, for each, that the mode did what the test is about. */
+static float *same_image_for_any_thread_count(const SgScene *s, SgRenderOptions o, int passes,
+                                              void (*check)(const SgRenderer *r, int threads))
+{
+    size_t n = (size_t)o.width * o.height * 3;
+    float *img[3];
+    const int threads[3] = {1, 2, 5};
+    for (int k = 0; k < 3; k++) {
+        o.threads = threads[k];
+        SgError err = {0};
+        SgRenderer *r = sg_renderer_create(s, &o, &err);
+        cr_assert_not_null(r, "%s", err.message);
+        for (int p = 0; p < passes; p++)
+            sg_renderer_pass(r);
+        check(r, threads[k]);
+        img[k] = malloc(n * sizeof(float));
+        sg_renderer_image(r, img[k]);
+        sg_renderer_free(r);
+    }
+    cr_assert(memcmp(img[0], img[1], n * sizeof(float)) == 0, "1 and 2 threads differ");
+    cr_assert(memcmp(img[0], img[2], n * sizeof(float)) == 0, "1 and 5 threads differ");
+    free(img[1]);
+    free(img[2]);
+    return img[0];
+}
+
+static void check_openpgl_guides(const SgRenderer *r, int threads)
+{
+    cr_assert_gt(sg_renderer_lobe_share(r), 0.1, "%d threads: the field guides in this test", threads);
+}
+
 /* The same image for any thread count: openpgl's field is trained
  * deterministically (its samples sorted) from every pass's paths. */
 Test(render_integrator, openpgl_same_image_for_any_thread_count)
@@ -642,26 +675,18 @@ Test(render_integrator, openpgl_same_image_for_any_thread_count)
     sg_render_options_default(&o, s);
     o.sampling = SG_SAMPLING_OPENPGL;
     o.seed = 42;
-    size_t n = (size_t)o.width * o.height * 3;
-    float *img[3];
-    const int threads[3] = {1, 2, 5};
-    for (int k = 0; k < 3; k++) {
-        o.threads = threads[k];
-        SgError err = {0};
-        SgRenderer *r = sg_renderer_create(s, &o, &err);
-        cr_assert_not_null(r, "%s", err.message);
-        for (int p = 0; p < 8; p++)
-            sg_renderer_pass(r);
-        cr_assert_gt(sg_renderer_lobe_share(r), 0.1, "the field guides in this test");
-        img[k] = malloc(n * sizeof(float));
-        sg_renderer_image(r, img[k]);
-        sg_renderer_free(r);
-    }
-    cr_assert(memcmp(img[0], img[1], n * sizeof(float)) == 0, "1 and 2 threads differ");
-    cr_assert(memcmp(img[0], img[2], n * sizeof(float)) == 0, "1 and 5 threads differ");
-    for (int k = 0; k < 3; k++)
-        free(img[k]);
+    free(same_image_for_any_thread_count(s, o, 8, check_openpgl_guides));
     sgt_scene_free(s);
+}
+
+/* The learner chose the lobe somewhere and the lobe drew bounces: the
+ * learned choices are part of what must not depend on threads. */
+static void check_learned_lobe(const SgRenderer *r, int threads)
+{
+    double regions = sg_renderer_guided_fraction(r), lobe = sg_renderer_lobe_share(r);
+    cr_log_info("%d threads: lobe in %.3f of the learner's bounces, drew %.3f of all", threads, regions, lobe);
+    cr_assert(regions > 0.005 && lobe > 0.005, "the mixture uses the lobe in this test: %.3f of the "
+              "learner's bounces, drew %.3f", regions, lobe);
 }
 
 Test(render_integrator, same_seed_same_image_for_any_thread_count)
@@ -674,32 +699,11 @@ Test(render_integrator, same_seed_same_image_for_any_thread_count)
     o.guide.ctx = &door;
     o.sampling = SG_SAMPLING_GUIDED;
     o.seed = 42;
-    size_t n = (size_t)o.width * o.height * 3;
-    float *img[3];
-    const int threads[3] = {1, 2, 5};
-    for (int k = 0; k < 3; k++) {
-        o.threads = threads[k];
-        SgError err = {0};
-        SgRenderer *r = sg_renderer_create(s, &o, &err);
-        cr_assert_not_null(r, "%s", err.message);
-        /* 12 passes: the learned mixture changes after every one of them
-         * (all paths learn in the first two, then every 2nd, 4th, 8th) */
-        for (int p = 0; p < 12; p++)
-            sg_renderer_pass(r);
-        /* the learner chose the lobe somewhere and the lobe drew bounces:
-         * the learned choices are part of what must not depend on threads */
-        double regions = sg_renderer_guided_fraction(r), lobe = sg_renderer_lobe_share(r);
-        cr_log_info("%d threads: lobe in %.3f of the learner's bounces, drew %.3f of all", threads[k], regions,
-                    lobe);
-        cr_assert(regions > 0.005 && lobe > 0.005, "the mixture uses the lobe in this test: %.3f of the "
-                  "learner's bounces, drew %.3f", regions, lobe);
-        img[k] = malloc(n * sizeof(float));
-        sg_renderer_image(r, img[k]);
-        sg_renderer_free(r);
-    }
-    cr_assert(memcmp(img[0], img[1], n * sizeof(float)) == 0, "1 and 2 threads differ");
-    cr_assert(memcmp(img[0], img[2], n * sizeof(float)) == 0, "1 and 5 threads differ");
+    /* 12 passes: the learned mixture changes after every one of them
+     * (all paths learn in the first two, then every 2nd, 4th, 8th) */
+    float *img = same_image_for_any_thread_count(s, o, 12, check_learned_lobe);
     /* and another seed does change it (the test can fail) */
+    size_t n = (size_t)o.width * o.height * 3;
     o.seed = 43;
     SgError err = {0};
     SgRenderer *r = sg_renderer_create(s, &o, &err);
@@ -708,9 +712,8 @@ Test(render_integrator, same_seed_same_image_for_any_thread_count)
     float *other = malloc(n * sizeof(float));
     sg_renderer_image(r, other);
     sg_renderer_free(r);
-    cr_assert(memcmp(img[0], other, n * sizeof(float)) != 0);
-    for (int k = 0; k < 3; k++)
-        free(img[k]);
+    cr_assert(memcmp(img, other, n * sizeof(float)) != 0);
+    free(img);
     free(other);
     sgt_scene_free(s);
 }
