@@ -14,6 +14,7 @@
 #include "mixture_learning.h"
 #include "openpgl_guide.h"
 #include "pixel_noise.h"
+#include "skeleton_guide.h"
 #include "progress.h"
 #include "rng.h"
 #include "sampling.h"
@@ -30,22 +31,6 @@ typedef struct TriInfo {
     uint8_t normal_bin; /* the learner's bin of the normal (sg_mixture_normal_bin) */
 } TriInfo;
 
-/* The importance cache read in the renderer's frame: a query is then a
- * voxel lookup and a table read, with no call through the guide function
- * and no conversion to world coordinates. */
-typedef struct CacheGuide {
-    const SgImportanceCache *cache;
-    Vec3 origin;       /* voxel (0,0,0)'s corner, local coordinates */
-    float inv_voxel;   /* 1 / voxel size */
-    float offset;      /* the guide's query offset */
-    uint32_t lights;
-    float *points;     /* [node][light][3] importance points, local; NaN: the
-                        * light cannot be reached from the node */
-    const uint32_t *decoded; /* node per voxel (sg_cache_decoded), or NULL */
-    const uint32_t *octants; /* of its mixed wall voxels (sg_cache_decoded_octants) */
-    float extent[3];   /* the grid's size in voxels */
-    int64_t stride[3]; /* of x, y, z in the decoded table */
-} CacheGuide;
 
 
 struct SgRenderer {
@@ -66,7 +51,7 @@ struct SgRenderer {
     Material *materials;
 
     LightSet lights;
-    CacheGuide cache_guide; /* cache_guide.points NULL: the guide function answers */
+    SkeletonGuide skeleton; /* skeleton and guided modes */
     /* openpgl: the peer's field, learning while the first passes record */
     SgPglField *pgl;
     double pgl_seconds;
@@ -145,51 +130,6 @@ bool sg_roulette_parse(const char *name, SgRoulette *r)
 
 
 
-/* The cache guide's table; a table too large for memory leaves the guide
- * function to answer (same answers, slower). */
-static bool setup_cache_guide(SgRenderer *r, const char *path, SgError *err)
-{
-    const SgImportanceCache *c = r->opt.guide.cache;
-    CacheGuide *g = &r->cache_guide;
-    if (!c || r->opt.sampling == SG_SAMPLING_BSDF)
-        return true;
-    uint32_t nodes = sg_cache_node_count(c), lights = sg_cache_light_count(c);
-    if (lights != r->lights.count)
-        return sg_fail(err, "%s: the importance cache has %u lights, the scene %u", path, lights,
-                       r->lights.count);
-    double floats = 3.0 * nodes * lights;
-    if (!nodes || !lights || floats * sizeof(float) > 256.0 * 1024 * 1024)
-        return true;
-    g->points = malloc((size_t)floats * sizeof(float));
-    if (!g->points)
-        return true;
-    int dims[3];
-    double origin[3];
-    sg_cache_grid(c, dims, origin);
-    g->decoded = sg_cache_decoded(c);
-    g->octants = sg_cache_decoded_octants(c);
-    for (int a = 0; a < 3; a++)
-        g->extent[a] = (float)dims[a];
-    g->stride[0] = 1;
-    g->stride[1] = dims[0];
-    g->stride[2] = (int64_t)dims[0] * dims[1];
-    double voxel = sg_cache_voxel_size(c);
-    g->cache = c;
-    g->origin = v3((float)(origin[0] - r->centre[0]), (float)(origin[1] - r->centre[1]),
-                   (float)(origin[2] - r->centre[2]));
-    g->inv_voxel = (float)(1.0 / voxel);
-    g->offset = (float)r->opt.guide.query_offset;
-    g->lights = lights;
-    for (uint32_t n = 0; n < nodes; n++)
-        for (uint32_t l = 0; l < lights; l++) {
-            double q[3];
-            float *out = g->points + 3 * ((size_t)n * lights + l);
-            bool ok = sg_cache_node_importance_point(c, n, l, q);
-            for (int a = 0; a < 3; a++)
-                out[a] = ok ? (float)(q[a] - r->centre[a]) : NAN;
-        }
-    return true;
-}
 
 /* The triangles' bounds, local coordinates. */
 static void triangle_bounds(const SgRenderer *r, Vec3 *lo, Vec3 *hi)
@@ -332,7 +272,8 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         sg_renderer_free(r);
         return NULL;
     }
-    if (!setup_cache_guide(r, path, err)) {
+    if ((o->sampling == SG_SAMPLING_SKELETON || o->sampling == SG_SAMPLING_GUIDED) &&
+        !skeleton_guide_init(&r->skeleton, &o->guide, r->centre, r->scale, &r->lights, path, err)) {
         sg_renderer_free(r);
         return NULL;
     }
@@ -395,7 +336,7 @@ void sg_renderer_free(SgRenderer *r)
     free(r->tris);
     free(r->materials);
     light_set_free(&r->lights);
-    free(r->cache_guide.points);
+    skeleton_guide_free(&r->skeleton);
     sg_mixture_learner_free(r->learner);
     pixel_noise_free(r->noise);
     free(r->sum);
@@ -540,90 +481,9 @@ typedef struct PathStats {
     uint64_t lobe_bounces; /* of which the guide's lobe drew the direction */
 } PathStats;
 
-/* A guide query in two halves, around the bounce's shadow ray: the first
- * picks the light and starts loading the cache's voxel, the second reads
- * it (by then in cache) and makes the lobe's axis. */
-typedef struct GuideQuery {
-    uint32_t light;
-    float voxel[3]; /* the query point in the cache's voxel units */
-    int64_t index;  /* its voxel in the decoded table, -1: ask the cache */
-} GuideQuery;
 
-/* False: no light to follow. */
-static bool guide_begin(const SgRenderer *r, Vec3 p, Vec3 n, SgRng *rng, GuideQuery *gq)
-{
-    float u = sg_rng_float(rng); /* drawn always: keeps the streams aligned */
-    if (!r->lights.count || r->lights.follow_cdf[r->lights.count - 1] <= 0.0)
-        return false;
-    gq->light = r->lights.count == 1
-                    ? 0
-                    : pick_cdf(r->lights.follow_cdf, r->lights.count, u * r->lights.follow_cdf[r->lights.count - 1]);
-    const CacheGuide *g = &r->cache_guide;
-    if (g->points) {
-        Vec3 w = v3_add(p, v3_scale(n, g->offset));
-        gq->voxel[0] = (w.x - g->origin.x) * g->inv_voxel;
-        gq->voxel[1] = (w.y - g->origin.y) * g->inv_voxel;
-        gq->voxel[2] = (w.z - g->origin.z) * g->inv_voxel;
-        const float *v = gq->voxel;
-        gq->index = -1;
-        if (g->decoded && v[0] >= 0.0f && v[1] >= 0.0f && v[2] >= 0.0f && v[0] < g->extent[0] &&
-            v[1] < g->extent[1] && v[2] < g->extent[2]) {
-            /* v >= 0: truncation is floor */
-            gq->index = (int64_t)(int)v[0] + g->stride[1] * (int)v[1] + g->stride[2] * (int)v[2];
-            __builtin_prefetch(g->decoded + gq->index);
-        }
-    }
-    return true;
-}
 
-/* The importance point (local coordinates), or false. */
-static bool importance_point(const SgRenderer *r, const GuideQuery *gq, Vec3 p, Vec3 n, Vec3 *q)
-{
-    const CacheGuide *g = &r->cache_guide;
-    if (g->points) {
-        uint32_t node = SG_CACHE_NONE;
-        if (gq->index >= 0) {
-            const float *v = gq->voxel; /* v >= 0: truncation is floor */
-            unsigned octant = (v[0] - (float)(int)v[0] >= 0.5f) | (v[1] - (float)(int)v[1] >= 0.5f) << 1 |
-                              (v[2] - (float)(int)v[2] >= 0.5f) << 2;
-            node = sg_cache_entry_node(g->decoded[gq->index], g->octants, octant);
-        }
-        /* no one node for the octant, or outside the grid: the cache searches the neighbours */
-        if (node == SG_CACHE_NONE && !sg_cache_nearest_node_voxel(g->cache, gq->voxel, &node))
-            return false;
-        const float *pt = g->points + 3 * ((size_t)node * g->lights + gq->light);
-        *q = v3(pt[0], pt[1], pt[2]);
-        return pt[0] == pt[0]; /* NaN: the light cannot reach the node */
-    }
-    double off = r->opt.guide.query_offset;
-    double world[3] = {p.x + r->centre[0] + off * n.x, p.y + r->centre[1] + off * n.y,
-                       p.z + r->centre[2] + off * n.z};
-    double wq[3];
-    if (!r->opt.guide.importance_point(r->opt.guide.ctx, world, gq->light, wq))
-        return false;
-    *q = v3((float)(wq[0] - r->centre[0]), (float)(wq[1] - r->centre[1]), (float)(wq[2] - r->centre[2]));
-    return true;
-}
 
-/* The direction toward the importance point, or false (none, or below the surface). */
-static bool guide_end(const SgRenderer *r, const GuideQuery *gq, Vec3 p, Vec3 n, Vec3 *axis)
-{
-    Vec3 q;
-    if (!importance_point(r, gq, p, n, &q))
-        return false;
-    Vec3 d = v3_sub(q, p);
-    float len2 = v3_dot(d, d);
-    /* a point at the shading point has no direction; one at infinity (a
-     * bad guide) would give a NaN axis that passes the test below */
-    float min_len = 1e-6f * r->scale;
-    if (!(len2 > min_len * min_len) || !(len2 < INFINITY))
-        return false;
-    Vec3 a = v3_scale(d, 1.0f / sqrtf(len2));
-    if (v3_dot(a, n) <= 0.0f)
-        return false; /* below the surface: back to BSDF sampling */
-    *axis = a;
-    return true;
-}
 
 /* A vertex of a learning path waiting for the rest of the path. */
 typedef struct PendingRecord {
@@ -932,7 +792,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 }
                 v.guided = mode == SG_SAMPLING_SKELETON || (mode == SG_SAMPLING_GUIDED && (lobe_region || learn));
                 GuideQuery gq;
-                v.guided = v.guided && guide_begin(r, h.p, n, rng, &gq);
+                v.guided = v.guided && skeleton_guide_begin(&r->skeleton, h.p, n, rng, &gq);
                 v.origin = offset_origin(r, h.p, n);
 
                 /* next-event estimation */
@@ -972,7 +832,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     }
                 }
 
-                v.guided = v.guided && guide_end(r, &gq, h.p, n, &axis);
+                v.guided = v.guided && skeleton_guide_end(&r->skeleton, &gq, h.p, n, &axis);
                 if (v.guided) {
                     if (mode == SG_SAMPLING_SKELETON) {
                         if (!lit) /* the paper: lobe only where not directly lit */
