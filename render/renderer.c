@@ -1,51 +1,32 @@
 #include "renderer.h"
 
-#include <embree3/rtcore.h>
 #include <math.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "memory.h"
 #include "camera.h"
+#include "geometry.h"
 #include "lights.h"
 #include "material.h"
+#include "memory.h"
 #include "mixture_learning.h"
 #include "openpgl_guide.h"
 #include "pixel_noise.h"
-#include "skeleton_guide.h"
 #include "progress.h"
 #include "rng.h"
 #include "sampling.h"
+#include "skeleton_guide.h"
 #include "threads.h"
 #include "vecmath.h"
 
 #define TILE 16
 
-
-typedef struct TriInfo {
-    Vec3 normal;       /* unit geometric normal (winding order) */
-    uint32_t material;
-    uint32_t light;    /* SG_NO_LIGHT if not emissive */
-    uint8_t normal_bin; /* the learner's bin of the normal (sg_mixture_normal_bin) */
-} TriInfo;
-
-
-
 struct SgRenderer {
     SgRenderOptions opt;
-    double centre[3];     /* world = local + centre */
-    float scale;          /* scene extent, for scale-free ray offsets */
-
-    RTCDevice device;
-    RTCScene rtc_scene;
+    Geometry geo;
     SgThreadPool *pool;   /* its workers live across the passes */
-
-    uint32_t triangle_count;
-    Vec3 *vertices;       /* local coordinates */
-    uint32_t *indices;
-    TriInfo *tris;        /* per triangle, packed: one cache line per hit */
 
     uint32_t material_count;
     Material *materials;
@@ -125,31 +106,14 @@ bool sg_roulette_parse(const char *name, SgRoulette *r)
     return true;
 }
 
-
 /* ---- setup ---------------------------------------------------------------- */
-
-
-
-
-/* The triangles' bounds, local coordinates. */
-static void triangle_bounds(const SgRenderer *r, Vec3 *lo, Vec3 *hi)
-{
-    *lo = v3(INFINITY, INFINITY, INFINITY);
-    *hi = v3(-INFINITY, -INFINITY, -INFINITY);
-    for (uint32_t t = 0; t < r->triangle_count; t++)
-        for (int k = 0; k < 3; k++) {
-            Vec3 v = r->vertices[r->indices[3 * t + k]];
-            *lo = v3(fminf(lo->x, v.x), fminf(lo->y, v.y), fminf(lo->z, v.z));
-            *hi = v3(fmaxf(hi->x, v.x), fmaxf(hi->y, v.y), fmaxf(hi->z, v.z));
-        }
-}
 
 /* The learner's grid covers the triangles' bounds (local coordinates):
  * 32 cells along the longest side, a few thousand regions in a room. */
 static bool setup_learner(SgRenderer *r, const char *path, SgError *err)
 {
     Vec3 lo, hi;
-    triangle_bounds(r, &lo, &hi);
+    geometry_bounds(&r->geo, &lo, &hi);
     SgError e;
     r->learner = sg_mixture_learner_create(lo, hi, 32, (uint32_t)(r->tiles_x * r->tiles_y),
                                            SG_MIXTURE_INITIAL, &e);
@@ -198,90 +162,40 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
     r->opt = *o;
     r->tiles_x = (o->width + TILE - 1) / TILE;
     r->tiles_y = (o->height + TILE - 1) / TILE;
-    double extent = 0.0;
-    for (int i = 0; i < 3; i++) {
-        r->centre[i] = 0.5 * (s->bounds_min[i] + s->bounds_max[i]);
-        extent = fmax(extent, s->bounds_max[i] - s->bounds_min[i]);
-    }
-    /* bounds may be unset by a hand-made scene: compute them if empty */
-    if (!(extent > 0.0)) {
-        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        for (uint32_t v = 0; v < s->vertex_count; v++)
-            for (int i = 0; i < 3; i++) {
-                lo[i] = fmin(lo[i], s->positions[3 * v + i]);
-                hi[i] = fmax(hi[i], s->positions[3 * v + i]);
-            }
-        for (int i = 0; i < 3; i++) {
-            r->centre[i] = 0.5 * (lo[i] + hi[i]);
-            extent = fmax(extent, hi[i] - lo[i]);
-        }
-    }
-    if (!isfinite(extent) || !(extent > 0.0)) {
-        sg_renderer_free(r);
-        return sg_fail(err, "%s: degenerate or non-finite scene bounds", path), NULL;
-    }
-    r->scale = (float)extent;
 
-    r->triangle_count = s->triangle_count;
-    r->vertices = malloc(sizeof(Vec3) * s->vertex_count + 16);
-    r->indices = malloc(sizeof(uint32_t) * 3 * s->triangle_count);
-    r->tris = malloc(sizeof(TriInfo) * s->triangle_count);
-    r->material_count = s->material_count;
-    r->materials = calloc(s->material_count ? s->material_count : 1, sizeof *r->materials);
-    size_t pixels = (size_t)o->width * o->height;
-    r->sum = calloc(pixels * 3, sizeof *r->sum);
-    r->last = calloc(pixels * 3, sizeof *r->last);
-    if (!r->vertices || !r->indices || !r->tris ||
-        !r->materials || !r->sum || !r->last) {
-        sg_renderer_free(r);
-        return sg_fail(err, "%s: out of memory", path), NULL;
-    }
-    for (uint32_t v = 0; v < s->vertex_count; v++)
-        r->vertices[v] = v3((float)(s->positions[3 * v] - r->centre[0]),
-                            (float)(s->positions[3 * v + 1] - r->centre[1]),
-                            (float)(s->positions[3 * v + 2] - r->centre[2]));
     if (!s->material_count) {
         sg_renderer_free(r);
         return sg_fail(err, "%s: no materials", path), NULL;
     }
+    if (!geometry_init(&r->geo, s, path, err)) {
+        sg_renderer_free(r);
+        return NULL;
+    }
+    r->material_count = s->material_count;
+    r->materials = calloc(s->material_count, sizeof *r->materials);
+    size_t pixels = (size_t)o->width * o->height;
+    r->sum = calloc(pixels * 3, sizeof *r->sum);
+    r->last = calloc(pixels * 3, sizeof *r->last);
+    if (!r->materials || !r->sum || !r->last) {
+        sg_renderer_free(r);
+        return sg_fail(err, "%s: out of memory", path), NULL;
+    }
     for (uint32_t m = 0; m < s->material_count; m++)
         material_init(&r->materials[m], &s->materials[m]);
-    for (uint32_t t = 0; t < s->triangle_count; t++) {
-        const uint32_t *id = s->indices + 3 * t;
-        if (id[0] >= s->vertex_count || id[1] >= s->vertex_count || id[2] >= s->vertex_count ||
-            s->triangle_material[t] >= s->material_count) {
-            sg_renderer_free(r);
-            return sg_fail(err, "%s: triangle %u has a bad vertex or material index", path, t), NULL;
-        }
-        memcpy(r->indices + 3 * t, id, 3 * sizeof *id);
-        r->tris[t].material = s->triangle_material[t];
-        r->tris[t].light = s->triangle_light ? s->triangle_light[t] : SG_NO_LIGHT;
-        if (r->tris[t].light != SG_NO_LIGHT && r->tris[t].light >= s->light_count)
-            r->tris[t].light = SG_NO_LIGHT;
-        /* normal in double from the world positions: exact direction */
-        double n[3], e1[3], e2[3];
-        const double *p = s->positions;
-        d3_sub(p + 3 * id[1], p + 3 * id[0], e1);
-        d3_sub(p + 3 * id[2], p + 3 * id[0], e2);
-        d3_cross(e1, e2, n);
-        double nl = d3_length(n);
-        r->tris[t].normal = nl > 0 ? v3((float)(n[0] / nl), (float)(n[1] / nl), (float)(n[2] / nl)) : v3(0, 0, 1);
-        r->tris[t].normal_bin = (uint8_t)sg_mixture_normal_bin(r->tris[t].normal);
-    }
-    if (!light_set_init(&r->lights, s, r->vertices, r->materials, r->opt.guide.light_weight, path, err)) {
+    if (!light_set_init(&r->lights, s, r->geo.vertices, r->materials, r->opt.guide.light_weight, path, err)) {
         sg_renderer_free(r);
         return NULL;
     }
     if ((o->sampling == SG_SAMPLING_SKELETON || o->sampling == SG_SAMPLING_GUIDED) &&
-        !skeleton_guide_init(&r->skeleton, &o->guide, r->centre, r->scale, &r->lights, path, err)) {
+        !skeleton_guide_init(&r->skeleton, &o->guide, r->geo.centre, r->geo.scale, &r->lights, path, err)) {
         sg_renderer_free(r);
         return NULL;
     }
-    camera_init(&r->camera, &s->camera, r->centre, o->width, o->height);
+    camera_init(&r->camera, &s->camera, r->geo.centre, o->width, o->height);
     r->pool = sg_thread_pool_create(o->threads);
     if (o->sampling == SG_SAMPLING_OPENPGL) {
         Vec3 lo, hi;
-        triangle_bounds(r, &lo, &hi);
+        geometry_bounds(&r->geo, &lo, &hi);
         SgError e = {0};
         r->pgl = sg_pgl_field_create(lo, hi, sg_thread_pool_size(r->pool), &e);
         if (!r->pgl) {
@@ -294,30 +208,11 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         sg_renderer_free(r);
         return NULL;
     }
+    if (!geometry_build(&r->geo, path, err)) {
+        sg_renderer_free(r);
+        return NULL;
+    }
 
-    r->device = rtcNewDevice(NULL);
-    if (!r->device) {
-        sg_renderer_free(r);
-        return sg_fail(err, "%s: Embree device: %d", path, (int)rtcGetDeviceError(NULL)), NULL;
-    }
-    r->rtc_scene = rtcNewScene(r->device);
-    rtcSetSceneBuildQuality(r->rtc_scene, RTC_BUILD_QUALITY_HIGH);
-    /* not RTC_SCENE_FLAG_ROBUST: 25% slower traversal on Sponza; the
-     * furnace tests (closed boxes) show no leaks without it */
-    RTCGeometry g = rtcNewGeometry(r->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, r->vertices, 0,
-                               sizeof(Vec3), s->vertex_count);
-    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, r->indices, 0,
-                               3 * sizeof(uint32_t), s->triangle_count);
-    rtcCommitGeometry(g);
-    rtcAttachGeometry(r->rtc_scene, g);
-    rtcReleaseGeometry(g);
-    rtcCommitScene(r->rtc_scene);
-    enum RTCError e = rtcGetDeviceError(r->device);
-    if (e != RTC_ERROR_NONE) {
-        sg_renderer_free(r);
-        return sg_fail(err, "%s: Embree scene build failed (error %d)", path, (int)e), NULL;
-    }
     return r;
 }
 
@@ -325,15 +220,9 @@ void sg_renderer_free(SgRenderer *r)
 {
     if (!r)
         return;
-    if (r->rtc_scene)
-        rtcReleaseScene(r->rtc_scene);
-    if (r->device)
-        rtcReleaseDevice(r->device);
+    geometry_free(&r->geo);
     sg_thread_pool_free(r->pool);
     sg_pgl_field_free(r->pgl);
-    free(r->vertices);
-    free(r->indices);
-    free(r->tris);
     free(r->materials);
     light_set_free(&r->lights);
     skeleton_guide_free(&r->skeleton);
@@ -346,87 +235,11 @@ void sg_renderer_free(SgRenderer *r)
 
 /* ---- tracing -------------------------------------------------------------- */
 
-static inline float int_as_float(int32_t i) { float f; memcpy(&f, &i, 4); return f; }
-static inline int32_t float_as_int(float f) { int32_t i; memcpy(&i, &f, 4); return i; }
-
-/* Self-intersection: move p off the surface along n (toward the side the
- * new ray leaves by) by a few ULPs of p's coordinates; near zero, where ULPs
- * vanish, by a small fraction of the scene's size (Waechter & Binder 2019,
- * made scale-free). */
-static Vec3 offset_origin(const SgRenderer *r, Vec3 p, Vec3 n)
-{
-    const float int_scale = 256.0f;
-    const float near_zero = r->scale * (1.0f / 32.0f);
-    const float float_scale = r->scale * (1.0f / 65536.0f);
-    float pc[3] = {p.x, p.y, p.z}, nc[3] = {n.x, n.y, n.z}, out[3];
-    for (int i = 0; i < 3; i++) {
-        int32_t of = (int32_t)(int_scale * nc[i]);
-        float pi = int_as_float(float_as_int(pc[i]) + (pc[i] < 0 ? -of : of));
-        out[i] = fabsf(pc[i]) < near_zero ? pc[i] + float_scale * nc[i] : pi;
-    }
-    return v3(out[0], out[1], out[2]);
-}
-
-typedef struct Hit {
-    bool found;
-    uint32_t tri;
-    float t;
-    Vec3 p;
-} Hit;
-
-static Hit intersect(const SgRenderer *r, Vec3 o, Vec3 d, float tfar)
-{
-    struct RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    struct RTCRayHit rh;
-    rh.ray.org_x = o.x; rh.ray.org_y = o.y; rh.ray.org_z = o.z;
-    rh.ray.dir_x = d.x; rh.ray.dir_y = d.y; rh.ray.dir_z = d.z;
-    rh.ray.tnear = 0.0f;
-    rh.ray.tfar = tfar;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.flags = 0;
-    rh.ray.time = 0.0f;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(r->rtc_scene, &ctx, &rh);
-    Hit h = {0};
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
-        return h;
-    h.found = true;
-    h.tri = rh.hit.primID;
-    h.t = rh.ray.tfar;
-    /* the hit point from the barycentrics (more accurate than o + t d) */
-    const uint32_t *id = r->indices + 3 * h.tri;
-    Vec3 a = r->vertices[id[0]], b = r->vertices[id[1]], c = r->vertices[id[2]];
-    float u = rh.hit.u, v = rh.hit.v;
-    h.p = v3_add(v3_add(v3_scale(a, 1.0f - u - v), v3_scale(b, u)), v3_scale(c, v));
-    return h;
-}
-
-static bool occluded(const SgRenderer *r, Vec3 o, Vec3 d, float tfar)
-{
-    struct RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    struct RTCRay ray;
-    ray.org_x = o.x; ray.org_y = o.y; ray.org_z = o.z;
-    ray.dir_x = d.x; ray.dir_y = d.y; ray.dir_z = d.z;
-    ray.tnear = 0.0f;
-    ray.tfar = tfar;
-    ray.mask = 0xFFFFFFFFu;
-    ray.flags = 0;
-    ray.time = 0.0f;
-    rtcOccluded1(r->rtc_scene, &ctx, &ray);
-    return ray.tfar < 0.0f;
-}
-
-
-
 static inline float power_heuristic(float a, float b)
 {
     float a2 = a * a, b2 = b * b;
     return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
 }
-
 
 /* Which way does the bounce sample at a diffuse/glossy vertex go. */
 typedef enum BounceKind {
@@ -480,10 +293,6 @@ typedef struct PathStats {
     uint64_t bounces;      /* diffuse and glossy bounces drawn */
     uint64_t lobe_bounces; /* of which the guide's lobe drew the direction */
 } PathStats;
-
-
-
-
 
 /* A vertex of a learning path waiting for the rest of the path. */
 typedef struct PendingRecord {
@@ -686,15 +495,15 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
     for (;;) {
         for (; alive; depth++) {
             bool roulette_done = false; /* a roulette has decided at this vertex */
-            Hit h = intersect(r, ps.o, ps.d, INFINITY);
+            Hit h = intersect(&r->geo, ps.o, ps.d, INFINITY);
             st->rays++;
             if (!h.found)
                 break;
-            Vec3 ng = r->tris[h.tri].normal;
+            Vec3 ng = r->geo.tris[h.tri].normal;
             float cos_o = v3_dot(ps.d, ng);
             if (depth == 0 && first_pass && cos_o > 0.0f)
                 st->backface++;
-            const Material *m = &r->materials[r->tris[h.tri].material];
+            const Material *m = &r->materials[r->geo.tris[h.tri].material];
             Vec3 wo = v3_scale(ps.d, -1.0f);
             Vec3 n = cos_o < 0.0f ? ng : v3_scale(ng, -1.0f); /* facing wo */
             /* openpgl, a training pass: every vertex is a segment of the path's record */
@@ -705,7 +514,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 float w = 1.0f;
                 if (!ps.specular_bounce) {
                     Vec3 dp = v3_sub(h.p, ps.prev_p);
-                    float pl = light_set_pdf(&r->lights, r->tris[h.tri].light, v3_dot(dp, dp), -cos_o);
+                    float pl = light_set_pdf(&r->lights, r->geo.tris[h.tri].light, v3_dot(dp, dp), -cos_o);
                     w = power_heuristic(ps.prev_pdf, pl);
                 }
                 radiance = v3_add(radiance, v3_scale(v3_mul(ps.beta, m->emission), w));
@@ -721,7 +530,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 ps.d = v3_normalize(sg_reflect(wo, n));
                 ps.beta = v3_mul(ps.beta, m->ks);
                 ps.rr_beta = v3_mul(ps.rr_beta, m->ks);
-                ps.o = offset_origin(r, h.p, n);
+                ps.o = offset_origin(&r->geo, h.p, n);
                 ps.specular_bounce = true;
                 if (seg)
                     sg_pgl_segment_bounce(seg, ps.d, 1.0f, m->ks, true, 1.0f, 0.0f);
@@ -741,10 +550,10 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 bool refracted = !(sg_rng_float(rng) < fresnel);
                 if (!refracted) {
                     ps.d = v3_normalize(sg_reflect(wo, n));
-                    ps.o = offset_origin(r, h.p, n);
+                    ps.o = offset_origin(&r->geo, h.p, n);
                 } else {
                     ps.d = v3_normalize(v3_add(v3_scale(wo, -eta), v3_scale(n, eta * cos_i - cos_t)));
-                    ps.o = offset_origin(r, h.p, v3_scale(n, -1.0f));
+                    ps.o = offset_origin(&r->geo, h.p, v3_scale(n, -1.0f));
                     ps.beta = v3_scale(ps.beta, eta * eta); /* radiance is compressed entering glass */
                     weight = v3(eta * eta, eta * eta, eta * eta);
                 }
@@ -775,7 +584,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 if (mode == SG_SAMPLING_GUIDED && r->learner) {
                     const SgMixtureView *view = r->mixture_view;
                     /* n is the winding normal or its opposite: the other bin of the pair */
-                    uint32_t bin = r->tris[h.tri].normal_bin ^ (cos_o < 0.0f ? 0u : 1u);
+                    uint32_t bin = r->geo.tris[h.tri].normal_bin ^ (cos_o < 0.0f ? 0u : 1u);
                     region = sg_mixture_region_at(view, h.p, bin);
                     uint8_t state = view->state[region];
                     mix = view->of_state[state & SG_MIXTURE_STATE_CANDIDATE];
@@ -793,7 +602,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 v.guided = mode == SG_SAMPLING_SKELETON || (mode == SG_SAMPLING_GUIDED && (lobe_region || learn));
                 GuideQuery gq;
                 v.guided = v.guided && skeleton_guide_begin(&r->skeleton, h.p, n, rng, &gq);
-                v.origin = offset_origin(r, h.p, n);
+                v.origin = offset_origin(&r->geo, h.p, n);
 
                 /* next-event estimation */
                 Vec3 nee = v3(0, 0, 0);
@@ -804,24 +613,24 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 float ua = sg_rng_float(rng), ub = sg_rng_float(rng);
                 uint32_t t;
                 Vec3 y;
-                if (light_set_sample(&r->lights, r->vertices, r->indices, ul, ut, ua, ub, &t, &y)) {
+                if (light_set_sample(&r->lights, r->geo.vertices, r->geo.indices, ul, ut, ua, ub, &t, &y)) {
                     Vec3 to = v3_sub(y, v.origin);
                     float dist2 = v3_dot(to, to);
                     float dist = sqrtf(dist2);
                     Vec3 wi = v3_scale(to, 1.0f / dist);
-                    float cos_l = -v3_dot(wi, r->tris[t].normal);
+                    float cos_l = -v3_dot(wi, r->geo.tris[t].normal);
                     float cos_x = v3_dot(wi, n);
-                    const Material *lm = &r->materials[r->tris[t].material];
+                    const Material *lm = &r->materials[r->geo.tris[t].material];
                     /* The skeleton rule asks whether the point is directly lit:
                      * the light sample is visible (even where the point's own
                      * cosine is zero), so it traces the shadow ray then too. */
                     bool wanted = cos_x > 0.0f || mode == SG_SAMPLING_SKELETON;
                     if (dist > 0.0f && cos_l > 0.0f && wanted) {
                         st->rays++;
-                        if (!occluded(r, v.origin, wi, dist * (1.0f - 1e-4f))) {
+                        if (!occluded(&r->geo, v.origin, wi, dist * (1.0f - 1e-4f))) {
                             lit = true;
                             if (cos_x > 0.0f) {
-                                float pl = light_set_pdf(&r->lights, r->tris[t].light, dist2, cos_l);
+                                float pl = light_set_pdf(&r->lights, r->geo.tris[t].light, dist2, cos_l);
                                 Vec3 f = material_eval(m, &v.lobe, wi);
                                 nee = v3_scale(v3_mul(f, lm->emission), cos_x / pl);
                                 nee_dir = wi;
