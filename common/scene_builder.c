@@ -11,6 +11,7 @@
 
 #include "color.h"
 #include "hash.h"
+#include "union_find.h"
 #include "vecmath.h"
 
 static bool grow(void **array, uint32_t *capacity, uint32_t needed, size_t item,
@@ -139,15 +140,6 @@ bool sg_builder_append_mesh(SgSceneBuilder *b, const char *file, const double *p
     return true;
 }
 
-static uint32_t find_root(uint32_t *parent, uint32_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
-
 typedef struct LightKey {
     uint32_t root, material, triangle;
 } LightKey;
@@ -182,11 +174,8 @@ static bool group_lights(SgSceneBuilder *b, SgError *err)
             continue;
         emissive++;
         const uint32_t *idx = s->indices + 3 * (size_t)t;
-        for (int c = 1; c < 3; c++) {
-            uint32_t r0 = find_root(parent, idx[0]), r1 = find_root(parent, idx[c]);
-            if (r0 != r1)
-                parent[r1 > r0 ? r1 : r0] = r1 > r0 ? r0 : r1;
-        }
+        for (int c = 1; c < 3; c++)
+            sg_set_union(parent, idx[0], idx[c]);
     }
     /* Sort emissive triangles by (component, material, id) so that lights
      * come out in a deterministic order. */
@@ -199,7 +188,7 @@ static bool group_lights(SgSceneBuilder *b, SgError *err)
     for (uint32_t t = 0; t < s->triangle_count; t++) {
         const float *e = s->materials[s->triangle_material[t]].emission;
         if (e[0] > 0 || e[1] > 0 || e[2] > 0)
-            keys[n++] = (LightKey){find_root(parent, s->indices[3 * (size_t)t]),
+            keys[n++] = (LightKey){sg_set_find(parent, s->indices[3 * (size_t)t]),
                                    s->triangle_material[t], t};
     }
     qsort(keys, n, sizeof *keys, compare_light_keys);

@@ -26,6 +26,7 @@
 #include <string.h>
 
 #include "threads.h"
+#include "union_find.h"
 
 #define KINDS 18
 #define SQUARE_BITS 0x68u /* masks 3, 5, 6 */
@@ -479,15 +480,6 @@ static int compare_u64(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-static uint32_t uf_find(uint32_t *parent, uint32_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
-
 static size_t square_index(const U32Vec *squares, uint32_t cell)
 {
     size_t lo = 0, hi = squares->n;
@@ -614,10 +606,8 @@ static bool break_cavities(Collapse *c)
     uint32_t broken = 0;
     for (size_t j = 0; j < n; j++) {
         size_t i = (size_t)(order[j] & 0xffffffffu);
-        uint32_t ra = uf_find(parent, side[2 * i]), rb = uf_find(parent, side[2 * i + 1]);
-        if (ra == rb)
+        if (!sg_set_union(parent, side[2 * i], side[2 * i + 1]))
             continue;
-        parent[ra] = rb;
         remove_cell(c, squares.a[i]);
         c->squares--;
         c->removed++;

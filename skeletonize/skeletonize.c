@@ -8,6 +8,7 @@
 #include "collapse.h"
 #include "complex.h"
 #include "progress.h"
+#include "union_find.h"
 
 void sg_skeleton_options_default(SgSkeletonOptions *opt)
 {
@@ -57,15 +58,6 @@ static size_t find_u32(const uint32_t *a, size_t n, uint32_t x)
             hi = mid;
     }
     return lo < n && a[lo] == x ? lo : SIZE_MAX;
-}
-
-static uint32_t uf_find(uint32_t *parent, uint32_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
 }
 
 /* Of the 8 corners of a constraint voxel, the one deepest in the medium
@@ -272,9 +264,8 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
         parent[i] = (uint32_t)i;
     uint32_t components = (uint32_t)nv;
     for (size_t e = 0; e < ne; e++) {
-        uint32_t a = uf_find(parent, out->edges[e][0]), b = uf_find(parent, out->edges[e][1]);
-        if (a != b)
-            parent[a] = b, components--;
+        if (sg_set_union(parent, out->edges[e][0], out->edges[e][1]))
+            components--;
     }
     double ratio_sum = 0;
     for (size_t i = 0; i < nv; i++) {

@@ -4,28 +4,7 @@
 #include <string.h>
 
 #include "complex.h"
-
-static uint32_t find_root(uint32_t *parent, uint32_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
-
-static bool unite(uint32_t *parent, uint32_t a, uint32_t b)
-{
-    a = find_root(parent, a);
-    b = find_root(parent, b);
-    if (a == b)
-        return false;
-    if (a < b)
-        parent[b] = a;
-    else
-        parent[a] = b;
-    return true;
-}
+#include "union_find.h"
 
 /* Components of the voxels whose value (as "inside") is wanted, over a
  * grid optionally padded by one layer of background, with 6 or 26
@@ -65,7 +44,7 @@ static bool count_components(const SgGrid *g, bool want_inside, int pad, bool fu
                             size_t j = (size_t)qx + (size_t)nx * ((size_t)qy + (size_t)ny * (size_t)qz);
                             if (parent[j] == UINT32_MAX)
                                 continue;
-                            if (unite(parent, (uint32_t)i, (uint32_t)j))
+                            if (sg_set_union(parent, (uint32_t)i, (uint32_t)j))
                                 components--;
                         }
             }
@@ -102,7 +81,7 @@ bool sg_graph_betti(const SgSkeleton *s, SgBetti *out, SgError *err)
             free(parent);
             return sg_fail(err, "topology: edge %u has a node index out of range", e);
         }
-        if (unite(parent, a, b))
+        if (sg_set_union(parent, a, b))
             components--;
     }
     free(parent);

@@ -7,6 +7,7 @@
 
 #include "progress.h"
 #include "threads.h"
+#include "union_find.h"
 #include "vecmath.h"
 
 /* Slack of the overlap test, in voxels. Geometry that lies exactly on a
@@ -237,27 +238,6 @@ static bool runs_push(Runs *r, uint32_t i0, uint32_t i1)
     return true;
 }
 
-static uint32_t run_root(uint32_t *parent, uint32_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
-
-static void run_union(uint32_t *parent, uint32_t a, uint32_t b)
-{
-    a = run_root(parent, a);
-    b = run_root(parent, b);
-    if (a != b) {
-        if (a < b)
-            parent[b] = a;
-        else
-            parent[a] = b;
-    }
-}
-
 /* Runs of rows ra and rb that overlap once widened by one voxel. */
 static void connect_rows(Runs *r, uint32_t ra, uint32_t rb)
 {
@@ -265,7 +245,7 @@ static void connect_rows(Runs *r, uint32_t ra, uint32_t rb)
     uint32_t b = r->row_first[rb], b_end = r->row_first[rb + 1];
     while (a < a_end && b < b_end) {
         if (r->start[b] <= r->end[a] + 1 && r->start[a] <= r->end[b] + 1)
-            run_union(r->parent, a, b);
+            sg_set_union(r->parent, a, b);
         if (r->end[a] < r->end[b])
             a++;
         else
@@ -462,7 +442,7 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
         if (!sealed) {
             uint32_t run = run_of(g, &runs, ml->seed[0], ml->seed[1], ml->seed[2]);
             if (run != UINT32_MAX)
-                keep[run_root(runs.parent, run)] = 1;
+                keep[sg_set_find(runs.parent, run)] = 1;
         }
         const SgLight *l = &scene->lights[k];
         for (uint32_t t = 0; t < l->triangle_count; t++) {
@@ -479,7 +459,7 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
             if (find_seed(g, c, n, seed)) {
                 uint32_t run = run_of(g, &runs, seed[0], seed[1], seed[2]);
                 if (run != UINT32_MAX)
-                    keep[run_root(runs.parent, run)] = 1;
+                    keep[sg_set_find(runs.parent, run)] = 1;
                 if (sealed) {
                     /* The centroid had no air in front (a ring-shaped lamp):
                      * any triangle's seed stands for the light. */
@@ -505,7 +485,7 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
                 stats->camera_voxel_state = 1;
             else {
                 uint32_t run = run_of(g, &runs, c[0], c[1], c[2]);
-                stats->camera_voxel_state = keep[run_root(runs.parent, run)] ? 2 : 0;
+                stats->camera_voxel_state = keep[sg_set_find(runs.parent, run)] ? 2 : 0;
             }
         }
     }
@@ -515,7 +495,7 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
     for (size_t row = 0; row < rows; row++) {
         uint8_t *v = g->voxels + row * (size_t)g->nx;
         for (uint32_t r = runs.row_first[row]; r < runs.row_first[row + 1]; r++)
-            if (keep[run_root(runs.parent, r)]) {
+            if (keep[sg_set_find(runs.parent, r)]) {
                 memset(v + runs.start[r], 1, runs.end[r] - runs.start[r] + 1);
                 stats->medium_voxels += runs.end[r] - runs.start[r] + 1;
             }
