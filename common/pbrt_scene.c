@@ -21,6 +21,7 @@
 
 #include "color.h"
 #include "image_io.h"
+#include "input_file.h"
 #include "ply_mesh.h"
 #include "scene_builder.h"
 #include "vecmath.h"
@@ -274,42 +275,25 @@ static bool push_file(Parser *p, const char *path, const Token *from)
             return fail_at(p, from, "%s: compressed files are not read: gunzip it first", path);
         return sg_fail(p->err, "%s: compressed files are not read: gunzip it first", path);
     }
-    FILE *f = fopen(path, "rb");
-    if (!f) {
+    char *text;
+    size_t size;
+    SgError read_err = {0};
+    if (!sg_read_file(path, NULL, SG_LIMIT_PBRT_TEXT, &text, &size, &read_err)) {
         if (from)
-            return fail_at(p, from, "%s: cannot open: %s", path, strerror(errno));
-        return sg_fail(p->err, "%s: cannot open: %s", path, strerror(errno));
+            return fail_at(p, from, "%s", read_err.message);
+        return sg_fail(p->err, "%s", read_err.message);
     }
     Source *src = calloc(1, sizeof *src);
     if (!src || !RESERVE(p, p->sources, p->source_count, p->source_capacity, 1)) {
         free(src);
-        fclose(f);
+        free(text);
         return sg_fail(p->err, "%s: out of memory", path);
     }
     p->sources[p->source_count++] = src;
     snprintf(src->path, sizeof src->path, "%s", path);
     src->line = 1;
-    size_t cap = 0;
-    for (;;) {
-        if (src->size + 65536 + 1 > cap) {
-            cap = cap ? 2 * cap : 65536 * 2;
-            char *grown = realloc(src->text, cap);
-            if (!grown) {
-                fclose(f);
-                return sg_fail(p->err, "%s: out of memory", path);
-            }
-            src->text = grown;
-        }
-        size_t got = fread(src->text + src->size, 1, 65536, f);
-        src->size += got;
-        if (got < 65536)
-            break;
-    }
-    bool bad = ferror(f);
-    fclose(f);
-    if (bad)
-        return sg_fail(p->err, "%s: read error", path);
-    src->text[src->size] = 0;
+    src->text = text;
+    src->size = size;
     if (src->size >= 2 && (((unsigned char)src->text[0] == 0xfe &&
                             (unsigned char)src->text[1] == 0xff) ||
                            ((unsigned char)src->text[0] == 0xff &&

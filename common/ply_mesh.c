@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "input_file.h"
+
 enum Format { ASCII, BINARY_LE, BINARY_BE };
 enum Type { T_NONE, T_I8, T_U8, T_I16, T_U16, T_I32, T_U32, T_F32, T_F64 };
 
@@ -93,35 +95,6 @@ static bool read_value(Reader *r, enum Type t, double *out)
     return true;
 }
 
-static bool load_file(const char *path, unsigned char **data, size_t *size, SgError *err)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return sg_fail(err, "%s: cannot open mesh: %s", path, strerror(errno));
-    if (fseek(f, 0, SEEK_END) != 0) {
-        fclose(f);
-        return sg_fail(err, "%s: cannot read mesh", path);
-    }
-    long len = ftell(f);
-    rewind(f);
-    if (len < 0) {
-        fclose(f);
-        return sg_fail(err, "%s: cannot read mesh", path);
-    }
-    *data = malloc((size_t)len + 1);
-    if (!*data) {
-        fclose(f);
-        return sg_fail(err, "%s: out of memory", path);
-    }
-    *size = fread(*data, 1, (size_t)len, f);
-    fclose(f);
-    if (*size != (size_t)len) {
-        free(*data);
-        return sg_fail(err, "%s: read error", path);
-    }
-    (*data)[*size] = 0;
-    return true;
-}
 
 static bool parse_header(Reader *r, Element *elements, int *element_count, SgError *err)
 {
@@ -219,9 +192,10 @@ bool sg_ply_mesh_read(SgPlyMesh *mesh, const char *path, SgError *err)
 {
     memset(mesh, 0, sizeof *mesh);
     Reader r = {.path = path};
-    unsigned char *data = NULL;
-    if (!load_file(path, &data, &r.size, err))
+    char *text;
+    if (!sg_read_file(path, "mesh", SG_LIMIT_MESH, &text, &r.size, err))
         return false;
+    unsigned char *data = (unsigned char *)text;
     r.data = data;
     Element elements[16];
     int element_count = 0;

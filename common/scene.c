@@ -17,6 +17,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "input_file.h"
 #include "pbrt_scene.h"
 #include "ply_mesh.h"
 #include "scene_builder.h"
@@ -738,48 +739,6 @@ static bool load_settings(Builder *b, const cJSON *root, SgError *err)
 
 /* ---- finishing ---------------------------------------------------------- */
 
-static char *read_text_file(const char *path, SgError *err)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        sg_fail(err, "%s: cannot open: %s", path, strerror(errno));
-        return NULL;
-    }
-    char *text = NULL;
-    size_t size = 0, cap = 0;
-    for (;;) {
-        if (size + 65536 + 1 > cap) {
-            cap = cap ? 2 * cap : 65536 * 2;
-            if (cap > ((size_t)256 << 20)) {
-                sg_fail(err, "%s: scene description larger than 256 MB", path);
-                free(text);
-                fclose(f);
-                return NULL;
-            }
-            char *p = realloc(text, cap);
-            if (!p) {
-                free(text);
-                fclose(f);
-                sg_fail(err, "%s: out of memory", path);
-                return NULL;
-            }
-            text = p;
-        }
-        size_t got = fread(text + size, 1, 65536, f);
-        size += got;
-        if (got < 65536)
-            break;
-    }
-    bool bad = ferror(f);
-    fclose(f);
-    if (bad) {
-        free(text);
-        sg_fail(err, "%s: read error", path);
-        return NULL;
-    }
-    text[size] = 0;
-    return text;
-}
 
 /* Line number of a byte offset, for parse errors. */
 static int line_of(const char *text, const char *where)
@@ -792,8 +751,9 @@ static int line_of(const char *text, const char *where)
 
 static SgScene *load_json_scene(const char *path, SgError *err)
 {
-    char *text = read_text_file(path, err);
-    if (!text)
+    char *text;
+    size_t size;
+    if (!sg_read_file(path, NULL, SG_LIMIT_SCENE_TEXT, &text, &size, err))
         return NULL;
     cJSON *root = cJSON_ParseWithOpts(text, NULL, 1);
     if (!root) {

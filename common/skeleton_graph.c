@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "input_file.h"
 #include "output_file.h"
 
 /* ---- writer ------------------------------------------------------------ */
@@ -543,34 +544,11 @@ bool sg_skeleton_parse_ply(SgSkeleton *skeleton, const void *data, size_t size,
 bool sg_skeleton_read_ply(SgSkeleton *skeleton, const char *path, SgError *err)
 {
     memset(skeleton, 0, sizeof *skeleton);
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return sg_fail(err, "%s: cannot open: %s", path, strerror(errno));
-    unsigned char *data = NULL;
-    size_t size = 0, cap = 0;
-    bool ok = true;
-    for (;;) {
-        if (size == cap) {
-            size_t next = cap ? cap * 2 : (size_t)1 << 16;
-            unsigned char *grown = realloc(data, next);
-            if (!grown) {
-                ok = sg_fail(err, "%s: out of memory", path);
-                break;
-            }
-            data = grown;
-            cap = next;
-        }
-        size_t got = fread(data + size, 1, cap - size, f);
-        size += got;
-        if (got == 0) {
-            if (ferror(f))
-                ok = sg_fail(err, "%s: read error: %s", path, strerror(errno));
-            break;
-        }
-    }
-    fclose(f);
+    char *data;
+    size_t size;
+    bool ok = sg_read_file(path, NULL, SG_LIMIT_SKELETON, &data, &size, err);
     if (ok)
-        ok = sg_skeleton_parse_ply(skeleton, data, size, path, err);
+        ok = sg_skeleton_parse_ply(skeleton, (const unsigned char *)data, size, path, err);
     free(data);
     return ok;
 }
