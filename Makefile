@@ -145,7 +145,7 @@ FUZZ_SRC := $(wildcard tests/fuzz/fuzz_*.c)
 FUZZ_SECONDS ?= 60
 # OpenVDB 10 loads raw file bytes into bools (undefined behaviour inside its
 # headers, harmless in practice): gcc cannot exempt it from the source.
-$(BUILD)/common/medium_vdb.o: CXXFLAGS += -fno-sanitize=bool
+$(BUILD)/common/medium_vdb.o $(BUILD)/common/vdb_read_guard.o: CXXFLAGS += -fno-sanitize=bool
 
 # Linked by the C++ driver: UBSan's C++ checks in the wrappers need its runtime.
 $(BUILD)/fuzzers/%: $(BUILD)/tests/fuzz/%.o $(STEP_LIBS) $(BUILD)/libcommon.a

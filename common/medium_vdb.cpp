@@ -30,127 +30,18 @@
 #include <stdexcept>
 #include <string>
 
-#include <dlfcn.h>
-#include <unistd.h>
-
 #include "output_file.h"
-
-// OpenVDB trusts the sizes stored in a file: a corrupt or truncated file can
-// ask operator new for terabytes. The standard says such a request throws
-// std::bad_alloc, which sg_medium_read turns into a one-line error, but
-// sanitizer runtimes abort in their own operator new instead. Routing the
-// global new/delete through malloc/free keeps the standard behaviour in
-// every build. A request larger than the machine's memory is refused before
-// it reaches the allocator, so no sanitizer has anything to say about it.
-//
-// Below the machine's size a corrupt length can still ask for gigabytes
-// that are then zero-filled (a metadata string of 1.6 GB in a 10 kB file),
-// so while a medium is read, one allocation may not exceed what the file
-// can hold plus room for OpenVDB's fixed node tables (this thread only).
-static thread_local std::size_t sg_read_allocation_cap = SIZE_MAX;
-
-// GCC sees free() inlined where OpenVDB's `new` is visible and cannot know
-// that this `new` is malloc: its mismatched-new-delete warning is wrong here.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-static bool sg_allocation_possible(std::size_t size)
-{
-    static const std::size_t physical = [] {
-        long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
-        return pages > 0 && page > 0 ? (std::size_t)pages * (std::size_t)page : SIZE_MAX;
-    }();
-    return size <= physical && size <= sg_read_allocation_cap;
-}
+#include "vdb_read_guard.h"
 
 namespace {
-// Sets the per-read allocation cap for its scope.
+// While a medium is read, one allocation may not exceed what the file can
+// hold plus room for OpenVDB's fixed node tables (common/vdb_read_guard.h).
 struct ReadAllocationCap {
     std::size_t previous;
-    explicit ReadAllocationCap(std::size_t cap) : previous(sg_read_allocation_cap)
-    {
-        sg_read_allocation_cap = cap;
-    }
-    ~ReadAllocationCap() { sg_read_allocation_cap = previous; }
+    explicit ReadAllocationCap(std::size_t cap) : previous(sg_vdb_read_cap_set(cap)) {}
+    ~ReadAllocationCap() { sg_vdb_read_cap_set(previous); }
 };
 } // namespace
-
-void *operator new(std::size_t size)
-{
-    if (sg_allocation_possible(size))
-        if (void *p = std::malloc(size ? size : 1))
-            return p;
-    throw std::bad_alloc();
-}
-void *operator new[](std::size_t size) { return ::operator new(size); }
-void *operator new(std::size_t size, const std::nothrow_t &) noexcept
-{
-    return sg_allocation_possible(size) ? std::malloc(size ? size : 1) : nullptr;
-}
-void *operator new[](std::size_t size, const std::nothrow_t &) noexcept
-{
-    return ::operator new(size, std::nothrow);
-}
-void operator delete(void *p) noexcept { std::free(p); }
-void operator delete[](void *p) noexcept { std::free(p); }
-void operator delete(void *p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void *p, std::size_t) noexcept { std::free(p); }
-void operator delete(void *p, const std::nothrow_t &) noexcept { std::free(p); }
-void operator delete[](void *p, const std::nothrow_t &) noexcept { std::free(p); }
-
-// OpenVDB 10 reads an uncompressed chunk (a negative size before it) of
-// whatever length the file states into a buffer sized for the node: a
-// corrupt file overflows the heap (found by fuzz_medium_vdb). Its two chunk
-// readers are replaced here by ones that check that length first and then
-// hand over to the library's own (the calls from OpenVDB's templates, all
-// instantiated in this file, bind to these definitions).
-#define SG_STR2(x) #x
-#define SG_STR(x) SG_STR2(x)
-namespace {
-using ChunkReader = void (*)(std::istream &, char *, size_t);
-
-// The library's function: the next definition of the same symbol.
-ChunkReader library_chunk_reader(const char *name, std::size_t name_length)
-{
-    const std::string version = SG_STR(OPENVDB_VERSION_NAME);
-    const std::string symbol = "_ZN7openvdb" + std::to_string(version.size()) + version + "2io" +
-                               std::to_string(name_length) + name + "ERSiPcm";
-    return reinterpret_cast<ChunkReader>(dlsym(RTLD_NEXT, symbol.c_str()));
-}
-
-void read_chunk_checked(ChunkReader original, const char *name, std::istream &is, char *data,
-                        size_t numBytes)
-{
-    if (!original)
-        OPENVDB_THROW(openvdb::RuntimeError, "cannot find OpenVDB's " << name);
-    std::streampos start = is.tellg();
-    openvdb::Int64 size = 0;
-    is.read(reinterpret_cast<char *>(&size), sizeof size);
-    if (!is.good() || start == std::streampos(-1))
-        OPENVDB_THROW(openvdb::RuntimeError, "stream failure reading the size of a chunk");
-    if (size <= 0 && (size == INT64_MIN || (std::uint64_t)(-size) != numBytes))
-        OPENVDB_THROW(openvdb::RuntimeError, "expected a " << numBytes << "-byte chunk, the file says "
-                                                           << (size == INT64_MIN ? 0 : -size));
-    is.seekg(start);
-    original(is, data, numBytes);
-}
-} // namespace
-
-namespace openvdb {
-OPENVDB_USE_VERSION_NAMESPACE
-namespace OPENVDB_VERSION_NAME {
-namespace io {
-void unzipFromStream(std::istream &is, char *data, size_t numBytes)
-{
-    static const ChunkReader original = library_chunk_reader("unzipFromStream", 15);
-    read_chunk_checked(original, "unzipFromStream", is, data, numBytes);
-}
-void bloscFromStream(std::istream &is, char *data, size_t numBytes)
-{
-    static const ChunkReader original = library_chunk_reader("bloscFromStream", 15);
-    read_chunk_checked(original, "bloscFromStream", is, data, numBytes);
-}
-} // namespace io
-} // namespace OPENVDB_VERSION_NAME
-} // namespace openvdb
 
 namespace {
 
