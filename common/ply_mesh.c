@@ -7,14 +7,14 @@
 #include <string.h>
 
 #include "input_file.h"
+#include "ply_types.h"
 
 enum Format { ASCII, BINARY_LE, BINARY_BE };
-enum Type { T_NONE, T_I8, T_U8, T_I16, T_U16, T_I32, T_U32, T_F32, T_F64 };
 
 typedef struct Property {
     char name[64];
-    enum Type type;
-    enum Type count_type; /* T_NONE unless a list */
+    SgPlyType type;
+    SgPlyType count_type; /* SG_PLY_NONE unless a list */
 } Property;
 
 typedef struct Element {
@@ -24,26 +24,6 @@ typedef struct Element {
     Property properties[32];
 } Element;
 
-static enum Type parse_type(const char *s)
-{
-    static const struct { const char *name; enum Type type; } names[] = {
-        {"char", T_I8},    {"int8", T_I8},     {"uchar", T_U8},   {"uint8", T_U8},
-        {"short", T_I16},  {"int16", T_I16},   {"ushort", T_U16}, {"uint16", T_U16},
-        {"int", T_I32},    {"int32", T_I32},   {"uint", T_U32},   {"uint32", T_U32},
-        {"float", T_F32},  {"float32", T_F32}, {"double", T_F64}, {"float64", T_F64},
-    };
-    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
-        if (!strcmp(s, names[i].name))
-            return names[i].type;
-    return T_NONE;
-}
-
-static size_t type_size(enum Type t)
-{
-    static const size_t sizes[] = {0, 1, 1, 2, 2, 4, 4, 4, 8};
-    return sizes[t];
-}
-
 typedef struct Reader {
     const unsigned char *data;
     size_t size, pos;
@@ -52,7 +32,7 @@ typedef struct Reader {
 } Reader;
 
 /* One value of type t as a double; false at the end of data or on junk. */
-static bool read_value(Reader *r, enum Type t, double *out)
+static bool read_value(Reader *r, SgPlyType t, double *out)
 {
     if (r->format == ASCII) {
         while (r->pos < r->size && (r->data[r->pos] == ' ' || r->data[r->pos] == '\t' ||
@@ -69,30 +49,12 @@ static bool read_value(Reader *r, enum Type t, double *out)
         *out = strtod(token, &end);
         return *end == 0 && n > 0;
     }
-    size_t size = type_size(t);
+    size_t size = sg_ply_type_size(t);
     if (r->size - r->pos < size)
         return false;
-    unsigned char b[8];
-    memcpy(b, r->data + r->pos, size);
+    bool ok = sg_ply_decode(r->data + r->pos, t, r->format == BINARY_BE, out);
     r->pos += size;
-    if (r->format == BINARY_BE)
-        for (size_t i = 0; i < size / 2; i++) {
-            unsigned char c = b[i];
-            b[i] = b[size - 1 - i];
-            b[size - 1 - i] = c;
-        }
-    switch (t) {
-    case T_I8: *out = (int8_t)b[0]; break;
-    case T_U8: *out = b[0]; break;
-    case T_I16: { int16_t v; memcpy(&v, b, 2); *out = v; break; }
-    case T_U16: { uint16_t v; memcpy(&v, b, 2); *out = v; break; }
-    case T_I32: { int32_t v; memcpy(&v, b, 4); *out = v; break; }
-    case T_U32: { uint32_t v; memcpy(&v, b, 4); *out = v; break; }
-    case T_F32: { float v; memcpy(&v, b, 4); *out = v; break; }
-    case T_F64: { double v; memcpy(&v, b, 8); *out = v; break; }
-    default: return false;
-    }
-    return true;
+    return ok;
 }
 
 
@@ -167,16 +129,16 @@ static bool parse_header(Reader *r, Element *elements, int *element_count, SgErr
                 char name[64];
                 if (sscanf(buf, "%*s %*s %*s %*s %63s", name) != 1)
                     return sg_fail(err, "%s: bad PLY list property on line %d", r->path, line_no);
-                p->count_type = parse_type(w[2]);
-                p->type = parse_type(w[3]);
+                p->count_type = sg_ply_type_parse(w[2]);
+                p->type = sg_ply_type_parse(w[3]);
                 snprintf(p->name, sizeof p->name, "%s", name);
-                if (p->count_type == T_NONE || p->count_type == T_F32 || p->count_type == T_F64)
-                    p->type = T_NONE;
+                if (p->count_type == SG_PLY_NONE || p->count_type == SG_PLY_F32 || p->count_type == SG_PLY_F64)
+                    p->type = SG_PLY_NONE;
             } else if (n == 3) {
-                p->type = parse_type(w[1]);
+                p->type = sg_ply_type_parse(w[1]);
                 snprintf(p->name, sizeof p->name, "%s", w[2]);
             }
-            if (p->type == T_NONE)
+            if (p->type == SG_PLY_NONE)
                 return sg_fail(err, "%s: unknown PLY property type on line %d", r->path, line_no);
         } else {
             return sg_fail(err, "%s: unexpected PLY header line %d", r->path, line_no);
@@ -207,7 +169,7 @@ bool sg_ply_mesh_read(SgPlyMesh *mesh, const char *path, SgError *err)
         int px = -1, py = -1, pz = -1, pf = -1, pnx = -1, pny = -1, pnz = -1;
         for (int p = 0; p < el->property_count; p++) {
             const char *n = el->properties[p].name;
-            bool list = el->properties[p].count_type != T_NONE;
+            bool list = el->properties[p].count_type != SG_PLY_NONE;
             if (is_vertex && !list && !strcmp(n, "x")) px = p;
             if (is_vertex && !list && !strcmp(n, "y")) py = p;
             if (is_vertex && !list && !strcmp(n, "z")) pz = p;
@@ -249,7 +211,7 @@ bool sg_ply_mesh_read(SgPlyMesh *mesh, const char *path, SgError *err)
             for (int p = 0; ok && p < el->property_count; p++) {
                 const Property *prop = &el->properties[p];
                 double v;
-                if (prop->count_type == T_NONE) {
+                if (prop->count_type == SG_PLY_NONE) {
                     if (!read_value(&r, prop->type, &v)) {
                         ok = sg_fail(err, "%s: PLY data truncated or malformed in %s %llu", path,
                                      el->name, (unsigned long long)row);

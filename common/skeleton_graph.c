@@ -14,6 +14,7 @@
 
 #include "input_file.h"
 #include "output_file.h"
+#include "ply_types.h"
 
 /* ---- writer ------------------------------------------------------------ */
 
@@ -99,41 +100,6 @@ bool sg_skeleton_write_ply(const SgSkeleton *skeleton, const char *path, SgError
 
 /* ---- reader ------------------------------------------------------------ */
 
-typedef enum PlyType {
-    PLY_NONE, PLY_I8, PLY_U8, PLY_I16, PLY_U16, PLY_I32, PLY_U32, PLY_F32, PLY_F64
-} PlyType;
-
-static const struct {
-    const char *name;
-    PlyType type;
-} ply_type_names[] = {
-    {"char", PLY_I8},    {"int8", PLY_I8},     {"uchar", PLY_U8},   {"uint8", PLY_U8},
-    {"short", PLY_I16},  {"int16", PLY_I16},   {"ushort", PLY_U16}, {"uint16", PLY_U16},
-    {"int", PLY_I32},    {"int32", PLY_I32},   {"uint", PLY_U32},   {"uint32", PLY_U32},
-    {"float", PLY_F32},  {"float32", PLY_F32}, {"double", PLY_F64}, {"float64", PLY_F64},
-};
-
-static int ply_type_size(PlyType t)
-{
-    switch (t) {
-    case PLY_I8: case PLY_U8: return 1;
-    case PLY_I16: case PLY_U16: return 2;
-    case PLY_I32: case PLY_U32: case PLY_F32: return 4;
-    case PLY_F64: return 8;
-    default: return 0;
-    }
-}
-
-static bool ply_type_is_float(PlyType t) { return t == PLY_F32 || t == PLY_F64; }
-
-static PlyType ply_type_parse(const char *s)
-{
-    for (size_t i = 0; i < sizeof ply_type_names / sizeof ply_type_names[0]; i++)
-        if (strcmp(s, ply_type_names[i].name) == 0)
-            return ply_type_names[i].type;
-    return PLY_NONE;
-}
-
 /* Where a known property's value goes. */
 typedef enum PlyField {
     F_UNKNOWN = -1,
@@ -149,8 +115,8 @@ static const char *const field_names[F_COUNT] = {
 enum { PLY_MAX_PROPS = 64, PLY_MAX_ELEMENTS = 16 };
 
 typedef struct PlyProperty {
-    PlyType type;       /* scalar type, or the item type of a list */
-    PlyType count_type; /* PLY_NONE for a scalar */
+    SgPlyType type;       /* scalar type, or the item type of a list */
+    SgPlyType count_type; /* SG_PLY_NONE for a scalar */
     PlyField field;
 } PlyProperty;
 
@@ -250,14 +216,14 @@ static bool parse_header(PlyReader *r, SgError *err)
             if (type && strcmp(type, "list") == 0) {
                 const char *ct = strtok_r(NULL, " \t", &save);
                 type = strtok_r(NULL, " \t", &save);
-                p->count_type = ct ? ply_type_parse(ct) : PLY_NONE;
-                if (p->count_type == PLY_NONE || ply_type_is_float(p->count_type))
+                p->count_type = ct ? sg_ply_type_parse(ct) : SG_PLY_NONE;
+                if (p->count_type == SG_PLY_NONE || sg_ply_type_is_float(p->count_type))
                     return sg_fail(err, "%s: bad list count type in element %s", r->path,
                                    current->name);
             }
             const char *name = strtok_r(NULL, " \t", &save);
-            p->type = type ? ply_type_parse(type) : PLY_NONE;
-            if (p->type == PLY_NONE || !name)
+            p->type = type ? sg_ply_type_parse(type) : SG_PLY_NONE;
+            if (p->type == SG_PLY_NONE || !name)
                 return sg_fail(err, "%s: malformed property line in element %s", r->path,
                                current->name);
             p->field = F_UNKNOWN;
@@ -275,12 +241,12 @@ static bool parse_header(PlyReader *r, SgError *err)
                 if (current->properties[q].field == p->field)
                     return sg_fail(err, "%s: property %s.%s given twice", r->path,
                                    current->name, name);
-            if (p->count_type != PLY_NONE)
+            if (p->count_type != SG_PLY_NONE)
                 return sg_fail(err, "%s: property %s.%s must be a scalar, not a list",
                                r->path, current->name, name);
             bool wants_float = p->field == F_X || p->field == F_Y || p->field == F_Z ||
                                p->field == F_RADIUS;
-            if (wants_float != ply_type_is_float(p->type))
+            if (wants_float != sg_ply_type_is_float(p->type))
                 return sg_fail(err, "%s: property %s.%s has type %s, expected %s", r->path,
                                current->name, name, type,
                                wants_float ? "float or double" : "an integer type");
@@ -293,40 +259,20 @@ static bool parse_header(PlyReader *r, SgError *err)
     return true;
 }
 
-static uint64_t rd_u(const unsigned char *p, int n)
-{
-    uint64_t v = 0;
-    for (int i = n - 1; i >= 0; i--)
-        v = (v << 8) | p[i];
-    return v;
-}
-
 /* Reads one binary value; false when the data ends first. */
-static bool read_binary(PlyReader *r, PlyType t, double *out)
+static bool read_binary(PlyReader *r, SgPlyType t, double *out)
 {
-    int n = ply_type_size(t);
-    if (r->size - r->pos < (size_t)n)
+    size_t n = sg_ply_type_size(t);
+    if (r->size - r->pos < n)
         return false;
-    const unsigned char *p = r->data + r->pos;
-    r->pos += (size_t)n;
-    uint64_t u = rd_u(p, n);
-    switch (t) {
-    case PLY_I8: *out = (int8_t)u; break;
-    case PLY_U8: *out = (uint8_t)u; break;
-    case PLY_I16: *out = (int16_t)u; break;
-    case PLY_U16: *out = (uint16_t)u; break;
-    case PLY_I32: *out = (int32_t)(uint32_t)u; break;
-    case PLY_U32: *out = (uint32_t)u; break;
-    case PLY_F32: { uint32_t b = (uint32_t)u; float f; memcpy(&f, &b, 4); *out = f; break; }
-    case PLY_F64: { double d; memcpy(&d, &u, 8); *out = d; break; }
-    default: return false;
-    }
-    return true;
+    bool ok = sg_ply_decode(r->data + r->pos, t, false, out);
+    r->pos += n;
+    return ok;
 }
 
 /* Reads one ascii token as a value of type t; 0 = ok, 1 = end of data,
  * 2 = not a valid number of that type. */
-static int read_ascii(PlyReader *r, PlyType t, double *out)
+static int read_ascii(PlyReader *r, SgPlyType t, double *out)
 {
     while (r->pos < r->size && (r->data[r->pos] == ' ' || r->data[r->pos] == '\t' ||
                                 r->data[r->pos] == '\n' || r->data[r->pos] == '\r'))
@@ -344,11 +290,11 @@ static int read_ascii(PlyReader *r, PlyType t, double *out)
     token[n] = 0;
     char *end;
     errno = 0;
-    if (ply_type_is_float(t)) {
+    if (sg_ply_type_is_float(t)) {
         *out = strtod(token, &end);
         if (*end)
             return 2;
-        if (t == PLY_F32 && isfinite(*out))
+        if (t == SG_PLY_F32 && isfinite(*out))
             *out = (float)*out;
         return 0;
     }
@@ -357,11 +303,11 @@ static int read_ascii(PlyReader *r, PlyType t, double *out)
         return 2;
     long long lo, hi;
     switch (t) {
-    case PLY_I8: lo = INT8_MIN, hi = INT8_MAX; break;
-    case PLY_U8: lo = 0, hi = UINT8_MAX; break;
-    case PLY_I16: lo = INT16_MIN, hi = INT16_MAX; break;
-    case PLY_U16: lo = 0, hi = UINT16_MAX; break;
-    case PLY_I32: lo = INT32_MIN, hi = INT32_MAX; break;
+    case SG_PLY_I8: lo = INT8_MIN, hi = INT8_MAX; break;
+    case SG_PLY_U8: lo = 0, hi = UINT8_MAX; break;
+    case SG_PLY_I16: lo = INT16_MIN, hi = INT16_MAX; break;
+    case SG_PLY_U16: lo = 0, hi = UINT16_MAX; break;
+    case SG_PLY_I32: lo = INT32_MIN, hi = INT32_MAX; break;
     default: lo = 0, hi = UINT32_MAX; break;
     }
     if (v < lo || v > hi)
@@ -370,7 +316,7 @@ static int read_ascii(PlyReader *r, PlyType t, double *out)
     return 0;
 }
 
-static bool read_value(PlyReader *r, PlyType t, double *out, const PlyElement *e, uint64_t row,
+static bool read_value(PlyReader *r, SgPlyType t, double *out, const PlyElement *e, uint64_t row,
                        SgError *err)
 {
     if (r->ascii) {
@@ -399,7 +345,7 @@ static size_t min_row_bytes(const PlyReader *r, const PlyElement *e)
         if (r->ascii)
             bytes += 2; /* a digit and a separator */
         else
-            bytes += (size_t)ply_type_size(q->count_type != PLY_NONE ? q->count_type : q->type);
+            bytes += (size_t)sg_ply_type_size(q->count_type != SG_PLY_NONE ? q->count_type : q->type);
     }
     return bytes;
 }
@@ -469,7 +415,7 @@ bool sg_skeleton_parse_ply(SgSkeleton *skeleton, const void *data, size_t size,
             for (int p = 0; ok && p < e->property_count; p++) {
                 const PlyProperty *q = &e->properties[p];
                 double value;
-                if (q->count_type == PLY_NONE) {
+                if (q->count_type == SG_PLY_NONE) {
                     ok = read_value(r, q->type, &value, e, row, err);
                     if (ok && q->field != F_UNKNOWN)
                         v[q->field] = value;
