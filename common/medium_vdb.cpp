@@ -3,21 +3,6 @@
 // the lights, camera and input identity. C++ stays inside this file.
 #include "medium.h"
 
-// OpenVDB reads the raw bytes of a file into bool tile values and flags
-// (RootNode::readTopology, readCompressedValues), so a corrupt file gives a
-// bool holding 54: undefined behaviour in OpenVDB's own templates, which are
-// instantiated here, harmless in practice (any non-zero byte reads as true)
-// and not ours to fix. The sanitizers' bool check is off for those
-// templates: under clang here, under gcc by -fno-sanitize=bool on this file.
-#if defined(__clang__)
-#pragma clang attribute push(__attribute__((no_sanitize("bool"))), apply_to = function)
-#endif
-#include <openvdb/io/File.h>
-#include <openvdb/io/Stream.h>
-#include <openvdb/openvdb.h>
-#if defined(__clang__)
-#pragma clang attribute pop
-#endif
 
 #include <cinttypes>
 #include <cmath>
@@ -30,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "openvdb_headers.h"
 #include "output_file.h"
 #include "vdb_read_guard.h"
 

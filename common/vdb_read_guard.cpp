@@ -2,14 +2,6 @@
 // vdb_read_guard.h for what they are, why, and how they are checked.
 #include "vdb_read_guard.h"
 
-#if defined(__clang__)
-#pragma clang attribute push(__attribute__((no_sanitize("bool"))), apply_to = function)
-#endif
-#include <openvdb/io/io.h>
-#include <openvdb/openvdb.h>
-#if defined(__clang__)
-#pragma clang attribute pop
-#endif
 
 #include <cstdint>
 #include <cstdlib>
@@ -21,6 +13,8 @@
 
 #include <dlfcn.h>
 #include <unistd.h>
+
+#include "openvdb_headers.h"
 
 // OpenVDB trusts the sizes stored in a file: a corrupt or truncated file can
 // ask operator new for terabytes. The standard says such a request throws
