@@ -19,13 +19,15 @@
 #include "error.h"
 #include "error_metrics.h"
 
-enum { SG_METRIC_RELMSE, SG_METRIC_MSE8, SG_METRIC_COUNT };
+/* relMSE (on the exposed image), 8-bit MSE (the PNG's bytes) and the plain
+ * MSE of the linear radiance (the CSV's mse column, unexposed). */
+enum { SG_METRIC_RELMSE, SG_METRIC_MSE8, SG_METRIC_MSE, SG_METRIC_COUNT };
 
 typedef struct SgCurve {
     size_t count;
     double *seconds;                 /* increasing */
     double *spp;
-    double *error[SG_METRIC_COUNT];  /* relMSE, 8-bit MSE */
+    double *error[SG_METRIC_COUNT];  /* relMSE, 8-bit MSE, linear MSE */
 } SgCurve;
 
 /* Allocates a curve of `count` zeroed points. */
@@ -92,11 +94,12 @@ void sg_ratio_format(SgReach base, SgReach mode, char *buf, size_t size);
 /* A reference made of two independent halves a and b (same spp) is
  * r = (a + b) / 2; (a - b)^2 / 4 estimates its squared error per value
  * without bias. Returns the reference's own relMSE (render's definition:
- * mean of e^2 / (r^2 + 0.01) on the image times `scale`) and 8-bit MSE (at `scale` = 2^exposure; the
- * byte difference of the halves, halved: a first-order estimate). Writes r
- * into `ref` (may be NULL). n counts floats. */
+ * mean of e^2 / (r^2 + 0.01) on the image times `scale`), 8-bit MSE (at
+ * `scale` = 2^exposure; the byte difference of the halves, halved: a
+ * first-order estimate) and linear MSE (unscaled, like render's mse).
+ * Writes r into `ref` (may be NULL). n counts floats. */
 void sg_reference_from_halves(const float *a, const float *b, size_t n, float scale, float *ref,
-                              double *relmse, double *mse8);
+                              double *relmse, double *mse8, double *mse);
 
 #endif
 
@@ -182,7 +185,7 @@ bool sg_curve_read_csv(const char *path, SgCurve *c, SgError *err)
             ok = sg_fail(err, "%s:%zu: malformed row (want 5 finite numbers)", path, row);
             break;
         }
-        if (v[0] < 0 || v[1] < 0 || v[3] < 0 || v[4] < 0) {
+        if (v[0] < 0 || v[1] < 0 || v[2] < 0 || v[3] < 0 || v[4] < 0) {
             ok = sg_fail(err, "%s:%zu: negative value", path, row);
             break;
         }
@@ -213,6 +216,7 @@ bool sg_curve_read_csv(const char *path, SgCurve *c, SgError *err)
         grow.spp[i] = v[1];
         grow.error[SG_METRIC_RELMSE][i] = v[3];
         grow.error[SG_METRIC_MSE8][i] = v[4];
+        grow.error[SG_METRIC_MSE][i] = v[2];
     }
     if (ok && ferror(f))
         ok = sg_fail(err, "%s: read error", path);
@@ -460,14 +464,15 @@ void sg_ratio_format(SgReach base, SgReach mode, char *buf, size_t size)
 }
 
 void sg_reference_from_halves(const float *a, const float *b, size_t n, float scale, float *ref,
-                              double *relmse, double *mse8)
+                              double *relmse, double *mse8, double *mse)
 {
-    double rs = 0, s8 = 0;
+    double rs = 0, s8 = 0, s = 0;
     double eps = sg_relmse_epsilon(scale); /* render's relMSE: on the exposed image */
     for (size_t i = 0; i < n; i++) {
         double r = 0.5 * ((double)a[i] + b[i]);
         double half = 0.5 * ((double)a[i] - b[i]);
         rs += sg_relmse_term(half, r, eps);
+        s += half * half;
         double d8 = sg_srgb_byte(a[i] * scale) - sg_srgb_byte(b[i] * scale);
         s8 += 0.25 * d8 * d8;
         if (ref)
@@ -475,5 +480,6 @@ void sg_reference_from_halves(const float *a, const float *b, size_t n, float sc
     }
     *relmse = n ? rs / (double)n : 0.0;
     *mse8 = n ? s8 / (double)n : 0.0;
+    *mse = n ? s / (double)n : 0.0;
 }
 #endif

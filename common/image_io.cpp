@@ -143,3 +143,25 @@ extern "C" bool sg_image_read(const char *path, int *width, int *height, float *
     *rgb = out;
     return true;
 }
+
+extern "C" bool sg_image_read_attribute(const char *path, const char *name, char *buf, size_t size,
+                                        SgError *err)
+{
+    if (size > 0)
+        buf[0] = '\0';
+    auto in = ImageInput::open(path);
+    if (!in) {
+        std::string msg = OIIO::geterror();
+        return sg_fail(err, "%s: cannot read: %s", path, msg.empty() ? "unknown format" : msg.c_str());
+    }
+    const ParamValue *p = in->spec().find_attribute(name);
+    if (!p) {
+        in->close();
+        return sg_fail(err, "%s: no attribute %s", path, name);
+    }
+    std::string value = p->get_string();
+    in->close();
+    if (size > 0)
+        snprintf(buf, size, "%s", value.c_str());
+    return true;
+}

@@ -4,6 +4,7 @@
 #define SG_IMAGE_IO_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 #include "error.h"
 
@@ -25,6 +26,11 @@ bool sg_image_write_png(const char *path, int width, int height, const float *rg
                         double exposure, SgError *err);
 /* Reads any image OpenImageIO knows as float RGB; caller frees *rgb. */
 bool sg_image_read(const char *path, int *width, int *height, float **rgb, SgError *err);
+/* The attribute `name` of an image's header as text (a string attribute as
+ * written by sg_image_write_exr, any other type formatted by OpenImageIO)
+ * into buf; false with the cause in err when the file cannot be opened or
+ * has no such attribute. */
+bool sg_image_read_attribute(const char *path, const char *name, char *buf, size_t size, SgError *err);
 
 #ifdef __cplusplus
 }

@@ -1,0 +1,610 @@
+/* `convergence analyze` (bench/convergence.c, for bench/sections/
+ * 60-convergence.sh), kept apart so that tests/test_bench_convergence.c can
+ * run it on synthetic curves. Single-header library like
+ * convergence_math.h: exactly one file of a program defines
+ * SG_CONVERGENCE_ANALYZE_IMPLEMENTATION before including it, in a file that
+ * also has convergence_math.h's implementation.
+ *
+ *   analyze NAME RUNDIR SEEDS TABLEDIR [--modes A,B,...] [--compare X:Y]...
+ *           [--size WxH] [--ref-relmse X] [--ref-mse8 Y] [--ref-mse Z]
+ *           [--ref-spp N] [--ref-seconds S] [--ref-state TEXT]
+ *
+ * reads RUNDIR/MODE-SEED.csv (render --log) for seeds 1..SEEDS and the modes
+ * of --modes, the first of which is the baseline; without --modes, the modes
+ * that have such files, bsdf first, then skeleton, guided, openpgl, then any
+ * other in name order (bsdf must be among them). A mode whose runs all
+ * failed keeps its columns, with "-". Writes each mode's mean curve
+ * RUNDIR/MODE.mean.dat (seconds spp relmse mse8 mse) and RUNDIR/levels.txt
+ * ("relmse L1 L2 mse8 L1 L2 mse L1 L2"); appends one markdown row per level
+ * to TABLEDIR/table2-{relmse,mse8,mse}.md and one row to
+ * TABLEDIR/{equal-time,reference}.md, and for every mode whose runs trained
+ * a field (the EXR attribute sg:training_passes > 0, i.e. openpgl) one row to
+ * TABLEDIR/training.md; each table's header goes to TABLEDIR/TABLE.head
+ * (rewritten every time: one table, one list of modes). One line goes to
+ * TABLEDIR/headline.tsv: scene, image, relMSE level, bsdf s, guided s,
+ * guided speed-up, skeleton speed-up, and where openpgl ran, openpgl s,
+ * openpgl speed-up, guided over openpgl.
+ *
+ * --compare X:Y adds to the time-to-level tables a column with the speed-up
+ * of X over Y (Y seconds / X seconds, > 1: X is faster); by default
+ * guided:openpgl when both modes are there. With --modes bsdf,skeleton,guided
+ * the tables are those of the three-mode benchmark, plus the MSE ones. */
+#ifndef SG_CONVERGENCE_ANALYZE_H
+#define SG_CONVERGENCE_ANALYZE_H
+
+#include "error.h"
+
+#define SG_ANALYZE_MAX_MODES 8
+#define SG_ANALYZE_MAX_COMPARE 4
+
+/* argv as the program's: argv[1] is "analyze", argv[2] NAME. 0 on success. */
+int sg_convergence_analyze(int argc, char **argv, SgError *err);
+
+#endif
+
+#ifdef SG_CONVERGENCE_ANALYZE_IMPLEMENTATION
+#include <dirent.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "image_io.h"
+#include "output_file.h"
+
+/* points of a mean curve, log-spaced in time */
+#define SG_ANALYZE_MEAN_POINTS 120
+
+static const char *const sg_metric_key[SG_METRIC_COUNT] = {"relmse", "mse8", "mse"};
+static const char *const sg_metric_title[SG_METRIC_COUNT] = {"relMSE", "mse8", "MSE"};
+/* the order of discovered modes; any other comes after, by name */
+static const char *const sg_known_modes[] = {"bsdf", "skeleton", "guided", "openpgl"};
+
+typedef struct SgModeResult {
+    bool present;
+    int seeds;             /* curves read */
+    SgCurve mean;
+    double us_per_sample;  /* wall time per sample over all threads, mean of seeds */
+    double final_spp;      /* mean of seeds */
+    /* from the runs' EXR attributes (means over the runs that have them) */
+    int trained_runs;
+    double training_passes, training_seconds, run_seconds, guide_share;
+    double training_phase;  /* seconds until the last training pass ended */
+} SgModeResult;
+
+static double sg_attr_number(const char *path, const char *name, bool *ok)
+{
+    char buf[128];
+    SgError e = {0};
+    if (!sg_image_read_attribute(path, name, buf, sizeof buf, &e)) {
+        *ok = false;
+        return NAN;
+    }
+    char *end;
+    double v = strtod(buf, &end);
+    if (end == buf || !isfinite(v))
+        *ok = false;
+    return v;
+}
+
+static bool sg_analyze_load_mode(const char *dir, const char *mode, int seeds, SgModeResult *res, SgError *err)
+{
+    memset(res, 0, sizeof *res);
+    SgCurve curves[64];
+    int n = 0;
+    for (int s = 1; s <= seeds && n < 64; s++) {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s-%d.csv", dir, mode, s);
+        SgError e = {0};
+        if (!sg_curve_read_csv(path, &curves[n], &e)) {
+            /* a failed run is reported and left out; the others still count */
+            fprintf(stderr, "convergence: %s (left out)\n", e.message);
+            continue;
+        }
+        /* what the guide did, from the image (absent or 0 passes: no field) */
+        snprintf(path, sizeof path, "%s/%s-%d.exr", dir, mode, s);
+        bool ok = true;
+        double passes = sg_attr_number(path, "sg:training_passes", &ok);
+        double tsec = sg_attr_number(path, "sg:training_seconds", &ok);
+        double run = sg_attr_number(path, "seconds", &ok);
+        double share = sg_attr_number(path, "sg:guide_share", &ok);
+        if (ok && passes > 0 && run > 0) {
+            const SgCurve *c = &curves[n];
+            double phase = c->seconds[c->count - 1];
+            for (size_t i = 0; i < c->count; i++)
+                if (c->spp[i] >= passes) {
+                    phase = c->seconds[i];
+                    break;
+                }
+            res->trained_runs++;
+            res->training_passes += passes;
+            res->training_seconds += tsec;
+            res->run_seconds += run;
+            res->guide_share += share;
+            res->training_phase += phase;
+        }
+        n++;
+    }
+    if (res->trained_runs > 0) {
+        double k = res->trained_runs;
+        res->training_passes /= k;
+        res->training_seconds /= k;
+        res->run_seconds /= k;
+        res->guide_share /= k;
+        res->training_phase /= k;
+    }
+    if (n == 0)
+        return true;
+    bool ok = sg_curve_mean(curves, (size_t)n, SG_ANALYZE_MEAN_POINTS, &res->mean, err);
+    for (int k = 0; k < n; k++) {
+        const SgCurve *c = &curves[k];
+        res->final_spp += c->spp[c->count - 1] / n;
+        res->us_per_sample += c->seconds[c->count - 1] / c->spp[c->count - 1] / n;
+        sg_curve_free(&curves[k]);
+    }
+    res->present = ok;
+    res->seeds = n;
+    return ok;
+}
+
+static bool sg_analyze_write_mean(const char *dir, const char *mode, const SgCurve *c, SgError *err)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s.mean.dat", dir, mode);
+    SgOutputFile out;
+    if (!sg_output_open(&out, path, err))
+        return false;
+    fprintf(out.file, "# seconds spp relmse mse8 mse (mean of seeds)\n");
+    for (size_t i = 0; i < c->count; i++)
+        fprintf(out.file, "%.6g %.6g %.6g %.6g %.6g\n", c->seconds[i], c->spp[i], c->error[SG_METRIC_RELMSE][i],
+                c->error[SG_METRIC_MSE8][i], c->error[SG_METRIC_MSE][i]);
+    return sg_output_commit(&out, err);
+}
+
+static bool sg_analyze_append(const char *dir, const char *file, const char *text, SgError *err)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, file);
+    FILE *f = fopen(path, "a");
+    if (!f)
+        return sg_fail(err, "%s: cannot append", path);
+    fputs(text, f);
+    bool ok = !ferror(f);
+    ok = fclose(f) == 0 && ok;
+    return ok ? true : sg_fail(err, "%s: write error", path);
+}
+
+/* TABLEDIR/FILE.head (FILE without .md) := the header and its rule */
+static bool sg_analyze_header(const char *dir, const char *table, const char *header, SgError *err)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s.head", dir, table);
+    SgOutputFile out;
+    if (!sg_output_open(&out, path, err))
+        return false;
+    fprintf(out.file, "%s\n|", header);
+    for (const char *p = header + 1; *p; p++) /* one |---| per column */
+        if (*p == '|')
+            fputs("---|", out.file);
+    fputc('\n', out.file);
+    return sg_output_commit(&out, err);
+}
+
+/* "%.3g" without the exponent form for the usual ranges of our errors. */
+static void sg_format_error(double v, char *buf, size_t size)
+{
+    if (!isfinite(v))
+        snprintf(buf, size, "-");
+    else if (v != 0 && (fabs(v) < 1e-3 || fabs(v) >= 1e5))
+        snprintf(buf, size, "%.2e", v);
+    else if (fabs(v) >= 1)
+        snprintf(buf, size, "%.4g", v);
+    else
+        snprintf(buf, size, "%.3g", v);
+}
+
+/* Appends printf output to a growing line (silently cut at `size`). */
+static void sg_cat(char *line, size_t size, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void sg_cat(char *line, size_t size, const char *fmt, ...)
+{
+    size_t used = strlen(line);
+    if (used + 1 >= size)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line + used, size - used, fmt, ap);
+    va_end(ap);
+}
+
+/* the name in the tables' crowded cells */
+static const char *sg_short_mode(const char *m) { return !strcmp(m, "skeleton") ? "skel." : m; }
+
+static int sg_mode_index(char names[][64], int count, const char *name)
+{
+    for (int m = 0; m < count; m++)
+        if (!strcmp(names[m], name))
+            return m;
+    return -1;
+}
+
+static int sg_known_rank(const char *name)
+{
+    for (size_t k = 0; k < sizeof sg_known_modes / sizeof sg_known_modes[0]; k++)
+        if (!strcmp(name, sg_known_modes[k]))
+            return (int)k;
+    return (int)(sizeof sg_known_modes / sizeof sg_known_modes[0]);
+}
+
+static int sg_mode_order(const void *a, const void *b)
+{
+    const char *x = a, *y = b;
+    int rx = sg_known_rank(x), ry = sg_known_rank(y);
+    return rx != ry ? rx - ry : strcmp(x, y);
+}
+
+/* The modes with a RUNDIR/MODE-SEED.csv, SEED in 1..seeds. */
+static bool sg_discover_modes(const char *dir, int seeds, char names[][64], int *count, SgError *err)
+{
+    DIR *d = opendir(dir);
+    if (!d)
+        return sg_fail(err, "%s: cannot list", dir);
+    *count = 0;
+    struct dirent *e;
+    bool ok = true;
+    while ((e = readdir(d))) {
+        const char *s = e->d_name, *dash = strrchr(s, '-');
+        size_t len = strlen(s);
+        if (!dash || dash == s || len < 5 || strcmp(s + len - 4, ".csv"))
+            continue;
+        char *end;
+        long seed = strtol(dash + 1, &end, 10);
+        if (end != s + len - 4 || end == dash + 1 || seed < 1 || seed > seeds)
+            continue;
+        size_t nlen = (size_t)(dash - s);
+        if (nlen >= 64)
+            continue;
+        char name[64];
+        memcpy(name, s, nlen);
+        name[nlen] = '\0';
+        if (sg_mode_index(names, *count, name) >= 0)
+            continue;
+        if (*count == SG_ANALYZE_MAX_MODES) {
+            ok = sg_fail(err, "%s: more than %d modes", dir, SG_ANALYZE_MAX_MODES);
+            break;
+        }
+        memcpy(names[(*count)++], name, nlen + 1);
+    }
+    closedir(d);
+    if (!ok)
+        return false;
+    qsort(names, (size_t)*count, sizeof names[0], sg_mode_order);
+    if (*count == 0 || strcmp(names[0], "bsdf"))
+        return sg_fail(err, "%s: no bsdf curve: nothing to compare with", dir);
+    return true;
+}
+
+/* "a,b,c" into names */
+static bool sg_parse_modes(const char *list, char names[][64], int *count, SgError *err)
+{
+    *count = 0;
+    const char *p = list;
+    while (*p) {
+        const char *comma = strchr(p, ',');
+        size_t len = comma ? (size_t)(comma - p) : strlen(p);
+        if (len == 0 || len >= 64 || memchr(p, '/', len))
+            return sg_fail(err, "analyze: --modes %s: want names separated by commas", list);
+        if (*count == SG_ANALYZE_MAX_MODES)
+            return sg_fail(err, "analyze: --modes %s: at most %d modes", list, SG_ANALYZE_MAX_MODES);
+        memcpy(names[*count], p, len);
+        names[*count][len] = '\0';
+        if (sg_mode_index(names, *count, names[*count]) >= 0)
+            return sg_fail(err, "analyze: --modes %s: %s twice", list, names[*count]);
+        (*count)++;
+        p += len + (comma ? 1 : 0);
+        if (comma && !*p)
+            return sg_fail(err, "analyze: --modes %s: want names separated by commas", list);
+    }
+    return *count > 0 ? true : sg_fail(err, "analyze: --modes: empty");
+}
+
+int sg_convergence_analyze(int argc, char **argv, SgError *err)
+{
+    if (argc < 6)
+        return sg_fail(err, "analyze: want NAME RUNDIR SEEDS TABLEDIR"), 1;
+    const char *name = argv[2], *dir = argv[3], *tables = argv[5];
+    int seeds = atoi(argv[4]);
+    if (seeds < 1 || seeds > 64)
+        return sg_fail(err, "analyze: SEEDS %s: want 1 to 64", argv[4]), 1;
+    const char *size = "?", *ref_state = "", *modes_arg = NULL;
+    const char *compare_arg[SG_ANALYZE_MAX_COMPARE];
+    int compare_args = 0;
+    double ref_err[SG_METRIC_COUNT], ref_spp = NAN, ref_seconds = NAN;
+    for (int k = 0; k < SG_METRIC_COUNT; k++)
+        ref_err[k] = NAN;
+    for (int i = 6; i < argc; i++) {
+        bool has = i + 1 < argc;
+        double *target = NULL;
+        if (has && !strcmp(argv[i], "--size"))
+            size = argv[++i];
+        else if (has && !strcmp(argv[i], "--ref-state"))
+            ref_state = argv[++i];
+        else if (has && !strcmp(argv[i], "--modes"))
+            modes_arg = argv[++i];
+        else if (has && !strcmp(argv[i], "--compare")) {
+            if (compare_args == SG_ANALYZE_MAX_COMPARE)
+                return sg_fail(err, "analyze: at most %d --compare", SG_ANALYZE_MAX_COMPARE), 1;
+            compare_arg[compare_args++] = argv[++i];
+        } else if (has && !strcmp(argv[i], "--ref-relmse"))
+            target = &ref_err[SG_METRIC_RELMSE];
+        else if (has && !strcmp(argv[i], "--ref-mse8"))
+            target = &ref_err[SG_METRIC_MSE8];
+        else if (has && !strcmp(argv[i], "--ref-mse"))
+            target = &ref_err[SG_METRIC_MSE];
+        else if (has && !strcmp(argv[i], "--ref-spp"))
+            target = &ref_spp;
+        else if (has && !strcmp(argv[i], "--ref-seconds"))
+            target = &ref_seconds;
+        else
+            return sg_fail(err, "analyze: unexpected argument %s", argv[i]), 1;
+        if (target) {
+            char *end;
+            *target = strtod(argv[++i], &end);
+            if (end == argv[i] || *end || !isfinite(*target))
+                return sg_fail(err, "analyze: %s %s: not a number", argv[i - 1], argv[i]), 1;
+        }
+    }
+
+    char names[SG_ANALYZE_MAX_MODES][64];
+    int nm = 0;
+    if (modes_arg ? !sg_parse_modes(modes_arg, names, &nm, err) : !sg_discover_modes(dir, seeds, names, &nm, err))
+        return 1;
+    /* the speed-up columns of one mode over another, by index */
+    int cmp[SG_ANALYZE_MAX_COMPARE][2], nc = 0;
+    for (int c = 0; c < compare_args; c++) {
+        char a[64], b[64];
+        const char *colon = strchr(compare_arg[c], ':');
+        size_t la = colon ? (size_t)(colon - compare_arg[c]) : 0;
+        if (!colon || la == 0 || la >= 64 || strlen(colon + 1) >= 64)
+            return sg_fail(err, "analyze: --compare %s: want MODE:MODE", compare_arg[c]), 1;
+        memcpy(a, compare_arg[c], la);
+        a[la] = '\0';
+        snprintf(b, sizeof b, "%s", colon + 1);
+        cmp[nc][0] = sg_mode_index(names, nm, a);
+        cmp[nc][1] = sg_mode_index(names, nm, b);
+        if (cmp[nc][0] < 0 || cmp[nc][1] < 0 || cmp[nc][0] == cmp[nc][1])
+            return sg_fail(err, "analyze: --compare %s: want two different modes of the run", compare_arg[c]), 1;
+        nc++;
+    }
+    int i_guided = sg_mode_index(names, nm, "guided"), i_pgl = sg_mode_index(names, nm, "openpgl"),
+        i_skel = sg_mode_index(names, nm, "skeleton");
+    if (compare_args == 0 && i_guided > 0 && i_pgl > 0) {
+        cmp[0][0] = i_guided;
+        cmp[0][1] = i_pgl;
+        nc = 1;
+    }
+
+    SgModeResult res[SG_ANALYZE_MAX_MODES];
+    int status = 1;
+    memset(res, 0, sizeof res);
+    char line[4096], head[4096];
+    for (int m = 0; m < nm; m++) {
+        if (!sg_analyze_load_mode(dir, names[m], seeds, &res[m], err))
+            goto done;
+        if (res[m].present && !sg_analyze_write_mean(dir, names[m], &res[m].mean, err))
+            goto done;
+    }
+    const SgModeResult *base = &res[0];
+    if (!base->present) {
+        sg_fail(err, "%s: no %s curve: nothing to compare with", dir, names[0]);
+        goto done;
+    }
+
+    /* Levels from the baseline only, the same for every mode: its mean
+     * error at the end of its run and at an eighth of it, each rounded up
+     * to two significant digits (so the baseline reaches them just before). */
+    double levels[SG_METRIC_COUNT][2];
+    const SgCurve *bc = &base->mean;
+    double t_end = bc->seconds[bc->count - 1], t_early = fmax(t_end / 8, bc->seconds[0]);
+    for (int k = 0; k < SG_METRIC_COUNT; k++) {
+        double end = bc->error[k][bc->count - 1], early;
+        if (!sg_curve_at(bc, k, t_early, &early))
+            early = end;
+        levels[k][1] = sg_level_at_least(end);
+        levels[k][0] = sg_level_at_least(early);
+        if (!(levels[k][0] > levels[k][1])) /* a flat curve: still two levels */
+            levels[k][0] = sg_level_at_least(1.5 * levels[k][1]);
+    }
+    line[0] = '\0';
+    for (int k = 0; k < SG_METRIC_COUNT; k++)
+        sg_cat(line, sizeof line, "%s%s %.6g %.6g", k ? " " : "", sg_metric_key[k], levels[k][0], levels[k][1]);
+    sg_cat(line, sizeof line, "\n");
+    {
+        char path[4096];
+        snprintf(path, sizeof path, "%s/levels.txt", dir);
+        SgOutputFile out;
+        if (!sg_output_open(&out, path, err))
+            goto done;
+        fputs(line, out.file);
+        if (!sg_output_commit(&out, err))
+            goto done;
+    }
+
+    /* table 2: one row per level */
+    SgReach headline[SG_ANALYZE_MAX_MODES];
+    for (int k = 0; k < SG_METRIC_COUNT; k++) {
+        char file[64];
+        snprintf(head, sizeof head, "| scene | %s level |", sg_metric_title[k]);
+        for (int m = 0; m < nm; m++)
+            sg_cat(head, sizeof head, " %s s |", names[m]);
+        for (int m = 1; m < nm; m++)
+            sg_cat(head, sizeof head, " %s speed-up |", names[m]);
+        for (int c = 0; c < nc; c++)
+            sg_cat(head, sizeof head, " %s over %s |", names[cmp[c][0]], names[cmp[c][1]]);
+        snprintf(file, sizeof file, "table2-%s", sg_metric_key[k]);
+        if (!sg_analyze_header(tables, file, head, err))
+            goto done;
+        snprintf(file, sizeof file, "table2-%s.md", sg_metric_key[k]);
+        for (int l = 0; l < 2; l++) {
+            SgReach r[SG_ANALYZE_MAX_MODES];
+            for (int m = 0; m < nm; m++) {
+                r[m] = res[m].present ? sg_curve_time_to_level(&res[m].mean, k, levels[k][l])
+                                      : (SgReach){SG_REACH_NONE, 0};
+                if (k == SG_METRIC_RELMSE && l == 1)
+                    headline[m] = r[m];
+            }
+            char cell[64];
+            sg_format_error(levels[k][l], cell, sizeof cell);
+            snprintf(line, sizeof line, "| %s | %s |", name, cell);
+            for (int m = 0; m < nm; m++) {
+                sg_reach_format(r[m], cell, sizeof cell);
+                sg_cat(line, sizeof line, " %s |", cell);
+            }
+            for (int m = 1; m < nm; m++) {
+                sg_ratio_format(r[0], r[m], cell, sizeof cell);
+                sg_cat(line, sizeof line, " %s |", cell);
+            }
+            for (int c = 0; c < nc; c++) {
+                sg_ratio_format(r[cmp[c][1]], r[cmp[c][0]], cell, sizeof cell);
+                sg_cat(line, sizeof line, " %s |", cell);
+            }
+            sg_cat(line, sizeof line, "\n");
+            if (!sg_analyze_append(tables, file, line, err))
+                goto done;
+        }
+    }
+
+    /* equal time: every mode at the time all of them reached */
+    double t_eq = INFINITY;
+    for (int m = 0; m < nm; m++)
+        if (res[m].present)
+            t_eq = fmin(t_eq, res[m].mean.seconds[res[m].mean.count - 1]);
+    double eq[SG_ANALYZE_MAX_MODES][SG_METRIC_COUNT];
+    for (int m = 0; m < nm; m++)
+        for (int k = 0; k < SG_METRIC_COUNT; k++)
+            if (!res[m].present || !sg_curve_at(&res[m].mean, k, t_eq, &eq[m][k]))
+                eq[m][k] = NAN;
+    int w = 0, h = 0;
+    double pixels = sscanf(size, "%dx%d", &w, &h) == 2 ? (double)w * h : NAN;
+    snprintf(head, sizeof head, "| scene | size | seconds | spp");
+    for (int m = 0; m < nm; m++)
+        sg_cat(head, sizeof head, "%s %s", m ? " /" : "", names[m]);
+    sg_cat(head, sizeof head, " | µs/sample");
+    for (int m = 0; m < nm; m++)
+        sg_cat(head, sizeof head, "%s %s", m ? " /" : "", sg_short_mode(names[m]));
+    sg_cat(head, sizeof head, " |");
+    for (int k = 0; k < SG_METRIC_COUNT; k++) {
+        sg_cat(head, sizeof head, " %s %s |", sg_metric_title[k], names[0]);
+        for (int m = 1; m < nm; m++)
+            sg_cat(head, sizeof head, " %s |", names[m]);
+        sg_cat(head, sizeof head, " ratio");
+        for (int m = 1; m < nm; m++)
+            sg_cat(head, sizeof head, "%s %s", m > 1 ? " /" : "", sg_short_mode(names[m]));
+        sg_cat(head, sizeof head, " |");
+    }
+    if (!sg_analyze_header(tables, "equal-time", head, err))
+        goto done;
+    snprintf(line, sizeof line, "| %s | %s | %.1f |", name, size, t_eq);
+    for (int pass = 0; pass < 2; pass++) { /* spp, then µs per sample */
+        for (int m = 0; m < nm; m++) {
+            sg_cat(line, sizeof line, "%s", m ? " /" : "");
+            if (res[m].present && isfinite(pixels)) {
+                if (pass == 0)
+                    sg_cat(line, sizeof line, " %.0f", res[m].final_spp);
+                else
+                    sg_cat(line, sizeof line, " %.3f", 1e6 * res[m].us_per_sample / pixels);
+            } else
+                sg_cat(line, sizeof line, " -");
+        }
+        sg_cat(line, sizeof line, " |");
+    }
+    for (int k = 0; k < SG_METRIC_COUNT; k++) {
+        char cell[64];
+        for (int m = 0; m < nm; m++) {
+            sg_format_error(eq[m][k], cell, sizeof cell);
+            sg_cat(line, sizeof line, " %s |", cell);
+        }
+        for (int m = 1; m < nm; m++) {
+            double q = eq[0][k] / eq[m][k];
+            if (isfinite(q))
+                sg_cat(line, sizeof line, "%s %.2f", m > 1 ? " /" : "", q);
+            else
+                sg_cat(line, sizeof line, "%s -", m > 1 ? " /" : "");
+        }
+        sg_cat(line, sizeof line, " |");
+    }
+    sg_cat(line, sizeof line, "\n");
+    if (!sg_analyze_append(tables, "equal-time.md", line, err))
+        goto done;
+
+    /* the reference against the smallest levels it has to resolve */
+    {
+        char own[256] = "", low[256] = "", cell[64];
+        double worst = NAN; /* the worst of the metrics known */
+        for (int k = 0; k < SG_METRIC_COUNT; k++) {
+            sg_format_error(ref_err[k], cell, sizeof cell);
+            sg_cat(own, sizeof own, "%s%s", k ? " / " : "", cell);
+            sg_format_error(levels[k][1], cell, sizeof cell);
+            sg_cat(low, sizeof low, "%s%s", k ? " / " : "", cell);
+            worst = fmax(worst, ref_err[k] / levels[k][1]); /* fmax skips a NaN */
+        }
+        const char *verdict = !isfinite(worst) ? "unknown"
+                              : worst <= 0.25  ? "good (< 1/4 of the lowest level)"
+                              : worst <= 0.5   ? "fair (< 1/2 of the lowest level)"
+                                               : "too noisy: lengthen it (SG_REF_SECONDS)";
+        snprintf(head, sizeof head, "| scene | size | spp | seconds | own relMSE / mse8 / MSE |"
+                                    " lowest level relMSE / mse8 / MSE | own / level (worst) | verdict | this run |");
+        if (!sg_analyze_header(tables, "reference", head, err))
+            goto done;
+        snprintf(line, sizeof line, "| %s | %s | %.0f | %.0f | %s | %s | %.2f | %s | %s |\n", name, size, ref_spp,
+                 ref_seconds, own, low, worst, verdict, ref_state);
+        if (!sg_analyze_append(tables, "reference.md", line, err))
+            goto done;
+    }
+
+    /* where a learned field's training went (openpgl) */
+    for (int m = 0; m < nm; m++) {
+        const SgModeResult *r = &res[m];
+        if (!r->present || r->trained_runs == 0)
+            continue;
+        snprintf(head, sizeof head, "| scene | mode | runs | spp | training passes | field updates s | of the run |"
+                                    " training passes took s | of the run | guide drew, of bounces |");
+        if (!sg_analyze_header(tables, "training", head, err))
+            goto done;
+        snprintf(line, sizeof line, "| %s | %s | %d | %.0f | %.0f | %.2f | %.1f%% | %.2f | %.1f%% | %.1f%% |\n", name,
+                 names[m], r->trained_runs, r->final_spp, r->training_passes, r->training_seconds,
+                 100 * r->training_seconds / r->run_seconds, r->training_phase, 100 * r->training_phase / r->run_seconds,
+                 100 * r->guide_share);
+        if (!sg_analyze_append(tables, "training.md", line, err))
+            goto done;
+    }
+
+    /* README headline: relMSE at the lower level */
+    {
+        const SgReach none = {SG_REACH_NONE, 0};
+        SgReach g = i_guided >= 0 ? headline[i_guided] : none, s = i_skel >= 0 ? headline[i_skel] : none;
+        char lv[64], a[64], b[64], c[64], d[64];
+        sg_format_error(levels[0][1], lv, sizeof lv);
+        sg_reach_format(headline[0], a, sizeof a);
+        sg_reach_format(g, b, sizeof b);
+        sg_ratio_format(headline[0], g, c, sizeof c);
+        sg_ratio_format(headline[0], s, d, sizeof d);
+        snprintf(line, sizeof line, "%s\t%s\t%s\t%s\t%s\t%s\t%s", name, size, lv, a, b, c, d);
+        if (i_pgl >= 0) {
+            SgReach p = headline[i_pgl];
+            sg_reach_format(p, a, sizeof a);
+            sg_ratio_format(headline[0], p, b, sizeof b);
+            sg_ratio_format(p, g, c, sizeof c);
+            sg_cat(line, sizeof line, "\t%s\t%s\t%s", a, b, c);
+        }
+        sg_cat(line, sizeof line, "\n");
+        if (!sg_analyze_append(tables, "headline.tsv", line, err))
+            goto done;
+    }
+    status = 0;
+done:
+    for (int m = 0; m < nm; m++)
+        sg_curve_free(&res[m].mean);
+    return status;
+}
+#endif
