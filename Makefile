@@ -78,7 +78,7 @@ TEST_SUPPORT_OBJ := $(TEST_SUPPORT_SRC:%.c=$(BUILD)/%.o)
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
-.PHONY: all test check-tests demo scene bench bench-quick bench-long deps bench-deps fuzz fuzz-run clean distclean \
+.PHONY: all test check-tests demo scene bench bench-build bench-quick bench-long deps bench-deps fuzz fuzz-run clean distclean \
         openpgl FORCE
 .DEFAULT_GOAL := all
 
@@ -128,14 +128,22 @@ $(BUILD)/bench/%: $(BUILD)/bench/%.o $(STEP_LIBS) $(BUILD)/libcommon.a
 	@mkdir -p $(@D)
 	$(CC) $(LDFLAGS) -o $@ $< $(STEP_LIBS) $(BUILD)/libcommon.a $(PROG_LDLIBS)
 
-bench: bench-deps $(PROGRAMS) $(BENCH_BIN)
+# The benchmarks render the peer too: Open PGL is built first (cached), then
+# a sub-make builds the programs, which links it only when this make's parse
+# finds build/openpgl/install (hence not plain prerequisites). When the peer
+# cannot be built, the benchmarks run without it and the report says so.
+bench-build: bench-deps
+	@bash scripts/build-openpgl.sh || echo "bench: Open PGL could not be built: the benchmarks run without openpgl"
+	@$(MAKE) --no-print-directory $(PROGRAMS) $(BENCH_BIN)
+
+bench: bench-build
 	@SG_BIN=$(abspath $(BIN)) SG_BENCH_BIN=$(abspath $(BUILD)/bench) bash bench/run.sh
 
-bench-quick: bench-deps $(PROGRAMS) $(BENCH_BIN)
+bench-quick: bench-build
 	@SG_QUICK=1 SG_BIN=$(abspath $(BIN)) SG_BENCH_BIN=$(abspath $(BUILD)/bench) bash bench/run.sh
 
-# publication-quality numbers: 60 s runs, 5 seeds, 4x the pixels (about 3 hours)
-bench-long: bench-deps $(PROGRAMS) $(BENCH_BIN)
+# publication-quality numbers: 60 s runs, 5 seeds, 4x the pixels (about 3.5 hours)
+bench-long: bench-build
 	@SG_LONG=1 SG_BIN=$(abspath $(BIN)) SG_BENCH_BIN=$(abspath $(BUILD)/bench) bash bench/run.sh
 
 # make fuzz: every tests/fuzz/fuzz_*.c is a libFuzzer target; each runs for

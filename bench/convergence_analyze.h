@@ -526,8 +526,8 @@ int sg_convergence_analyze(int argc, char **argv, SgError *err)
         }
         for (int m = 1; m < nm; m++) {
             double q = eq[0][k] / eq[m][k];
-            if (isfinite(q))
-                sg_cat(line, sizeof line, "%s %.2f", m > 1 ? " /" : "", q);
+            if (isfinite(q)) /* like sg_ratio_format: two digits below 0.1 */
+                sg_cat(line, sizeof line, q >= 0.1 ? "%s %.2f" : "%s %.2g", m > 1 ? " /" : "", q);
             else
                 sg_cat(line, sizeof line, "%s -", m > 1 ? " /" : "");
         }

@@ -2,12 +2,14 @@
 # Convergence: the paper's table 2 on our scenes. For each scene, the
 # precompute (voxelize, skeletonize, importance) and a bsdf reference made of
 # two independent halves, both kept in bench/out/NAME/ and remade only when
-# what they depend on changes; then `bsdf`, `skeleton` and `guided` for a
-# fixed time each, with several seeds, modes interleaved within each seed,
-# every run logging its error curve against the reference. bench/convergence
-# (bench/convergence.c) averages the curves over seeds and writes the tables;
-# gnuplot draws relMSE against time; `convergence strip` makes the
-# equal-time crops. Settings: SG_QUICK=1 (a first look), default, SG_LONG=1
+# what they depend on changes; then `bsdf`, `skeleton`, `guided` and
+# `openpgl` (Open PGL, the peer; left out, said in the notes, when this
+# build of render has no Open PGL) for a fixed time each, with several
+# seeds, modes interleaved within each seed, every run logging its error
+# curve against the reference. bench/convergence (bench/convergence.c)
+# averages the curves over seeds and writes the tables (relMSE, 8-bit MSE
+# and linear MSE); gnuplot draws relMSE and MSE against time; `convergence
+# strip` makes the equal-time crops. Settings: SG_QUICK=1 (a first look), default, SG_LONG=1
 # (publication). Overrides: SG_CONV_SECONDS, SG_CONV_SEEDS, SG_CONV_PIXELS,
 # SG_REF_SECONDS (seconds of each reference half), SG_CONV_SCENES (names,
 # space-separated), SG_KEEP_REFERENCES=1 (keep references made by another
@@ -42,7 +44,7 @@ scenes=(
   "staircase|data/external/staircase.json"
   "bathroom|data/external/bathroom.json"
 )
-modes=(bsdf skeleton guided)
+modes=(bsdf skeleton guided openpgl)
 
 note() { [ -t 2 ] && printf '\r\033[Kconvergence: %s' "$*" >&2; return 0; }
 for p in voxelize skeletonize importance render; do
@@ -53,6 +55,16 @@ done
 tables=$(mktemp -d)
 trap 'rm -rf "$tables"' EXIT
 notes=()
+
+# The peer is in only where render was built with Open PGL (make openpgl;
+# make bench builds it first): one pixel of the corridor tells.
+if ! probe=$("$bin/render" data/corridor/corridor.json --sampling openpgl --spp 1 --size 4x3 \
+               -o "$tables/probe.exr" --quiet 2>&1); then
+  modes=(bsdf skeleton guided)
+  notes+=("openpgl: not run, this build of render cannot: ${probe##*$'\n'} (make bench builds the peer first with scripts/build-openpgl.sh; it needs ../shared/peers/openpgl-0.7.1.tar.gz)")
+fi
+rm -f "$tables/probe.exr"
+mode_list=$(IFS=,; echo "${modes[*]}")
 
 # precompute NAME SCENE DIR: the three steps into DIR, only when the
 # geometry key changed, an output is missing or a step's program is newer.
@@ -75,7 +87,8 @@ precompute() {
 }
 
 # reference NAME SCENE DIR SIZE EXPOSURE: DIR/ref.exr and DIR/ref.txt
-# ("relmse X mse8 Y spp N seconds S state T"), remade when the key changes.
+# ("relmse X mse8 Y mse Z spp N seconds S state T"), remade when the key
+# changes.
 reference() {
   local name=$1 scene=$2 dir=$3 size=$4 exposure=$5 key render_id
   mkdir -p "$dir"
@@ -90,6 +103,15 @@ reference() {
   [ "${SG_KEEP_REFERENCES:-0}" = 1 ] || key+="; render $render_id"
   if [ -e "$dir/ref.exr" ] && [ -e "$dir/ref.txt" ] && [ "$key" = "$old" ]; then
     sed -i 's/ state .*/ state kept/' "$dir/ref.txt"
+    # a reference made before the linear MSE was measured: its halves tell
+    if [ -z "$(field mse "$dir/ref.txt")" ] && [ -e "$dir/half-a.exr" ] && [ -e "$dir/half-b.exr" ]; then
+      local s
+      if s=$("$tool" reference "$dir/half-a.exr" "$dir/half-b.exr" -o "$dir/ref.check.exr" --exposure "$exposure" 2>&1); then
+        printf '%s spp %s seconds %s state kept\n' "$s" "$(field spp "$dir/ref.txt")" \
+          "$(field seconds "$dir/ref.txt")" >"$dir/ref.txt"
+      fi
+      rm -f "$dir/ref.check.exr"
+    fi
     return 0
   fi
   key="${key%; render *}; render $render_id"
@@ -112,25 +134,40 @@ reference() {
 
 field() { awk -v k="$1" '{for(i=1;i<NF;i++) if($i==k) print $(i+1)}' "$2"; }
 
-plot() { # name dir size levels-file ref-relmse png
-  local name=$1 dir=$2 size=$3 ref_rel=$5 png=$6 l1 l2
-  read -r _ l1 l2 _ <"$4"
+declare -A color=([bsdf]="#1f77b4" [skeleton]="#ff7f0e" [guided]="#2ca02c" [openpgl]="#d62728")
+declare -A label=([skeleton]="skeleton (biased)")
+
+# panel DIR COLUMN YLABEL REF-ERROR LEVEL1 LEVEL2: the gnuplot commands of
+# one panel: every mode's mean curve (COLUMN of DIR/runs/MODE.mean.dat), the
+# reference's own error (when known) and the two table 2 levels
+panel() {
+  local dir=$1 col=$2 ylabel=$3 ref=$4 l1=$5 l2=$6 m items=()
+  for m in "${modes[@]}"; do
+    [ -s "$dir/runs/$m.mean.dat" ] || continue
+    items+=("\"$dir/runs/$m.mean.dat\" u 1:$col w l lw 2 lc rgb \"${color[$m]:-#9467bd}\" t \"${label[$m]:-$m}\"")
+  done
+  [ -n "$ref" ] && items+=("$ref w l dt 2 lw 1.5 lc rgb \"#7f7f7f\" t \"reference's own error\"")
+  items+=("$l1 w l dt 3 lc rgb \"#000000\" t \"table 2 levels\"" "$l2 w l dt 3 lc rgb \"#000000\" notitle")
+  echo "set ylabel \"$ylabel\""
+  local IFS=,
+  echo "plot ${items[*]}"
+}
+
+plot() { # name dir size levels-file ref-relmse ref-mse png
+  local name=$1 dir=$2 size=$3 ref_rel=$5 ref_mse=$6 png=$7 r1 r2 m1 m2
+  read -r _ r1 r2 _ _ _ _ m1 m2 <"$4"
   gnuplot 2>"$dir/gnuplot.log" <<EOF || notes+=("$name: gnuplot failed: $(tail -1 "$dir/gnuplot.log")")
-set terminal pngcairo size 560,400 font ",9"
+set terminal pngcairo size 960,440 font ",9"
 set output "$png.tmp"
 set logscale xy
 set format y "%.0e"
 set grid xtics ytics mxtics mytics lc rgb "#dddddd"
 set xlabel "seconds of rendering"
-set ylabel "relMSE against the reference"
-set title "$name, ${size}: mean of $seeds seed(s)"
-set key outside below horizontal maxrows 2 width 1
-plot "$dir/runs/bsdf.mean.dat" u 1:3 w l lw 2 lc rgb "#1f77b4" t "bsdf", \
-     "$dir/runs/skeleton.mean.dat" u 1:3 w l lw 2 lc rgb "#ff7f0e" t "skeleton (biased)", \
-     "$dir/runs/guided.mean.dat" u 1:3 w l lw 2 lc rgb "#2ca02c" t "guided", \
-     $ref_rel w l dt 2 lw 1.5 lc rgb "#7f7f7f" t "reference's own error", \
-     $l1 w l dt 3 lc rgb "#000000" t "table 2 levels", \
-     $l2 w l dt 3 lc rgb "#000000" notitle
+set key outside below horizontal maxcols 3 maxrows 3 samplen 2
+set multiplot layout 1,2 title "$name, ${size}: mean of $seeds seed(s)"
+$(panel "$dir" 3 "relMSE against the reference" "$ref_rel" "$r1" "$r2")
+$(panel "$dir" 5 "linear-radiance MSE against the reference" "$ref_mse" "$m1" "$m2")
+unset multiplot
 EOF
   [ -s "$png.tmp" ] && mv "$png.tmp" "$png"
   rm -f "$png.tmp"
@@ -155,8 +192,8 @@ for entry in "${scenes[@]}"; do
   rm -rf "$runs"; mkdir -p "$runs"
   for seed in $(seq "$seeds"); do
     # modes interleaved, the order rotated per seed: load changes hit all alike
-    for k in 0 1 2; do
-      mode=${modes[$(((k + seed - 1) % 3))]}
+    for k in "${!modes[@]}"; do
+      mode=${modes[$(((k + seed - 1) % ${#modes[@]}))]}
       note "$name: $mode, seed $seed/$seeds, $seconds s"
       "$bin/render" "$scene" --cache "$dir/importance.cache" --sampling "$mode" --time "$seconds" \
         --seed "$seed" --size "$size" --reference "$refdir/ref.exr" --log "$runs/$mode-$seed.csv" \
@@ -164,36 +201,53 @@ for entry in "${scenes[@]}"; do
         notes+=("$name: $mode seed $seed failed: $(tail -1 "$runs/$mode-$seed.err")")
     done
   done
-  "$tool" analyze "$name" "$runs" "$seeds" "$tables" --size "$size" \
-    --ref-relmse "$(field relmse "$refdir/ref.txt")" --ref-mse8 "$(field mse8 "$refdir/ref.txt")" \
-    --ref-spp "$(field spp "$refdir/ref.txt")" --ref-seconds "$(field seconds "$refdir/ref.txt")" \
-    --ref-state "$(field state "$refdir/ref.txt")" 2>"$runs/analyze.err" ||
+  ref_args=()
+  for k in relmse mse8 mse spp seconds state; do
+    v=$(field "$k" "$refdir/ref.txt")
+    [ -n "$v" ] && ref_args+=("--ref-$k" "$v")
+  done
+  "$tool" analyze "$name" "$runs" "$seeds" "$tables" --modes "$mode_list" --size "$size" "${ref_args[@]}" \
+    2>"$runs/analyze.err" ||
     { notes+=("$name: analyze failed: $(tail -1 "$runs/analyze.err")"); continue; }
-  fig="![$name: relMSE against time]($report_link/$name-convergence.png)"
+  fig="![$name: relMSE and MSE against time]($report_link/$name-convergence.png)"
   if [ $have_gnuplot = 1 ]; then
-    plot "$name" "$dir" "$size" "$runs/levels.txt" "$(field relmse "$refdir/ref.txt")" "$report_dir/$name-convergence.png"
+    plot "$name" "$dir" "$size" "$runs/levels.txt" "$(field relmse "$refdir/ref.txt")" \
+      "$(field mse "$refdir/ref.txt")" "$report_dir/$name-convergence.png"
   else
     fig="(no plot: gnuplot is not installed; make bench-deps installs it)"
   fi
+  # seed 1 of every mode that has its image, then the reference
+  strip=() shown=()
+  for m in "${modes[@]}"; do
+    [ -e "$runs/$m-1.exr" ] && { strip+=("$runs/$m-1.exr"); shown+=("$m"); }
+  done
   crop=$("$tool" strip "$refdir/ref.exr" --exposure "$exposure" -o "$report_dir/$name-crops.png" \
-           "$runs/bsdf-1.exr" "$runs/skeleton-1.exr" "$runs/guided-1.exr" 2>&1) ||
+           "${strip[@]}" 2>&1) ||
     notes+=("$name: crops failed: $crop")
-  figures+=("**$name** ($size, exposure $exposure): relMSE against time; equal-time crops after $seconds s (seed 1), left to right bsdf, skeleton, guided, reference, ${crop#crop } (x,y,w,h: the square where bsdf's relative error is largest)"
+  figures+=("**$name** ($size, exposure $exposure): relMSE (left) and linear MSE (right) against time; equal-time crops after $seconds s (seed 1), left to right $(printf '%s, ' "${shown[@]}")reference, ${crop#crop } (x,y,w,h: the square where bsdf's relative error is largest)"
             "$fig ![$name: equal-time crops]($report_link/$name-crops.png)")
 done
 note "done"; [ -t 2 ] && printf '\n' >&2
 
+# table NAME: a table analyze wrote, its header first ("(no results)" when
+# no scene got that far)
+table() {
+  if [ -s "$tables/$1.md" ]; then cat "$tables/$1.head" "$tables/$1.md"; else echo "(no results)"; fi
+}
+has_openpgl=0
+[[ " ${modes[*]} " == *" openpgl "* ]] && has_openpgl=1
+versus=
+[ $has_openpgl = 1 ] && versus=" Guided over openpgl = openpgl seconds / guided seconds (> 1: guided gets there first)."
+
 echo "Setting **$setting**: each scene's image scaled to about $pixels pixels (aspect kept); every run"
 echo "$seconds s of rendering (\`render --time\`: scene loading, BVH and guide set-up excluded); $seeds seed(s) per"
-echo "mode, modes interleaved within a seed; curves averaged over seeds on a common time grid (log-log"
+echo "mode (${modes[*]}), modes interleaved within a seed; curves averaged over seeds on a common time grid (log-log"
 echo "interpolation). References: \`render --sampling bsdf\`, two halves of the same spp (seeds 1001, 1002,"
 echo "the first $ref_seconds s long) averaged; their own error is estimated from the halves' difference."
 echo
 echo "### References"
 echo
-echo "| scene | size | spp | seconds | own relMSE / mse8 | lowest level relMSE / mse8 | own / level (worst) | verdict | this run |"
-echo "|---|---|---|---|---|---|---|---|---|"
-cat "$tables/reference.md" 2>/dev/null
+table reference
 echo
 echo "An error measured against the reference is the run's own error plus the reference's (they are"
 echo "independent): a curve cannot go below the reference's own error, drawn dashed in the plots."
@@ -204,32 +258,49 @@ echo "relMSE = mean over pixels and channels of (x - ref)^2 / (ref^2 + 0.01), on
 echo "2^exposure (the scene's PNG exposure), so that dark scenes are measured relatively too."
 echo "Levels per scene from bsdf alone, the same for every mode: bsdf's mean error at the end of its run"
 echo "and at an eighth of it, rounded up to two digits. Speed-up = bsdf seconds / mode"
-echo "seconds (> 1: faster than bsdf). ~: extrapolated along 1/t from the last half of the curve;"
+echo "seconds (> 1: faster than bsdf).$versus ~: extrapolated along 1/t from the last half of the curve;"
 echo "< t: already below at the first pass; never: not reached and the curve too flat to extrapolate"
 echo "(log-log slope above -0.5: a biased mode stuck on its bias)."
 echo
-echo "| scene | relMSE level | bsdf s | skeleton s | guided s | skeleton speed-up | guided speed-up |"
-echo "|---|---|---|---|---|---|---|"
-cat "$tables/table2-relmse.md" 2>/dev/null
+table table2-relmse
 echo
 echo "### Table 2: seconds to reach an 8-bit MSE level (the paper's measure)"
 echo
 echo "mse8 = mean squared difference of the 8-bit sRGB values of the PNG at the scene's exposure (the"
 echo "paper's MSE 100 and 40 were at its own exposures and image sizes). Same rules as above."
 echo
-echo "| scene | mse8 level | bsdf s | skeleton s | guided s | skeleton speed-up | guided speed-up |"
-echo "|---|---|---|---|---|---|---|"
-cat "$tables/table2-mse8.md" 2>/dev/null
+table table2-mse8
+echo
+echo "### Table 2: seconds to reach a linear-radiance MSE level"
+echo
+echo "MSE = mean over pixels and channels of (x - ref)^2 on the linear radiance, no exposure and no"
+echo "tone curve (\`render --log\`'s mse column): the brightest pixels weigh most, where relMSE and mse8"
+echo "weigh every pixel more evenly, so a guide that spends its samples on dim regions can gain on those"
+echo "two and lose on this one. Same rules as above."
+echo
+table table2-mse
 echo
 echo "### Equal time"
 echo
 echo "Errors of the mean curves at the time every mode reached; ratio = bsdf error / mode error (for"
 echo "unbiased modes, the speed-up); µs/sample: wall time per path over both cores."
 echo
-echo "| scene | size | seconds | spp bsdf / skeleton / guided | µs/sample bsdf / skel. / guided | relMSE bsdf | skeleton | guided | ratio skel. / guided | mse8 bsdf | skeleton | guided | ratio skel. / guided |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
-cat "$tables/equal-time.md" 2>/dev/null
+table equal-time
 echo
+if [ $has_openpgl = 1 ]; then
+  echo "### Where openpgl's training goes"
+  echo
+  echo "Open PGL learns its field from the paths of the first passes (render's"
+  echo "SG_OPENPGL_TRAINING_PASSES): each such pass records its paths and the field is updated before the"
+  echo "next, which samples from it; every pass renders the image all the same. Field updates s: time in"
+  echo "Open PGL's update (sg:training_seconds, part of the run's time); training passes took s: time"
+  echo "until the last training pass ended (its curve's time at that spp), recording and learning"
+  echo "included; guide drew: share of all bounces of the run sampled from the field (sg:guide_share)."
+  echo "Means over the runs (EXR attributes of MODE-SEED.exr)."
+  echo
+  table training
+  echo
+fi
 echo "### Plots and equal-time crops"
 echo
 for line in "${figures[@]}"; do printf '%s\n\n' "$line"; done
