@@ -3,7 +3,8 @@
 #   make test       install missing packages, build, run every test
 #   make demo       install missing packages, build, run the pipeline on data/corridor
 #   make scene SCENE=path/to/scene.json   build out/NAME/ (only steps whose inputs changed)
-#   make bench      speed and error benchmarks, writes bench/report.md (bench-quick, bench-long)
+#   make bench      speed and error benchmarks, writes bench/report.md (bench-quick, bench-long);
+#                   builds the Open PGL peer first (scripts/build-openpgl.sh) for render --sampling openpgl
 #   make openpgl    build the Open PGL peer once (build/openpgl) and render --sampling openpgl
 #   make SANITIZE=1 ...  the same with AddressSanitizer + UBSan in build/asan
 
