@@ -34,11 +34,13 @@ Test(relmse, term_known_values)
 Test(relmse, reference_from_halves_uses_it)
 {
     float a[4] = {1, 3, 1, 3}, b[4] = {3, 1, 3, 1}, ref[4];
-    double relmse = -1, mse8 = -1;
-    sg_reference_from_halves(a, b, 4, 1.0f, ref, &relmse, &mse8);
+    double relmse = -1, mse8 = -1, mse = -1;
+    sg_reference_from_halves(a, b, 4, 1.0f, ref, &relmse, &mse8, &mse);
     cr_assert_float_eq(relmse, 1 / 4.01, 1e-15);
+    cr_assert_float_eq(mse, 1.0, 1e-15, "linear MSE: the error 1 squared");
     for (int i = 0; i < 4; i++)
         cr_assert_eq(ref[i], 2.0f);
-    sg_reference_from_halves(a, b, 4, 0.5f, NULL, &relmse, &mse8);
+    sg_reference_from_halves(a, b, 4, 0.5f, NULL, &relmse, &mse8, &mse);
     cr_assert_float_eq(relmse, 1 / 4.04, 1e-15);
+    cr_assert_float_eq(mse, 1.0, 1e-15, "linear MSE takes no exposure");
 }

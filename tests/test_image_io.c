@@ -55,7 +55,20 @@ Test(image_io, exr_round_trip_is_exact_with_metadata)
     cr_assert(contains(bytes, n, "spp") && contains(bytes, n, "64"));
     cr_assert(contains(bytes, n, "sampling") && contains(bytes, n, "guided"));
     free(bytes);
+    /* and read back by name */
+    char value[16];
+    cr_assert(sg_image_read_attribute(path, "spp", value, sizeof value, &err), "%s", err.message);
+    cr_assert_str_eq(value, "64");
+    cr_assert(sg_image_read_attribute(path, "sampling", value, 4, &err), "%s", err.message);
+    cr_assert_str_eq(value, "gui", "cut to the buffer");
+    err = (SgError){0};
+    cr_assert_not(sg_image_read_attribute(path, "sg:nothing", value, sizeof value, &err));
+    cr_assert(strstr(err.message, path) && strstr(err.message, "sg:nothing"), "%s", err.message);
+    cr_assert_str_eq(value, "");
     unlink(path);
+    err = (SgError){0};
+    cr_assert_not(sg_image_read_attribute(path, "spp", value, sizeof value, &err));
+    cr_assert(strstr(err.message, path), "%s", err.message);
 }
 
 Test(image_io, png_applies_exposure_and_srgb)
