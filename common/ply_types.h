@@ -41,6 +41,14 @@ static inline size_t sg_ply_type_size(SgPlyType t)
 
 static inline bool sg_ply_type_is_float(SgPlyType t) { return t == SG_PLY_F32 || t == SG_PLY_F64; }
 
+/* A type's first spelling in the table above ("uchar" for SG_PLY_U8), for
+ * messages; "none" for SG_PLY_NONE. */
+static inline const char *sg_ply_type_name(SgPlyType t)
+{
+    static const char *const names[] = {"none", "char", "uchar", "short", "ushort", "int", "uint", "float", "double"};
+    return (unsigned)t < sizeof names / sizeof names[0] ? names[t] : "none";
+}
+
 /* The binary value of type t at p (sg_ply_type_size(t) bytes, little- or
  * big-endian) as a double; false for SG_PLY_NONE. */
 static inline bool sg_ply_decode(const unsigned char *p, SgPlyType t, bool big_endian, double *out)

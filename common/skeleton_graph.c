@@ -1,8 +1,9 @@
 /* skeleton.ply: writer (binary_little_endian) and a defensive reader
  * (ascii and binary_little_endian). The reader loads the whole file, parses
- * the header into a list of elements and properties, then decodes each
- * element with bounds checks on every read: a malformed or truncated file
- * ends in a one-line error naming the file, never in a read past the end. */
+ * the header into a list of elements and properties (common/ply_file.c,
+ * shared with the mesh reader), then decodes each element with bounds
+ * checks on every read: a malformed or truncated file ends in a one-line
+ * error naming the file, never in a read past the end. */
 #include "skeleton_graph.h"
 
 #include <errno.h>
@@ -14,7 +15,7 @@
 
 #include "input_file.h"
 #include "output_file.h"
-#include "ply_types.h"
+#include "ply_file.h"
 
 /* ---- writer ------------------------------------------------------------ */
 
@@ -112,182 +113,69 @@ static const char *const field_names[F_COUNT] = {
     "x", "y", "z", "i", "j", "k", "kind", "radius", "lifespan", "light", "vertex1", "vertex2",
 };
 
-enum { PLY_MAX_PROPS = 64, PLY_MAX_ELEMENTS = 16 };
-
-typedef struct PlyProperty {
-    SgPlyType type;       /* scalar type, or the item type of a list */
-    SgPlyType count_type; /* SG_PLY_NONE for a scalar */
-    PlyField field;
-} PlyProperty;
-
-typedef struct PlyElement {
-    char name[32];
-    uint64_t count;
-    int property_count;
-    PlyProperty properties[PLY_MAX_PROPS];
-} PlyElement;
-
 typedef struct PlyReader {
     const char *path;
     const unsigned char *data;
     size_t size;
     size_t pos;
     bool ascii;
-    int element_count;
-    PlyElement elements[PLY_MAX_ELEMENTS];
+    SgPlyHeader header;
+    /* field[e][p]: where property p of element e goes */
+    PlyField field[SG_PLY_MAX_ELEMENTS][SG_PLY_MAX_PROPERTIES];
 } PlyReader;
 
-/* Next header line into `line` (without the end of line); false at the end
- * of the data or when a line is absurdly long. */
-static bool header_line(PlyReader *r, char *line, size_t cap)
-{
-    size_t n = 0;
-    while (r->pos < r->size) {
-        unsigned char c = r->data[r->pos++];
-        if (c == '\n') {
-            if (n > 0 && line[n - 1] == '\r')
-                n--;
-            line[n] = 0;
-            return true;
-        }
-        if (c == 0 || n + 1 >= cap)
-            return false;
-        line[n++] = (char)c;
-    }
-    return false;
-}
-
+/* The shared header walk, then this reader's policy: ascii or little
+ * endian (what the writer writes and MeshLab and Blender read back), and
+ * each known field once, as a scalar of its kind of type. */
 static bool parse_header(PlyReader *r, SgError *err)
 {
-    char line[512];
-    if (!header_line(r, line, sizeof line) || strcmp(line, "ply") != 0)
-        return sg_fail(err, "%s: not a PLY file (no 'ply' magic line)", r->path);
-    bool have_format = false;
-    PlyElement *current = NULL;
-    for (;;) {
-        if (!header_line(r, line, sizeof line))
-            return sg_fail(err, "%s: PLY header is truncated or malformed (no end_header)",
-                           r->path);
-        char *save = NULL;
-        char *word = strtok_r(line, " \t", &save);
-        if (!word)
-            continue;
-        if (strcmp(word, "end_header") == 0)
-            break;
-        if (strcmp(word, "comment") == 0 || strcmp(word, "obj_info") == 0)
-            continue;
-        if (strcmp(word, "format") == 0) {
-            const char *fmt = strtok_r(NULL, " \t", &save);
-            const char *version = strtok_r(NULL, " \t", &save);
-            if (!fmt || !version || strcmp(version, "1.0") != 0)
-                return sg_fail(err, "%s: malformed PLY format line", r->path);
-            if (strcmp(fmt, "ascii") == 0)
-                r->ascii = true;
-            else if (strcmp(fmt, "binary_little_endian") == 0)
-                r->ascii = false;
-            else
-                return sg_fail(err, "%s: unsupported PLY format '%s' (ascii or "
-                               "binary_little_endian expected)", r->path, fmt);
-            have_format = true;
-        } else if (strcmp(word, "element") == 0) {
-            const char *name = strtok_r(NULL, " \t", &save);
-            const char *count = strtok_r(NULL, " \t", &save);
-            if (!name || !count)
-                return sg_fail(err, "%s: malformed PLY element line", r->path);
-            if (r->element_count >= PLY_MAX_ELEMENTS)
-                return sg_fail(err, "%s: too many PLY elements", r->path);
-            char *end;
-            errno = 0;
-            unsigned long long n = strtoull(count, &end, 10);
-            if (*end || count[0] == '-' || errno || n > UINT32_MAX)
-                return sg_fail(err, "%s: bad count '%s' for element %s", r->path, count, name);
-            current = &r->elements[r->element_count++];
-            memset(current, 0, sizeof *current);
-            snprintf(current->name, sizeof current->name, "%s", name);
-            current->count = n;
-        } else if (strcmp(word, "property") == 0) {
-            if (!current)
-                return sg_fail(err, "%s: PLY property before any element", r->path);
-            if (current->property_count >= PLY_MAX_PROPS)
-                return sg_fail(err, "%s: too many properties in element %s", r->path,
-                               current->name);
-            PlyProperty *p = &current->properties[current->property_count++];
-            const char *type = strtok_r(NULL, " \t", &save);
-            if (type && strcmp(type, "list") == 0) {
-                const char *ct = strtok_r(NULL, " \t", &save);
-                type = strtok_r(NULL, " \t", &save);
-                p->count_type = ct ? sg_ply_type_parse(ct) : SG_PLY_NONE;
-                if (p->count_type == SG_PLY_NONE || sg_ply_type_is_float(p->count_type))
-                    return sg_fail(err, "%s: bad list count type in element %s", r->path,
-                                   current->name);
-            }
-            const char *name = strtok_r(NULL, " \t", &save);
-            p->type = type ? sg_ply_type_parse(type) : SG_PLY_NONE;
-            if (p->type == SG_PLY_NONE || !name)
-                return sg_fail(err, "%s: malformed property line in element %s", r->path,
-                               current->name);
-            p->field = F_UNKNOWN;
-            int first = -1, last = -1;
-            if (strcmp(current->name, "vertex") == 0)
-                first = F_X, last = F_LIGHT;
-            else if (strcmp(current->name, "edge") == 0)
-                first = F_V1, last = F_V2;
+    SgPlyHeader *h = &r->header;
+    if (!sg_ply_header_parse(h, r->data, r->size, false, r->path, err))
+        return false;
+    r->ascii = h->format == SG_PLY_ASCII;
+    r->pos = h->data_start;
+    for (int e = 0; e < h->element_count; e++) {
+        const SgPlyElement *current = &h->elements[e];
+        int first = -1, last = -1;
+        if (strcmp(current->name, "vertex") == 0)
+            first = F_X, last = F_LIGHT;
+        else if (strcmp(current->name, "edge") == 0)
+            first = F_V1, last = F_V2;
+        for (int i = 0; i < current->property_count; i++) {
+            const SgPlyProperty *p = &current->properties[i];
+            const char *name = p->name;
+            PlyField field = F_UNKNOWN;
             for (int f = first; f >= 0 && f <= last; f++)
                 if (strcmp(name, field_names[f]) == 0)
-                    p->field = (PlyField)f;
-            if (p->field == F_UNKNOWN)
+                    field = (PlyField)f;
+            r->field[e][i] = field;
+            if (field == F_UNKNOWN)
                 continue;
-            for (int q = 0; q + 1 < current->property_count; q++)
-                if (current->properties[q].field == p->field)
+            for (int q = 0; q < i; q++)
+                if (r->field[e][q] == field)
                     return sg_fail(err, "%s: property %s.%s given twice", r->path,
                                    current->name, name);
             if (p->count_type != SG_PLY_NONE)
                 return sg_fail(err, "%s: property %s.%s must be a scalar, not a list",
                                r->path, current->name, name);
-            bool wants_float = p->field == F_X || p->field == F_Y || p->field == F_Z ||
-                               p->field == F_RADIUS;
+            bool wants_float = field == F_X || field == F_Y || field == F_Z || field == F_RADIUS;
             if (wants_float != sg_ply_type_is_float(p->type))
                 return sg_fail(err, "%s: property %s.%s has type %s, expected %s", r->path,
-                               current->name, name, type,
+                               current->name, name, sg_ply_type_name(p->type),
                                wants_float ? "float or double" : "an integer type");
-        } else {
-            return sg_fail(err, "%s: unknown PLY header keyword '%s'", r->path, word);
         }
     }
-    if (!have_format)
-        return sg_fail(err, "%s: PLY header has no format line", r->path);
     return true;
-}
-
-/* Reads one binary value; false when the data ends first. */
-static bool read_binary(PlyReader *r, SgPlyType t, double *out)
-{
-    size_t n = sg_ply_type_size(t);
-    if (r->size - r->pos < n)
-        return false;
-    bool ok = sg_ply_decode(r->data + r->pos, t, false, out);
-    r->pos += n;
-    return ok;
 }
 
 /* Reads one ascii token as a value of type t; 0 = ok, 1 = end of data,
  * 2 = not a valid number of that type. */
 static int read_ascii(PlyReader *r, SgPlyType t, double *out)
 {
-    while (r->pos < r->size && (r->data[r->pos] == ' ' || r->data[r->pos] == '\t' ||
-                                r->data[r->pos] == '\n' || r->data[r->pos] == '\r'))
-        r->pos++;
-    if (r->pos >= r->size)
-        return 1;
     char token[80];
-    size_t n = 0;
-    while (r->pos < r->size && r->data[r->pos] != ' ' && r->data[r->pos] != '\t' &&
-           r->data[r->pos] != '\n' && r->data[r->pos] != '\r') {
-        if (n + 1 >= sizeof token)
-            return 2;
-        token[n++] = (char)r->data[r->pos++];
-    }
-    token[n] = 0;
+    SgPlyToken got = sg_ply_read_token(r->data, r->size, &r->pos, token, sizeof token);
+    if (got != SG_PLY_TOKEN_OK)
+        return got == SG_PLY_TOKEN_END ? 1 : 2;
     char *end;
     errno = 0;
     if (sg_ply_type_is_float(t)) {
@@ -316,7 +204,7 @@ static int read_ascii(PlyReader *r, SgPlyType t, double *out)
     return 0;
 }
 
-static bool read_value(PlyReader *r, SgPlyType t, double *out, const PlyElement *e, uint64_t row,
+static bool read_value(PlyReader *r, SgPlyType t, double *out, const SgPlyElement *e, uint64_t row,
                        SgError *err)
 {
     if (r->ascii) {
@@ -329,7 +217,7 @@ static bool read_value(PlyReader *r, SgPlyType t, double *out, const PlyElement 
                            (unsigned long long)row);
         return true;
     }
-    if (!read_binary(r, t, out))
+    if (!sg_ply_read_binary(r->data, r->size, &r->pos, t, false, out))
         return sg_fail(err, "%s: truncated (%s %llu of %llu)", r->path, e->name,
                        (unsigned long long)row, (unsigned long long)e->count);
     return true;
@@ -337,11 +225,11 @@ static bool read_value(PlyReader *r, SgPlyType t, double *out, const PlyElement 
 
 /* Smallest number of bytes one row of e can take: bounds element counts by
  * the file size before anything is allocated. */
-static size_t min_row_bytes(const PlyReader *r, const PlyElement *e)
+static size_t min_row_bytes(const PlyReader *r, const SgPlyElement *e)
 {
     size_t bytes = 0;
     for (int p = 0; p < e->property_count; p++) {
-        const PlyProperty *q = &e->properties[p];
+        const SgPlyProperty *q = &e->properties[p];
         if (r->ascii)
             bytes += 2; /* a digit and a separator */
         else
@@ -364,11 +252,11 @@ bool sg_skeleton_parse_ply(SgSkeleton *skeleton, const void *data, size_t size,
     r->size = size;
     bool ok = parse_header(r, err);
 
-    const PlyElement *vertex = NULL, *edge = NULL;
-    for (int i = 0; ok && i < r->element_count; i++) {
-        const PlyElement *e = &r->elements[i];
+    const SgPlyElement *vertex = NULL, *edge = NULL;
+    for (int i = 0; ok && i < r->header.element_count; i++) {
+        const SgPlyElement *e = &r->header.elements[i];
         if (strcmp(e->name, "vertex") == 0 || strcmp(e->name, "edge") == 0) {
-            const PlyElement **slot = e->name[0] == 'v' ? &vertex : &edge;
+            const SgPlyElement **slot = e->name[0] == 'v' ? &vertex : &edge;
             if (*slot)
                 ok = sg_fail(err, "%s: element %s given twice", path, e->name);
             *slot = e;
@@ -383,10 +271,10 @@ bool sg_skeleton_parse_ply(SgSkeleton *skeleton, const void *data, size_t size,
     if (ok && !vertex)
         ok = sg_fail(err, "%s: no 'vertex' element", path);
     bool have[F_COUNT] = {false};
-    for (int i = 0; ok && i < r->element_count; i++)
-        for (int p = 0; p < r->elements[i].property_count; p++)
-            if (r->elements[i].properties[p].field != F_UNKNOWN)
-                have[r->elements[i].properties[p].field] = true;
+    for (int i = 0; ok && i < r->header.element_count; i++)
+        for (int p = 0; p < r->header.elements[i].property_count; p++)
+            if (r->field[i][p] != F_UNKNOWN)
+                have[r->field[i][p]] = true;
     for (int f = F_X; ok && f <= F_LIFESPAN; f++)
         if (!have[f])
             ok = sg_fail(err, "%s: vertex property '%s' is missing", path, field_names[f]);
@@ -403,8 +291,8 @@ bool sg_skeleton_parse_ply(SgSkeleton *skeleton, const void *data, size_t size,
     }
 
     /* Decode elements in file order. */
-    for (int i = 0; ok && i < r->element_count; i++) {
-        const PlyElement *e = &r->elements[i];
+    for (int i = 0; ok && i < r->header.element_count; i++) {
+        const SgPlyElement *e = &r->header.elements[i];
         /* Rows without properties hold no data: nothing to decode (and a
          * count of 4 billion must not take a minute to step through). */
         if (e->property_count == 0)
@@ -413,12 +301,12 @@ bool sg_skeleton_parse_ply(SgSkeleton *skeleton, const void *data, size_t size,
             double v[F_COUNT] = {0};
             v[F_LIGHT] = -1;
             for (int p = 0; ok && p < e->property_count; p++) {
-                const PlyProperty *q = &e->properties[p];
+                const SgPlyProperty *q = &e->properties[p];
                 double value;
                 if (q->count_type == SG_PLY_NONE) {
                     ok = read_value(r, q->type, &value, e, row, err);
-                    if (ok && q->field != F_UNKNOWN)
-                        v[q->field] = value;
+                    if (ok && r->field[i][p] != F_UNKNOWN)
+                        v[r->field[i][p]] = value;
                     continue;
                 }
                 /* An unknown list: read its length, skip its items. */

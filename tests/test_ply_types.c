@@ -18,6 +18,12 @@ Test(ply_types, names_and_sizes)
     cr_assert_eq(sg_ply_type_parse("int64"), SG_PLY_NONE);
     cr_assert_eq(sg_ply_type_parse("Float"), SG_PLY_NONE);
     cr_assert_eq(sg_ply_type_size(SG_PLY_NONE), 0);
+    /* the name in messages is the first spelling, and reads back as its type */
+    for (SgPlyType t = SG_PLY_I8; t <= SG_PLY_F64; t++)
+        cr_assert_eq(sg_ply_type_parse(sg_ply_type_name(t)), t, "%s", sg_ply_type_name(t));
+    cr_assert_str_eq(sg_ply_type_name(SG_PLY_U8), "uchar");
+    cr_assert_str_eq(sg_ply_type_name(SG_PLY_F64), "double");
+    cr_assert_str_eq(sg_ply_type_name(SG_PLY_NONE), "none");
 }
 
 Test(ply_types, decodes_both_byte_orders)
