@@ -12,12 +12,11 @@
 #include "material.h"
 #include "memory.h"
 #include "mixture_learning.h"
-#include "openpgl_guide.h"
+#include "path_guide.h"
 #include "pixel_noise.h"
 #include "progress.h"
 #include "rng.h"
 #include "sampling.h"
-#include "skeleton_guide.h"
 #include "threads.h"
 #include "vecmath.h"
 
@@ -32,13 +31,7 @@ struct SgRenderer {
     Material *materials;
 
     LightSet lights;
-    SkeletonGuide skeleton; /* skeleton and guided modes */
-    /* openpgl: the peer's field, learning while the first passes record */
-    SgPglField *pgl;
-    double pgl_seconds;
-    /* Guided mode with a learned alpha: per-region choice of the mixture. */
-    SgMixtureLearner *learner;
-    const SgMixtureView *mixture_view; /* the learner's, read at every bounce */
+    PathGuide *guide;     /* how bounces are drawn: one of path_guide.h's */
     /* Learned roulette: per pixel, the sums of the luminance of its samples
      * past the camera ray's own hit (emission seen directly is not what
      * roulette acts on) and of their squares; and the noise a path may add
@@ -56,7 +49,6 @@ struct SgRenderer {
     _Atomic uint64_t backface_hits;
     _Atomic uint64_t branches;
     _Atomic uint64_t bounces, lobe_bounces;
-    uint64_t first_pass_rays;
 };
 
 const char *sg_sampling_name(SgSampling s)
@@ -108,27 +100,8 @@ bool sg_roulette_parse(const char *name, SgRoulette *r)
 
 /* ---- setup ---------------------------------------------------------------- */
 
-/* The learner's grid covers the triangles' bounds (local coordinates):
- * 32 cells along the longest side, a few thousand regions in a room. */
-static bool setup_learner(SgRenderer *r, const char *path, SgError *err)
-{
-    Vec3 lo, hi;
-    geometry_bounds(&r->geo, &lo, &hi);
-    SgError e;
-    r->learner = sg_mixture_learner_create(lo, hi, 32, (uint32_t)(r->tiles_x * r->tiles_y),
-                                           SG_MIXTURE_INITIAL, &e);
-    if (!r->learner)
-        return sg_fail(err, "%s: %s", path, e.message);
-    r->mixture_view = sg_mixture_view(r->learner);
-    if (r->opt.roulette == SG_ROULETTE_LEARNED) {
-        r->noise = pixel_noise_create(r->opt.width, r->opt.height);
-        if (!r->noise)
-            return sg_fail(err, "%s: out of memory", path);
-    }
-    return true;
-}
-
-SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgError *err)
+/* `create`: the guide's constructor, NULL: the one o->sampling names. */
+static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, PathGuideCreate create, SgError *err)
 {
     const char *path = s->path[0] ? s->path : "scene";
     if (!s->triangle_count || !s->positions || !s->indices)
@@ -139,11 +112,6 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         return sg_fail(err, "%s: bad image size %dx%d", path, o->width, o->height), NULL;
     if (o->max_depth < 1)
         return sg_fail(err, "%s: max depth must be at least 1", path), NULL;
-    if ((o->sampling == SG_SAMPLING_SKELETON || o->sampling == SG_SAMPLING_GUIDED) && !o->guide.importance_point)
-        return sg_fail(err, "%s: %s sampling needs an importance cache", path,
-                       sg_sampling_name(o->sampling)), NULL;
-    if (o->sampling == SG_SAMPLING_GUIDED && o->alpha != SG_ALPHA_LEARNED && !(o->alpha > 0.0f && o->alpha <= 1.0f))
-        return sg_fail(err, "%s: the mixture weight alpha must be in (0, 1] to stay unbiased", path), NULL;
     if (!(o->lobe_exponent >= 0.0f && o->lobe_exponent <= 1e5f))
         return sg_fail(err, "%s: lobe exponent must be in [0, 1e5]", path), NULL;
     if (o->roulette != SG_ROULETTE_LEARNED && o->roulette != SG_ROULETTE_ALBEDO)
@@ -186,27 +154,23 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
         sg_renderer_free(r);
         return NULL;
     }
-    if ((o->sampling == SG_SAMPLING_SKELETON || o->sampling == SG_SAMPLING_GUIDED) &&
-        !skeleton_guide_init(&r->skeleton, &o->guide, r->geo.centre, r->geo.scale, &r->lights, path, err)) {
-        sg_renderer_free(r);
-        return NULL;
-    }
     camera_init(&r->camera, &s->camera, r->geo.centre, o->width, o->height);
     r->pool = sg_thread_pool_create(o->threads);
-    if (o->sampling == SG_SAMPLING_OPENPGL) {
-        Vec3 lo, hi;
-        geometry_bounds(&r->geo, &lo, &hi);
-        SgError e = {0};
-        r->pgl = sg_pgl_field_create(lo, hi, sg_thread_pool_size(r->pool), &e);
-        if (!r->pgl) {
-            sg_renderer_free(r);
-            return sg_fail(err, "%s: --sampling openpgl: %s", path, e.message), NULL;
-        }
-    }
-    if (o->sampling == SG_SAMPLING_GUIDED && o->alpha == SG_ALPHA_LEARNED && r->lights.count &&
-        !setup_learner(r, path, err)) {
+    PathGuideSetup gs = {.opt = &r->opt, .geo = &r->geo, .lights = &r->lights,
+                         .threads = sg_thread_pool_size(r->pool), .tiles = (uint32_t)(r->tiles_x * r->tiles_y),
+                         .path = path};
+    r->guide = create ? create(&gs, err) : path_guide_create(o->sampling, &gs, err);
+    if (!r->guide) {
         sg_renderer_free(r);
         return NULL;
+    }
+    /* the learned roulette needs what a bounce brings back: a guide that learns it */
+    if (o->roulette == SG_ROULETTE_LEARNED && r->guide->estimates_radiance) {
+        r->noise = pixel_noise_create(o->width, o->height);
+        if (!r->noise) {
+            sg_renderer_free(r);
+            return sg_fail(err, "%s: out of memory", path), NULL;
+        }
     }
     if (!geometry_build(&r->geo, path, err)) {
         sg_renderer_free(r);
@@ -216,17 +180,26 @@ SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgErr
     return r;
 }
 
+SgRenderer *sg_renderer_create(const SgScene *s, const SgRenderOptions *o, SgError *err)
+{
+    return renderer_create(s, o, NULL, err);
+}
+
+SgRenderer *sg_renderer_create_with_guide(const SgScene *s, const SgRenderOptions *o, PathGuideCreate create,
+                                          SgError *err)
+{
+    return renderer_create(s, o, create, err);
+}
+
 void sg_renderer_free(SgRenderer *r)
 {
     if (!r)
         return;
     geometry_free(&r->geo);
     sg_thread_pool_free(r->pool);
-    sg_pgl_field_free(r->pgl);
+    path_guide_free(r->guide);
     free(r->materials);
     light_set_free(&r->lights);
-    skeleton_guide_free(&r->skeleton);
-    sg_mixture_learner_free(r->learner);
     pixel_noise_free(r->noise);
     free(r->sum);
     free(r->last);
@@ -241,67 +214,32 @@ static inline float power_heuristic(float a, float b)
     return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
 }
 
-/* Which way does the bounce sample at a diffuse/glossy vertex go. */
-typedef enum BounceKind {
-    BOUNCE_BSDF,    /* the material's own sampler */
-    BOUNCE_LOBE,    /* the guide's lobe alone (the paper's rule, skeleton) */
-    BOUNCE_MIXTURE, /* BSDF with probability alpha, the lobe otherwise (guided) */
-    BOUNCE_OPENPGL, /* BSDF with probability alpha, Open PGL's distribution otherwise */
-} BounceKind;
-
-typedef struct BounceSampler {
-    BounceKind kind;
-    const SgGlossyLobe *bsdf; /* the material's lobe; bsdf->n is the shading normal */
-    SgFoldedLobe lobe;        /* the guide's (kind 2) */
-    float alpha;              /* the BSDF's share of the mixture */
-    SgPglField *pgl;          /* BOUNCE_OPENPGL: the field, prepared at the vertex by `thread` */
-    int thread;
-} BounceSampler;
-
-static float bounce_pdf(const BounceSampler *b, Vec3 w, float wn)
-{
-    float pdf_bsdf, c1, c2;
-    switch (b->kind) {
-    case BOUNCE_LOBE: return sg_pdf_cosine_power(b->lobe.axis, b->lobe.exponent, w);
-    case BOUNCE_MIXTURE: return sg_pdf_mixture_at(b->bsdf, &b->lobe, b->alpha, w, wn, &pdf_bsdf, &c1, &c2);
-    case BOUNCE_OPENPGL:
-        return b->alpha * sg_pdf_glossy(b->bsdf, w) + (1.0f - b->alpha) * sg_pgl_guide_pdf(b->pgl, b->thread, w);
-    case BOUNCE_BSDF: break;
-    }
-    return sg_pdf_glossy(b->bsdf, w);
-}
-
-static Vec3 bounce_sample(const BounceSampler *b, float u0, float u1, float u2)
-{
-    switch (b->kind) {
-    case BOUNCE_LOBE: return sg_sample_cosine_power(b->lobe.axis, b->lobe.exponent, u1, u2);
-    case BOUNCE_MIXTURE: return sg_sample_mixture_at(b->bsdf, &b->lobe, b->alpha, u0, u1, u2);
-    case BOUNCE_OPENPGL:
-        if (u0 < b->alpha)
-            return sg_sample_glossy(b->bsdf, u0 / b->alpha, u1, u2);
-        float pdf;
-        return sg_pgl_guide_sample(b->pgl, b->thread, u1, u2, &pdf);
-    case BOUNCE_BSDF: break;
-    }
-    return sg_sample_glossy(b->bsdf, u0, u1, u2);
-}
-
 typedef struct PathStats {
     uint64_t rays;
     uint64_t backface;
     uint64_t branches;     /* made by splitting, beyond the path itself */
     uint64_t bounces;      /* diffuse and glossy bounces drawn */
-    uint64_t lobe_bounces; /* of which the guide's lobe drew the direction */
+    uint64_t lobe_bounces; /* of which the guide drew the direction */
 } PathStats;
 
-/* A vertex of a learning path waiting for the rest of the path. */
+/* What one camera path needs besides the renderer. */
+typedef struct PathCtx {
+    SgRng *rng;
+    PathStats *st;
+    int thread;
+    bool first_pass;
+    bool record;           /* the guide records this pass's paths (record_*) */
+    int learn_tile;        /* >= 0: the path learns, its records go to this tile */
+    float pixel_deviation; /* the pixel's noise for the learned roulette; 0: albedo roulette */
+} PathCtx;
+
+/* A learning vertex waiting for the rest of its branch. */
 typedef struct PendingRecord {
-    uint32_t region;
-    bool lobe;     /* guided: the bounce's fields are set */
-    float pdf_bsdf, cos_axis, cos_mirror, pdf;
-    Vec3 beta;     /* path throughput of the bounce (after the roulette) */
-    Vec3 radiance; /* radiance gathered before the bounce */
-    bool cut;      /* the roulette cut the path here: no sample of M2 */
+    GuideVertex v;  /* as its bounce was drawn */
+    Vec3 beta;      /* path throughput of the bounce (before the roulette, where it cut the path) */
+    Vec3 radiance;  /* radiance gathered before the bounce */
+    bool bounced;   /* a direction above the surface was drawn */
+    bool cut;       /* the albedo roulette cut the path here */
 } PendingRecord;
 
 #define MAX_PENDING 32
@@ -312,7 +250,8 @@ typedef struct PendingRecord {
  * survives with probability
  *     q = min(1, ROULETTE_GAIN |beta| sqrt(M2(region)) / sigma(pixel)),
  * M2 the region's second moment of what a bounce brings back per unit
- * throughput, sigma the noise the pixel has anyway (render/pixel_noise.h).
+ * throughput (GuideVertex.rms, from a guide that learns it), sigma the
+ * noise the pixel has anyway (render/pixel_noise.h).
  * Cutting adds variance |beta|^2 M2 (1/q - 1) and saves the rest of the
  * path's cost; this q balances the two against the pixel's variance per
  * cost (the ratio of a whole path's cost to its rest folded into
@@ -322,132 +261,9 @@ typedef struct PendingRecord {
  * toward the light live on, where albedo roulette would cut them. Never
  * below ROULETTE_MIN_SURVIVAL, so that a region whose estimate is wrongly
  * low cannot make fireflies. */
-/* Open PGL's share of a diffuse bounce: Cycles' default surface guiding
- * probability. */
-#define OPENPGL_GUIDING_PROBABILITY 0.5f
-
 #define ROULETTE_DEPTH 2
 #define ROULETTE_GAIN 2.8f
 #define ROULETTE_MIN_SURVIVAL 0.05f
-
-/* Russian roulette after a few bounces, on the product of albedos:
- * unbiased (the survivor is divided by its survival probability). */
-static bool albedo_roulette(Vec3 *beta, Vec3 *rr_beta, SgRng *rng, SgPglSegment *seg)
-{
-    float q = sg_minf(0.95f, v3_max_component(*rr_beta));
-    if (seg) /* openpgl: the field learns what survivors carry */
-        sg_pgl_segment_survival(seg, q);
-    if (!(sg_rng_float(rng) < q))
-        return false;
-    *beta = v3_scale(*beta, 1.0f / q);
-    *rr_beta = v3_scale(*rr_beta, 1.0f / q);
-    return true;
-}
-
-static Vec3 per_throughput(Vec3 c, Vec3 beta)
-{
-    return v3(beta.x > 0.0f ? c.x / beta.x : 0.0f, beta.y > 0.0f ? c.y / beta.y : 0.0f,
-              beta.z > 0.0f ? c.z / beta.z : 0.0f);
-}
-
-/* The vertex records of a finished branch, pending[from..to): what each
- * bounce brought back is the radiance gathered since it, `radiance` now. */
-static void finish_records(SgRenderer *r, const PendingRecord *pending, int from, int to, Vec3 radiance,
-                           int learn_tile)
-{
-    for (int i = from; i < to; i++) {
-        const PendingRecord *pr = &pending[i];
-        if (!pr->lobe && !r->noise)
-            continue; /* only the learned roulette reads what left a vertex */
-        float t = luminance(pr->beta);
-        /* the bounce's one-sample estimate: what came after, per unit throughput */
-        float after = luminance(per_throughput(v3_sub(radiance, pr->radiance), pr->beta));
-        SgMixtureRecord rec = {.region = pr->region, .radiance = pr->cut ? -1.0f : after, .lobe = pr->lobe,
-                               .weight = t * t};
-        if (pr->lobe) {
-            rec.pdf_bsdf = pr->pdf_bsdf;
-            rec.cos_axis = pr->cos_axis;
-            rec.cos_mirror = pr->cos_mirror;
-            rec.pdf = pr->pdf;
-            rec.estimate = after;
-        }
-        sg_mixture_record(r->learner, (uint32_t)learn_tile, &rec);
-    }
-}
-
-/* A path's state between vertices. */
-typedef struct PathState {
-    Vec3 o, d;
-    Vec3 beta;
-    /* What beta would be under BSDF sampling (the product of albedos):
-     * Russian roulette follows it, not beta, so that a guided path is not
-     * killed for carrying a small weight where its pdf was large. Any
-     * survival probability is unbiased once divided out. */
-    Vec3 rr_beta;
-    bool specular_bounce;
-    float prev_pdf;
-    Vec3 prev_p;
-} PathState;
-
-/* A diffuse or glossy vertex, as far as drawing its bounce needs. */
-typedef struct BounceVertex {
-    const Material *m;
-    SgGlossyLobe lobe;
-    BounceSampler bs; /* bs.bsdf points at lobe: set again where the vertex is copied */
-    Vec3 n, origin, p;
-    bool guided;      /* bs is the guided mixture */
-    SgPglSegment *seg; /* openpgl, recording: the vertex's segment */
-} BounceVertex;
-
-/* Draws the vertex's bounce into the path state; false where the path
- * ends (below the surface). `pr`: the vertex's learning record, if any. */
-static bool take_bounce(BounceVertex *v, PathState *ps, SgRng *rng, PendingRecord *pr, PathStats *st)
-{
-    v->bs.bsdf = &v->lobe;
-    float u0 = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
-    Vec3 wi = bounce_sample(&v->bs, u0, u1, u2);
-    st->bounces++;
-    st->lobe_bounces += v->bs.kind == BOUNCE_LOBE ||
-                        ((v->bs.kind == BOUNCE_MIXTURE || v->bs.kind == BOUNCE_OPENPGL) && !(u0 < v->bs.alpha));
-    float cos_x = v3_dot(wi, v->n);
-    float pdf, pdf_bsdf = 0.0f, c1 = 0.0f, c2 = 0.0f;
-    if (v->bs.kind == BOUNCE_MIXTURE) /* with the BSDF's part and the cosines the learner needs */
-        pdf = sg_pdf_mixture_at(&v->lobe, &v->bs.lobe, v->bs.alpha, wi, cos_x, &pdf_bsdf, &c1, &c2);
-    else
-        pdf = bounce_pdf(&v->bs, wi, cos_x);
-    if (!(cos_x > 0.0f) || !(pdf > 0.0f))
-        return false; /* below the surface: f = 0, the path ends */
-    if (pr && v->guided) {
-        pr->lobe = true;
-        pr->pdf_bsdf = pdf_bsdf;
-        pr->cos_axis = c1;
-        pr->cos_mirror = c2;
-        pr->pdf = pdf;
-    }
-    Vec3 f = material_eval(v->m, &v->lobe, wi);
-    Vec3 weight = v3_scale(f, cos_x / pdf);
-    ps->beta = v3_mul(ps->beta, weight);
-    if (v->seg)
-        sg_pgl_segment_bounce(v->seg, wi, pdf, weight, false, 1.0f, v->m->roughness);
-    ps->d = wi;
-    ps->o = v->origin;
-    ps->prev_pdf = pdf;
-    ps->prev_p = v->p;
-    ps->specular_bounce = false;
-    return true;
-}
-
-/* A vertex where the learned roulette split the path: its bounce is drawn
- * again, `remaining` more times, once the branches before have ended. */
-typedef struct SplitPoint {
-    BounceVertex v;
-    PathState ps;      /* at the vertex, beta already divided by the split factor */
-    int depth;
-    int remaining;
-    int mark;          /* the branch's first record in pending[] */
-    bool learn;        /* the vertex learns: each branch gets a record */
-    uint32_t region;
-} SplitPoint;
 
 /* Splitting, the other half of efficiency-aware roulette: where a
  * bounce's worth |beta| sqrt(M2) / sigma(pixel) (as for the learned
@@ -474,21 +290,205 @@ typedef struct SplitPoint {
 #define SPLIT_BRANCHES_MAX 16
 #define SPLIT_STACK 12
 
-/* Where the path learns (`learn_tile` >= 0): every diffuse or glossy vertex
- * becomes a record of what left it (and, guided, of its bounce's one-sample
- * estimate), known once its branch has ended. `pixel_deviation`: the
- * pixel's noise for the learned roulette (0: albedo roulette); `seen` gets
- * the emission the camera ray itself hit. */
-static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st, bool first_pass,
-                       int learn_tile, float pixel_deviation, Vec3 *seen, int thread, bool record)
+/* Russian roulette after a few bounces, on the product of albedos:
+ * unbiased (the survivor is divided by its survival probability). */
+static bool albedo_roulette(const PathGuide *g, Vec3 *beta, Vec3 *rr_beta, SgRng *rng, GuideSegment *seg)
 {
+    float q = sg_minf(0.95f, v3_max_component(*rr_beta));
+    if (seg) /* a learned field learns what survivors carry */
+        g->ops->record_survival(seg, q);
+    if (!(sg_rng_float(rng) < q))
+        return false;
+    *beta = v3_scale(*beta, 1.0f / q);
+    *rr_beta = v3_scale(*rr_beta, 1.0f / q);
+    return true;
+}
+
+static Vec3 per_throughput(Vec3 c, Vec3 beta)
+{
+    return v3(beta.x > 0.0f ? c.x / beta.x : 0.0f, beta.y > 0.0f ? c.y / beta.y : 0.0f,
+              beta.z > 0.0f ? c.z / beta.z : 0.0f);
+}
+
+/* The records of a finished branch, pending[from..to): what each bounce
+ * brought back is the radiance gathered since it, `radiance` now. */
+static void finish_records(PathGuide *g, const PendingRecord *pending, int from, int to, Vec3 radiance, int tile)
+{
+    for (int i = from; i < to; i++) {
+        const PendingRecord *pr = &pending[i];
+        float t = luminance(pr->beta);
+        BounceOutcome o = {.radiance = luminance(per_throughput(v3_sub(radiance, pr->radiance), pr->beta)),
+                           .weight = t * t, .bounced = pr->bounced, .cut = pr->cut};
+        g->ops->learn(g, tile, &pr->v, &o);
+    }
+}
+
+/* A path's state between vertices. */
+typedef struct PathState {
+    Vec3 o, d;
+    Vec3 beta;
+    /* What beta would be under BSDF sampling (the product of albedos):
+     * Russian roulette follows it, not beta, so that a guided path is not
+     * killed for carrying a small weight where its pdf was large. Any
+     * survival probability is unbiased once divided out. */
+    Vec3 rr_beta;
+    bool specular_bounce;
+    float prev_pdf;
+    Vec3 prev_p;
+} PathState;
+
+/* A diffuse or glossy vertex, as far as drawing its bounce needs. */
+typedef struct BounceVertex {
+    const Material *m;
+    GuideVertex g;     /* the guide's distribution there */
+    Vec3 origin, p;
+    GuideSegment *seg; /* recording: the vertex's record */
+} BounceVertex;
+
+/* Draws the vertex's bounce into the path state; false where the path
+ * ends (below the surface). `pr`: the vertex's learning record, if any. */
+static bool take_bounce(const PathGuide *guide, BounceVertex *v, PathState *ps, SgRng *rng, PendingRecord *pr,
+                        PathStats *st)
+{
+    float u[3];
+    u[0] = sg_rng_float(rng);
+    u[1] = sg_rng_float(rng);
+    u[2] = sg_rng_float(rng);
+    float pdf;
+    Vec3 wi = guide->ops->sample(&v->g, u, &pdf);
+    st->bounces++;
+    st->lobe_bounces += v->g.by_guide;
+    float cos_x = v3_dot(wi, v->g.bsdf.n);
+    bool above = cos_x > 0.0f && pdf > 0.0f;
+    if (pr) {
+        pr->v = v->g;
+        pr->bounced = above;
+    }
+    if (!above)
+        return false; /* below the surface: f = 0, the path ends */
+    Vec3 f = material_eval(v->m, &v->g.bsdf, wi);
+    Vec3 weight = v3_scale(f, cos_x / pdf);
+    ps->beta = v3_mul(ps->beta, weight);
+    if (v->seg)
+        guide->ops->record_bounce(v->seg, wi, pdf, weight, false, 1.0f, v->m->roughness);
+    ps->d = wi;
+    ps->o = v->origin;
+    ps->prev_pdf = pdf;
+    ps->prev_p = v->p;
+    ps->specular_bounce = false;
+    return true;
+}
+
+/* A mirror's or glass's bounce (a delta distribution: no guide). */
+static void specular_bounce(const SgRenderer *r, const Material *m, Vec3 p, Vec3 wo, Vec3 n, bool entering,
+                            PathState *ps, SgRng *rng, GuideSegment *seg)
+{
+    ps->specular_bounce = true;
+    if (m->type == SG_MATERIAL_MIRROR) {
+        ps->d = v3_normalize(sg_reflect(wo, n));
+        ps->beta = v3_mul(ps->beta, m->ks);
+        ps->rr_beta = v3_mul(ps->rr_beta, m->ks);
+        ps->o = offset_origin(&r->geo, p, n);
+        if (seg)
+            r->guide->ops->record_bounce(seg, ps->d, 1.0f, m->ks, true, 1.0f, 0.0f);
+        return;
+    }
+    float eta = entering ? 1.0f / m->ior : m->ior; /* eta_i / eta_t */
+    float cos_i = v3_dot(wo, n);
+    float sin2_t = eta * eta * fmaxf(0.0f, 1.0f - cos_i * cos_i);
+    float fresnel = 1.0f, cos_t = 0.0f;
+    if (sin2_t < 1.0f) {
+        cos_t = sqrtf(1.0f - sin2_t);
+        float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+        float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+        fresnel = 0.5f * (rs * rs + rp * rp);
+    }
+    Vec3 weight = v3(1, 1, 1);
+    bool refracted = !(sg_rng_float(rng) < fresnel);
+    if (!refracted) {
+        ps->d = v3_normalize(sg_reflect(wo, n));
+        ps->o = offset_origin(&r->geo, p, n);
+    } else {
+        ps->d = v3_normalize(v3_add(v3_scale(wo, -eta), v3_scale(n, eta * cos_i - cos_t)));
+        ps->o = offset_origin(&r->geo, p, v3_scale(n, -1.0f));
+        ps->beta = v3_scale(ps->beta, eta * eta); /* radiance is compressed entering glass */
+        weight = v3(eta * eta, eta * eta, eta * eta);
+    }
+    if (seg)
+        r->guide->ops->record_bounce(seg, ps->d, 1.0f, weight, true, refracted ? 1.0f / eta : 1.0f, 0.0f);
+}
+
+/* Next-event estimation at a diffuse or glossy vertex: one point on the
+ * lights, its shadow ray, and what it brings (before the MIS weight). */
+typedef struct LightSample {
+    bool lit;         /* the sampled point is visible (whatever its cosine) */
+    Vec3 c;           /* f cos Le / pdf, 0 where the point gives nothing */
+    Vec3 wi;
+    float pdf, cos_x; /* pdf 0: no contribution */
+} LightSample;
+
+static LightSample sample_light(const SgRenderer *r, const BounceVertex *v, bool lit_below_horizon, SgRng *rng,
+                                PathStats *st)
+{
+    LightSample ls = {0};
+    float ul = sg_rng_float(rng), ut = sg_rng_float(rng);
+    float ua = sg_rng_float(rng), ub = sg_rng_float(rng);
+    uint32_t t;
+    Vec3 y;
+    if (!light_set_sample(&r->lights, r->geo.vertices, r->geo.indices, ul, ut, ua, ub, &t, &y))
+        return ls;
+    Vec3 n = v->g.bsdf.n;
+    Vec3 to = v3_sub(y, v->origin);
+    float dist2 = v3_dot(to, to);
+    float dist = sqrtf(dist2);
+    Vec3 wi = v3_scale(to, 1.0f / dist);
+    float cos_l = -v3_dot(wi, r->geo.tris[t].normal);
+    float cos_x = v3_dot(wi, n);
+    if (!(dist > 0.0f && cos_l > 0.0f && (cos_x > 0.0f || lit_below_horizon)))
+        return ls;
+    st->rays++;
+    if (occluded(&r->geo, v->origin, wi, dist * (1.0f - 1e-4f)))
+        return ls;
+    ls.lit = true;
+    if (cos_x > 0.0f) {
+        const Material *lm = &r->materials[r->geo.tris[t].material];
+        float pl = light_set_pdf(&r->lights, r->geo.tris[t].light, dist2, cos_l);
+        Vec3 f = material_eval(v->m, &v->g.bsdf, wi);
+        ls.c = v3_scale(v3_mul(f, lm->emission), cos_x / pl);
+        ls.wi = wi;
+        ls.cos_x = cos_x;
+        ls.pdf = pl;
+    }
+    return ls;
+}
+
+/* A vertex where the learned roulette split the path: its bounce is drawn
+ * again, `remaining` more times, once the branches before have ended. */
+typedef struct SplitPoint {
+    BounceVertex v;
+    PathState ps;      /* at the vertex, beta already divided by the split factor */
+    int depth;
+    int remaining;
+    int mark;          /* the branch's first record in pending[] */
+    bool learn;        /* the vertex learns: each branch gets a record */
+} SplitPoint;
+
+/* One camera path. Where it learns (pc->learn_tile >= 0) every diffuse or
+ * glossy vertex the guide asks for becomes a record of what its bounce
+ * brought back, known once its branch has ended. `seen` gets the emission
+ * the camera ray itself hit. */
+static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, const PathCtx *pc, Vec3 *seen)
+{
+    PathGuide *guide = r->guide;
+    const PathGuideOps *gops = guide->ops;
+    SgRng *rng = pc->rng;
+    PathStats *st = pc->st;
     PendingRecord pending[MAX_PENDING];
     int pending_count = 0;
     SplitPoint splits[SPLIT_STACK];
     int split_count = 0, branches = 1;
     Vec3 radiance = v3(0, 0, 0);
     PathState ps = {o, d, v3(1, 1, 1), v3(1, 1, 1), true /* the camera ray counts as one */, 0.0f, o};
-    const SgSampling mode = r->opt.sampling;
     int depth = 0;
     bool alive = true;
 
@@ -501,13 +501,12 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 break;
             Vec3 ng = r->geo.tris[h.tri].normal;
             float cos_o = v3_dot(ps.d, ng);
-            if (depth == 0 && first_pass && cos_o > 0.0f)
+            if (depth == 0 && pc->first_pass && cos_o > 0.0f)
                 st->backface++;
             const Material *m = &r->materials[r->geo.tris[h.tri].material];
             Vec3 wo = v3_scale(ps.d, -1.0f);
             Vec3 n = cos_o < 0.0f ? ng : v3_scale(ng, -1.0f); /* facing wo */
-            /* openpgl, a training pass: every vertex is a segment of the path's record */
-            SgPglSegment *seg = record ? sg_pgl_segment_next(r->pgl, thread, h.p, wo, n) : NULL;
+            GuideSegment *seg = pc->record ? gops->record_vertex(guide, pc->thread, h.p, wo, n) : NULL;
 
             /* emission (one-sided, toward the winding normal) */
             if (m->emissive && cos_o < 0.0f) {
@@ -519,156 +518,48 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                 }
                 radiance = v3_add(radiance, v3_scale(v3_mul(ps.beta, m->emission), w));
                 if (seg)
-                    sg_pgl_segment_emission(seg, m->emission, w);
+                    gops->record_emission(seg, m->emission, w);
             }
             if (depth == 0)
                 *seen = radiance; /* emission the camera sees directly */
             if (depth + 1 >= r->opt.max_depth)
                 break;
 
-            if (m->type == SG_MATERIAL_MIRROR) {
-                ps.d = v3_normalize(sg_reflect(wo, n));
-                ps.beta = v3_mul(ps.beta, m->ks);
-                ps.rr_beta = v3_mul(ps.rr_beta, m->ks);
-                ps.o = offset_origin(&r->geo, h.p, n);
-                ps.specular_bounce = true;
-                if (seg)
-                    sg_pgl_segment_bounce(seg, ps.d, 1.0f, m->ks, true, 1.0f, 0.0f);
-            } else if (m->type == SG_MATERIAL_DIELECTRIC) {
-                bool entering = cos_o < 0.0f;
-                float eta = entering ? 1.0f / m->ior : m->ior; /* eta_i / eta_t */
-                float cos_i = v3_dot(wo, n);
-                float sin2_t = eta * eta * fmaxf(0.0f, 1.0f - cos_i * cos_i);
-                float fresnel = 1.0f, cos_t = 0.0f;
-                if (sin2_t < 1.0f) {
-                    cos_t = sqrtf(1.0f - sin2_t);
-                    float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-                    float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-                    fresnel = 0.5f * (rs * rs + rp * rp);
-                }
-                Vec3 weight = v3(1, 1, 1);
-                bool refracted = !(sg_rng_float(rng) < fresnel);
-                if (!refracted) {
-                    ps.d = v3_normalize(sg_reflect(wo, n));
-                    ps.o = offset_origin(&r->geo, h.p, n);
-                } else {
-                    ps.d = v3_normalize(v3_add(v3_scale(wo, -eta), v3_scale(n, eta * cos_i - cos_t)));
-                    ps.o = offset_origin(&r->geo, h.p, v3_scale(n, -1.0f));
-                    ps.beta = v3_scale(ps.beta, eta * eta); /* radiance is compressed entering glass */
-                    weight = v3(eta * eta, eta * eta, eta * eta);
-                }
-                ps.specular_bounce = true;
-                if (seg)
-                    sg_pgl_segment_bounce(seg, ps.d, 1.0f, weight, true, refracted ? 1.0f / eta : 1.0f, 0.0f);
+            if (m->type == SG_MATERIAL_MIRROR || m->type == SG_MATERIAL_DIELECTRIC) {
+                specular_bounce(r, m, h.p, wo, n, cos_o < 0.0f, &ps, rng, seg);
             } else {
                 if (m->black)
                     break;
-                BounceVertex v;
-                v.m = m;
-                v.lobe = sg_glossy_lobe(n, wo, m->type == SG_MATERIAL_GLOSSY ? m->exponent : 0.0f,
-                                        m->diffuse_weight);
-                v.bs = (BounceSampler){.kind = BOUNCE_BSDF, .bsdf = &v.lobe, .lobe = {.axis = n, .squarings = -1},
-                                       .alpha = 1.0f};
-                v.n = n;
-                v.p = h.p;
-                v.seg = seg;
-                Vec3 axis;
-                /* guided: the region's learned alpha; where it is the BSDF
-                 * alone the guide is asked only by paths that learn */
-                SgMixtureCandidate mix = {r->opt.alpha, r->opt.lobe_exponent};
-                bool lobe_region = r->opt.alpha < 1.0f;
-                uint32_t region = SG_NO_REGION;
-                bool learn = false;
-                float rms = -1.0f; /* what a bounce from here brings back, for the learned roulette */
+                BounceVertex v = {.m = m, .p = h.p, .seg = seg};
+                v.g.bsdf = sg_glossy_lobe(n, wo, m->type == SG_MATERIAL_GLOSSY ? m->exponent : 0.0f,
+                                          m->diffuse_weight);
+                v.g.learn = false;
+                v.g.rms = -1.0f;
+                v.g.by_guide = false;
+                /* n is the winding normal or its opposite: the other bin of the pair */
+                GuideHit gh = {.p = h.p, .n = n, .m = m, .thread = pc->thread,
+                               .normal_bin = r->geo.tris[h.tri].normal_bin ^ (cos_o < 0.0f ? 0u : 1u),
+                               .may_learn = pc->learn_tile >= 0 && pending_count < MAX_PENDING};
+                if (gops->vertex_begin)
+                    gops->vertex_begin(guide, &gh, rng, &v.g);
                 PendingRecord *pr = NULL;
-                if (mode == SG_SAMPLING_GUIDED && r->learner) {
-                    const SgMixtureView *view = r->mixture_view;
-                    /* n is the winding normal or its opposite: the other bin of the pair */
-                    uint32_t bin = r->geo.tris[h.tri].normal_bin ^ (cos_o < 0.0f ? 0u : 1u);
-                    region = sg_mixture_region_at(view, h.p, bin);
-                    uint8_t state = view->state[region];
-                    mix = view->of_state[state & SG_MIXTURE_STATE_CANDIDATE];
-                    lobe_region = state & SG_MIXTURE_STATE_LOBE;
-                    learn = learn_tile >= 0 && !(state & SG_MIXTURE_STATE_SETTLED) && pending_count < MAX_PENDING;
-                    rms = pixel_deviation > 0.0f ? sg_mixture_radiance(view, region) : -1.0f;
-                    if (learn) {
-                        pr = &pending[pending_count++];
-                        pr->region = region;
-                        pr->lobe = false;
-                        pr->beta = ps.beta; /* before the roulette: the weight of a bounce it cuts */
-                        pr->cut = false; /* beta and radiance of a bounce taken: set after the roulette */
-                    }
+                if (v.g.learn) {
+                    pr = &pending[pending_count++];
+                    /* before the roulette: the weight of a bounce it cuts; the
+                     * rest is set when the bounce is drawn */
+                    *pr = (PendingRecord){.beta = ps.beta};
                 }
-                v.guided = mode == SG_SAMPLING_SKELETON || (mode == SG_SAMPLING_GUIDED && (lobe_region || learn));
-                GuideQuery gq;
-                v.guided = v.guided && skeleton_guide_begin(&r->skeleton, h.p, n, rng, &gq);
                 v.origin = offset_origin(&r->geo, h.p, n);
 
-                /* next-event estimation */
-                Vec3 nee = v3(0, 0, 0);
-                Vec3 nee_dir = v3(0, 0, 0);
-                float nee_pdf = 0.0f, nee_cos = 0.0f;
-                bool lit = false;
-                float ul = sg_rng_float(rng), ut = sg_rng_float(rng);
-                float ua = sg_rng_float(rng), ub = sg_rng_float(rng);
-                uint32_t t;
-                Vec3 y;
-                if (light_set_sample(&r->lights, r->geo.vertices, r->geo.indices, ul, ut, ua, ub, &t, &y)) {
-                    Vec3 to = v3_sub(y, v.origin);
-                    float dist2 = v3_dot(to, to);
-                    float dist = sqrtf(dist2);
-                    Vec3 wi = v3_scale(to, 1.0f / dist);
-                    float cos_l = -v3_dot(wi, r->geo.tris[t].normal);
-                    float cos_x = v3_dot(wi, n);
-                    const Material *lm = &r->materials[r->geo.tris[t].material];
-                    /* The skeleton rule asks whether the point is directly lit:
-                     * the light sample is visible (even where the point's own
-                     * cosine is zero), so it traces the shadow ray then too. */
-                    bool wanted = cos_x > 0.0f || mode == SG_SAMPLING_SKELETON;
-                    if (dist > 0.0f && cos_l > 0.0f && wanted) {
-                        st->rays++;
-                        if (!occluded(&r->geo, v.origin, wi, dist * (1.0f - 1e-4f))) {
-                            lit = true;
-                            if (cos_x > 0.0f) {
-                                float pl = light_set_pdf(&r->lights, r->geo.tris[t].light, dist2, cos_l);
-                                Vec3 f = material_eval(m, &v.lobe, wi);
-                                nee = v3_scale(v3_mul(f, lm->emission), cos_x / pl);
-                                nee_dir = wi;
-                                nee_cos = cos_x;
-                                nee_pdf = pl;
-                            }
-                        }
-                    }
-                }
-
-                v.guided = v.guided && skeleton_guide_end(&r->skeleton, &gq, h.p, n, &axis);
-                if (v.guided) {
-                    if (mode == SG_SAMPLING_SKELETON) {
-                        if (!lit) /* the paper: lobe only where not directly lit */
-                            v.bs = (BounceSampler){.kind = BOUNCE_LOBE, .bsdf = &v.lobe,
-                                                   .lobe = sg_folded_lobe(axis, n, r->opt.lobe_exponent)};
-                    } else {
-                        /* alpha 1 (a learning path): the BSDF, with the lobe's
-                         * densities at hand for the learner */
-                        v.bs = (BounceSampler){.kind = BOUNCE_MIXTURE, .bsdf = &v.lobe,
-                                               .lobe = sg_folded_lobe(axis, n, mix.exponent), .alpha = mix.alpha};
-                    }
-                }
-                if (mode == SG_SAMPLING_OPENPGL) {
-                    /* Cycles' share for the guide: its guiding probability
-                     * times the BSDF's diffuse share (a glossy lobe is not guided) */
-                    float share = OPENPGL_GUIDING_PROBABILITY * m->diffuse_weight;
-                    float u = sg_rng_float(rng);
-                    if (share > 0.0f && sg_pgl_guide_at(r->pgl, thread, h.p, n, u))
-                        v.bs = (BounceSampler){.kind = BOUNCE_OPENPGL, .bsdf = &v.lobe, .alpha = 1.0f - share,
-                                               .pgl = r->pgl, .thread = thread};
-                }
-                if (nee_pdf > 0.0f) {
-                    float w = power_heuristic(nee_pdf, bounce_pdf(&v.bs, nee_dir, nee_cos));
-                    Vec3 c = v3_scale(nee, w);
+                LightSample ls = sample_light(r, &v, gops->lit_below_horizon, rng, st);
+                if (gops->vertex_end)
+                    gops->vertex_end(guide, &gh, ls.lit, rng, &v.g);
+                if (ls.pdf > 0.0f) {
+                    float w = power_heuristic(ls.pdf, gops->pdf(&v.g, ls.wi, ls.cos_x));
+                    Vec3 c = v3_scale(ls.c, w);
                     radiance = v3_add(radiance, v3_mul(ps.beta, c));
                     if (seg)
-                        sg_pgl_segment_scattered(seg, c);
+                        gops->record_direct(seg, c);
                 }
 
                 /* Roulette after next-event estimation and before the bounce is
@@ -676,9 +567,9 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                  * keeps its direct light and pays for no direction, pdf or
                  * guide lobe it would not follow. */
                 ps.rr_beta = v3_mul(ps.rr_beta, v3_add(m->kd, m->ks));
-                if (rms >= 0.0f) {
+                if (pc->pixel_deviation > 0.0f && v.g.rms >= 0.0f) {
                     /* learned: by what the bounce brings back, against the pixel's noise */
-                    float worth = luminance(ps.beta) * rms / pixel_deviation;
+                    float worth = luminance(ps.beta) * v.g.rms / pc->pixel_deviation;
                     float q = ROULETTE_GAIN * worth, split = SPLIT_GAIN * worth;
                     if (depth >= ROULETTE_DEPTH) {
                         roulette_done = true;
@@ -687,7 +578,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     if (depth >= ROULETTE_DEPTH && q < 1.0f) {
                         q = sg_maxf(q, ROULETTE_MIN_SURVIVAL);
                         if (!(sg_rng_float(rng) < q)) {
-                            if (pr) /* what a surviving bounce brings is what the learner estimates */
+                            if (pr) /* what a surviving bounce brings is what the guide estimates */
                                 pending_count--;
                             break;
                         }
@@ -699,18 +590,15 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                         if (n_branches > 1) { /* the others wait, from this vertex on */
                             splits[split_count++] = (SplitPoint){v, ps, depth, n_branches - 1,
                                                                  pr ? (int)(pr - pending) : pending_count,
-                                                                 pr != NULL, region};
+                                                                 pr != NULL};
                             branches += n_branches - 1;
                         }
                     }
                 } else if (depth >= ROULETTE_DEPTH) {
                     roulette_done = true;
-                    if (!albedo_roulette(&ps.beta, &ps.rr_beta, rng, seg)) {
-                        if (pr && v.guided) /* for the learner, a bounce that brought nothing back */
-                            *pr = (PendingRecord){.region = pr->region, .lobe = true, .beta = pr->beta,
-                                                  .radiance = radiance, .cut = true};
-                        else if (pr) /* nothing for M2, which is of surviving bounces (as above) */
-                            pending_count--;
+                    if (!albedo_roulette(guide, &ps.beta, &ps.rr_beta, rng, seg)) {
+                        if (pr) /* the guide hears of a bounce cut before it was drawn */
+                            *pr = (PendingRecord){.v = v.g, .beta = pr->beta, .radiance = radiance, .cut = true};
                         break;
                     }
                 }
@@ -718,12 +606,12 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
                     pr->beta = ps.beta;
                     pr->radiance = radiance;
                 }
-                if (!take_bounce(&v, &ps, rng, pr, st))
+                if (!take_bounce(guide, &v, &ps, rng, pr, st))
                     break;
             }
 
             /* after a specular bounce: the same roulette */
-            if (depth >= ROULETTE_DEPTH && !roulette_done && !albedo_roulette(&ps.beta, &ps.rr_beta, rng, seg))
+            if (depth >= ROULETTE_DEPTH && !roulette_done && !albedo_roulette(guide, &ps.beta, &ps.rr_beta, rng, seg))
                 break;
             if (!(v3_max_component(ps.beta) > 0.0f))
                 break;
@@ -733,7 +621,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
         /* the branch has ended: what its vertices brought back is known;
          * the next branch of the deepest split starts from its bounce */
         SplitPoint *sp = &splits[split_count - 1];
-        finish_records(r, pending, sp->mark, pending_count, radiance, learn_tile);
+        finish_records(guide, pending, sp->mark, pending_count, radiance, pc->learn_tile);
         pending_count = sp->mark;
         BounceVertex v = sp->v;
         ps = sp->ps;
@@ -741,16 +629,16 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, SgRng *rng, PathStats *st,
         PendingRecord *pr = NULL;
         if (sp->learn && pending_count < MAX_PENDING) {
             pr = &pending[pending_count++];
-            *pr = (PendingRecord){.region = sp->region, .beta = ps.beta, .radiance = radiance};
+            *pr = (PendingRecord){.beta = ps.beta, .radiance = radiance};
         }
         if (--sp->remaining == 0)
             split_count--;
-        alive = take_bounce(&v, &ps, rng, pr, st) && v3_max_component(ps.beta) > 0.0f;
+        alive = take_bounce(guide, &v, &ps, rng, pr, st) && v3_max_component(ps.beta) > 0.0f;
         depth++;
     }
-    finish_records(r, pending, 0, pending_count, radiance, learn_tile);
-    if (record)
-        sg_pgl_path_end(r->pgl, thread);
+    finish_records(guide, pending, 0, pending_count, radiance, pc->learn_tile);
+    if (pc->record)
+        gops->record_path_end(guide, pc->thread);
     st->branches += (uint64_t)(branches - 1);
     return radiance;
 }
@@ -761,10 +649,7 @@ typedef struct PassCtx {
     uint64_t pass_key;
     uint64_t jitter_key;  /* the seed's: the same for every pass */
     bool first_pass;
-    uint64_t learn_stride;
-    uint64_t learn_below; /* UINT64_MAX / learn_stride */
-    bool learn_job;       /* job 0 runs sg_mixture_learn */
-    bool record;          /* openpgl: the paths train the field */
+    GuidePass plan;       /* what the guide said of this pass */
 } PassCtx;
 
 static uint64_t mix64(uint64_t x)
@@ -775,39 +660,6 @@ static uint64_t mix64(uint64_t x)
     x *= 0x94d049bb133111ebULL;
     x ^= x >> 31;
     return x;
-}
-
-/* Which paths teach the learner: all in the first passes, then a share
- * that halves as the passes double (1/2, 1/4, ... down to 1/64), chosen by
- * pixel and pass so that every pixel takes turns. Learning costs
- * a cache query at every bounce; what it learns matters most early. */
-#define LEARN_WARMUP_PASSES 2
-#define LEARN_STRIDE_MAX 64
-
-/* At most this many learning paths per pass (~20 MB of records), whatever
- * the image size: a large image learns from a share of its pixels. */
-#define LEARN_PATHS_MAX 16384
-
-/* One path in `stride` learns in this pass (1: all). */
-static uint64_t learn_stride(const SgRenderer *r)
-{
-    uint64_t pixels = (uint64_t)r->opt.width * (uint64_t)r->opt.height;
-    uint64_t stride = 1;
-    while (pixels / stride > LEARN_PATHS_MAX)
-        stride *= 2;
-    int pass = r->spp;
-    if (pass >= LEARN_WARMUP_PASSES)
-        for (int p = 2; p <= pass && stride < LEARN_STRIDE_MAX; p *= 2)
-            stride *= 2;
-    return stride;
-}
-
-/* Fibonacci hashing (the high bits of pixel times 2^64/golden ratio spread
- * consecutive pixels evenly), the pixels shifted by the pass: one in
- * `stride` (a power of two), a different set each pass, for an imul. */
-static bool learns(const PassCtx *pc, size_t pix)
-{
-    return pc->learn_stride == 1 || ((uint64_t)pix + pc->pass_key) * 0x9e3779b97f4a7c15ULL < pc->learn_below;
 }
 
 /* Where in its pixel pass n's camera ray goes: the n-th point of the R2
@@ -845,11 +697,12 @@ static void render_tile(PassCtx *pc, uint64_t index, int thread)
             float jx, jy;
             pixel_jitter(pc->jitter_key, pix, r->spp, &jx, &jy);
             Vec3 dir = camera_ray(&r->camera, x, y, jx, jy);
-            int learn_tile = r->learner && learns(pc, pix) ? (int)index : -1;
-            float deviation = r->noise ? pixel_noise_deviation(r->noise, pix) : 0.0f;
+            bool learns = r->guide->ops->path_learns && r->guide->ops->path_learns(r->guide, pix);
+            PathCtx path = {.rng = &rng, .st = &st, .thread = thread, .first_pass = pc->first_pass,
+                            .record = pc->plan.record, .learn_tile = learns ? (int)index : -1,
+                            .pixel_deviation = r->noise ? pixel_noise_deviation(r->noise, pix) : 0.0f};
             Vec3 seen = v3(0, 0, 0);
-            Vec3 L = trace_path(r, r->camera.pos, dir, &rng, &st, pc->first_pass, learn_tile, deviation, &seen, thread,
-                                pc->record);
+            Vec3 L = trace_path(r, r->camera.pos, dir, &path, &seen);
             if (!isfinite(L.x) || !isfinite(L.y) || !isfinite(L.z)) {
                 nonfinite++;
                 L = v3(0, 0, 0);
@@ -876,14 +729,15 @@ static void render_tile(PassCtx *pc, uint64_t index, int thread)
         atomic_fetch_add(&r->nonfinite, nonfinite);
 }
 
-/* A pass's jobs: with a learner, job 0 learns from the pass before
- * (taken first, it runs beside the tiles), then one job per tile. */
+/* A pass's jobs: where the guide has a side job (the learner learning
+ * from the pass before), job 0 (taken first, it runs beside the tiles),
+ * then one job per tile. */
 static void pass_job(void *vctx, uint64_t index, int thread)
 {
     PassCtx *pc = vctx;
-    if (pc->learn_job) {
+    if (pc->plan.side_job) {
         if (index == 0) {
-            sg_mixture_learn(pc->r->learner);
+            pc->r->guide->ops->side_job(pc->r->guide);
             return;
         }
         index--;
@@ -901,22 +755,14 @@ void sg_renderer_pass(SgRenderer *r)
                   .tiles_x = (r->opt.width + TILE - 1) / TILE,
                   .pass_key = mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1),
                   .jitter_key = mix64(r->opt.seed ^ 0x6a09e667f3bcc909ULL),
-                  .first_pass = r->spp == 0,
-                  .learn_stride = learn_stride(r),
-                  .learn_job = r->learner != NULL,
-                  .record = r->pgl && r->spp < SG_OPENPGL_TRAINING_PASSES};
-    pc.learn_below = UINT64_MAX / pc.learn_stride;
+                  .first_pass = r->spp == 0};
+    const PathGuideOps *gops = r->guide->ops;
+    if (gops->pass_begin)
+        gops->pass_begin(r->guide, r->spp, pc.pass_key, &pc.plan);
     int tiles_y = (r->opt.height + TILE - 1) / TILE;
-    sg_thread_pool_run(r->pool, (uint64_t)pc.tiles_x * tiles_y + pc.learn_job, pass_job, &pc);
-    /* Each pass's records are learned during the next and used from the
-     * one after: the update does not hold up the threads. */
-    if (r->learner)
-        sg_mixture_end_pass(r->learner);
-    if (pc.record) { /* the next pass samples what this one taught */
-        double t0 = sg_seconds();
-        sg_pgl_field_update(r->pgl);
-        r->pgl_seconds += sg_seconds() - t0;
-    }
+    sg_thread_pool_run(r->pool, (uint64_t)pc.tiles_x * tiles_y + pc.plan.side_job, pass_job, &pc);
+    if (gops->pass_end)
+        gops->pass_end(r->guide, r->spp);
     r->spp++;
 }
 
@@ -934,7 +780,9 @@ const float *sg_renderer_last_pass(const SgRenderer *r) { return r->last; }
 uint64_t sg_renderer_nonfinite(const SgRenderer *r) { return atomic_load(&((SgRenderer *)r)->nonfinite); }
 double sg_renderer_guided_fraction(const SgRenderer *r)
 {
-    return r->learner ? sg_mixture_guided_fraction(r->learner) : -1.0;
+    GuideStats gs;
+    path_guide_stats(r->guide, &gs);
+    return gs.guided_fraction;
 }
 
 uint64_t sg_renderer_rays(const SgRenderer *r) { return atomic_load(&((SgRenderer *)r)->rays); }
@@ -945,8 +793,19 @@ double sg_renderer_branches_per_path(const SgRenderer *r)
     return paths > 0.0 ? (double)atomic_load(&((SgRenderer *)r)->branches) / paths : 0.0;
 }
 
-int sg_renderer_training_passes(const SgRenderer *r) { return r->pgl ? sg_pgl_field_updates(r->pgl) : 0; }
-double sg_renderer_training_seconds(const SgRenderer *r) { return r->pgl_seconds; }
+int sg_renderer_training_passes(const SgRenderer *r)
+{
+    GuideStats gs;
+    path_guide_stats(r->guide, &gs);
+    return gs.training_passes;
+}
+
+double sg_renderer_training_seconds(const SgRenderer *r)
+{
+    GuideStats gs;
+    path_guide_stats(r->guide, &gs);
+    return gs.training_seconds;
+}
 
 double sg_renderer_lobe_share(const SgRenderer *r)
 {

@@ -1,0 +1,247 @@
+/* guided: a one-sample mixture of the BSDF (probability alpha) and a
+ * cosine-power lobe toward the skeleton's importance point (folded above
+ * the surface), unbiased. With a fixed --alpha the mixture is the same
+ * everywhere; by default it is learned per region of the scene while
+ * rendering (render/mixture_learning.h): learning paths report what their
+ * bounces brought back, the learner re-chooses between passes (beside the
+ * next pass, as a side job), and its regional second moments feed the
+ * learned roulette (GuideVertex.rms). */
+#include <stdlib.h>
+
+#include "mixture_learning.h"
+#include "path_guide.h"
+#include "skeleton_guide.h"
+
+typedef struct Mixture {
+    PathGuide base;
+    SkeletonGuide skeleton;
+    SgMixtureCandidate fixed;        /* the options' alpha and exponent */
+    SgMixtureLearner *learner;       /* NULL: a fixed alpha, or no light */
+    const SgMixtureView *view;       /* the learner's, read at every bounce */
+    bool roulette_learns;            /* the learned roulette reads what every vertex brought back */
+    uint64_t pixels;
+    /* this pass's learning paths: one in `stride`, by pixel and pass */
+    uint64_t stride, below, pass_key;
+} Mixture;
+
+typedef struct MixtureVertex {
+    GuideQuery query;
+    SgFoldedLobe lobe;
+    SgMixtureCandidate mix;
+    uint32_t region;
+    bool asked;    /* the guide was queried */
+    bool mixture;  /* it gave an axis: the bounce draws from the mixture */
+    /* the direction drawn, as the learner needs it */
+    float pdf_bsdf, cos_axis, cos_mirror, pdf;
+} MixtureVertex;
+_Static_assert(sizeof(MixtureVertex) <= GUIDE_VERTEX_STATE, "MixtureVertex fits GuideVertex.state");
+
+static inline MixtureVertex *mixture_vertex(GuideVertex *v) { return (MixtureVertex *)v->state; }
+static inline const MixtureVertex *mixture_vertex_c(const GuideVertex *v) { return (const MixtureVertex *)v->state; }
+
+/* ---- which paths learn ---------------------------------------------------- */
+
+/* All in the first passes, then a share that halves as the passes double
+ * (1/2, 1/4, ... down to 1/64), chosen by pixel and pass so that every
+ * pixel takes turns. Learning costs a cache query at every bounce; what it
+ * learns matters most early. */
+#define LEARN_WARMUP_PASSES 2
+#define LEARN_STRIDE_MAX 64
+
+/* At most this many learning paths per pass (~20 MB of records), whatever
+ * the image size: a large image learns from a share of its pixels. */
+#define LEARN_PATHS_MAX 16384
+
+static void mixture_pass_begin(PathGuide *g, int pass, uint64_t pass_key, GuidePass *plan)
+{
+    Mixture *x = (Mixture *)g;
+    uint64_t stride = 1;
+    while (x->pixels / stride > LEARN_PATHS_MAX)
+        stride *= 2;
+    if (pass >= LEARN_WARMUP_PASSES)
+        for (int p = 2; p <= pass && stride < LEARN_STRIDE_MAX; p *= 2)
+            stride *= 2;
+    x->stride = stride;
+    x->below = UINT64_MAX / stride;
+    x->pass_key = pass_key;
+    plan->side_job = x->learner != NULL;
+}
+
+/* Fibonacci hashing (the high bits of pixel times 2^64/golden ratio spread
+ * consecutive pixels evenly), the pixels shifted by the pass: one in
+ * `stride` (a power of two), a different set each pass, for an imul. */
+static bool mixture_path_learns(const PathGuide *g, size_t pixel)
+{
+    const Mixture *x = (const Mixture *)g;
+    return x->learner &&
+           (x->stride == 1 || ((uint64_t)pixel + x->pass_key) * 0x9e3779b97f4a7c15ULL < x->below);
+}
+
+/* Each pass's records are learned during the next (the side job) and used
+ * from the one after: the update does not hold up the threads. */
+static void mixture_side_job(PathGuide *g) { sg_mixture_learn(((Mixture *)g)->learner); }
+
+static void mixture_pass_end(PathGuide *g, int pass)
+{
+    (void)pass;
+    Mixture *x = (Mixture *)g;
+    if (x->learner)
+        sg_mixture_end_pass(x->learner);
+}
+
+/* ---- a vertex ------------------------------------------------------------- */
+
+static void mixture_vertex_begin(PathGuide *g, const GuideHit *h, SgRng *rng, GuideVertex *v)
+{
+    Mixture *x = (Mixture *)g;
+    MixtureVertex *mv = mixture_vertex(v);
+    mv->mix = x->fixed;
+    mv->region = SG_NO_REGION;
+    mv->mixture = false;
+    bool lobe_region = x->fixed.alpha < 1.0f;
+    if (x->learner) {
+        /* the region's learned alpha; where it is the BSDF alone the guide
+         * is asked only by paths that learn */
+        const SgMixtureView *view = x->view;
+        mv->region = sg_mixture_region_at(view, h->p, h->normal_bin);
+        uint8_t state = view->state[mv->region];
+        mv->mix = view->of_state[state & SG_MIXTURE_STATE_CANDIDATE];
+        lobe_region = state & SG_MIXTURE_STATE_LOBE;
+        v->learn = h->may_learn && !(state & SG_MIXTURE_STATE_SETTLED);
+        v->rms = sg_mixture_radiance(view, mv->region);
+    }
+    mv->asked = (lobe_region || v->learn) && skeleton_guide_begin(&x->skeleton, h->p, h->n, rng, &mv->query);
+}
+
+static void mixture_vertex_end(PathGuide *g, const GuideHit *h, bool lit, SgRng *rng, GuideVertex *v)
+{
+    (void)lit, (void)rng;
+    Mixture *x = (Mixture *)g;
+    MixtureVertex *mv = mixture_vertex(v);
+    Vec3 axis;
+    if (mv->asked && skeleton_guide_end(&x->skeleton, &mv->query, h->p, h->n, &axis)) {
+        /* alpha 1 (a learning path): the BSDF, with the lobe's densities
+         * at hand for the learner */
+        mv->mixture = true;
+        mv->lobe = sg_folded_lobe(axis, h->n, mv->mix.exponent);
+    }
+}
+
+static float mixture_pdf(const GuideVertex *v, Vec3 w, float cos_n)
+{
+    const MixtureVertex *mv = mixture_vertex_c(v);
+    if (!mv->mixture)
+        return guide_bsdf_pdf(v, w, cos_n);
+    float pdf_bsdf, c1, c2;
+    return sg_pdf_mixture_at(&v->bsdf, &mv->lobe, mv->mix.alpha, w, cos_n, &pdf_bsdf, &c1, &c2);
+}
+
+static Vec3 mixture_sample(GuideVertex *v, const float u[3], float *pdf)
+{
+    MixtureVertex *mv = mixture_vertex(v);
+    if (!mv->mixture)
+        return guide_bsdf_sample(v, u, pdf);
+    Vec3 w = sg_sample_mixture_at(&v->bsdf, &mv->lobe, mv->mix.alpha, u[0], u[1], u[2]);
+    v->by_guide = !(u[0] < mv->mix.alpha);
+    /* with the BSDF's part and the cosines the learner needs */
+    mv->pdf = *pdf = sg_pdf_mixture_at(&v->bsdf, &mv->lobe, mv->mix.alpha, w, v3_dot(w, v->bsdf.n), &mv->pdf_bsdf,
+                                       &mv->cos_axis, &mv->cos_mirror);
+    return w;
+}
+
+/* A learning vertex's record: what its bounce brought back (every bounce:
+ * the learned roulette's second moments) and, where the mixture drew it,
+ * how (the candidates' second moments). A bounce the albedo roulette cut
+ * before the mixture could draw it counts, for the lobe, as one that
+ * brought nothing back; elsewhere it is no sample of what survivors bring. */
+static void mixture_learn(PathGuide *g, int tile, const GuideVertex *v, const BounceOutcome *o)
+{
+    Mixture *x = (Mixture *)g;
+    const MixtureVertex *mv = mixture_vertex_c(v);
+    bool lobe = mv->mixture && (o->bounced || o->cut);
+    if (o->cut && !lobe)
+        return;
+    if (!lobe && !x->roulette_learns)
+        return; /* only the learned roulette reads what left a vertex */
+    SgMixtureRecord rec = {.region = mv->region, .radiance = o->cut ? -1.0f : o->radiance, .lobe = lobe,
+                           .weight = o->weight};
+    if (lobe) {
+        if (!o->cut) {
+            rec.pdf_bsdf = mv->pdf_bsdf;
+            rec.cos_axis = mv->cos_axis;
+            rec.cos_mirror = mv->cos_mirror;
+            rec.pdf = mv->pdf;
+        }
+        rec.estimate = o->radiance;
+    }
+    sg_mixture_record(x->learner, (uint32_t)tile, &rec);
+}
+
+static void mixture_stats(const PathGuide *g, GuideStats *s)
+{
+    const Mixture *x = (const Mixture *)g;
+    s->guided_fraction = x->learner ? sg_mixture_guided_fraction(x->learner) : -1.0;
+}
+
+static void mixture_destroy(PathGuide *g)
+{
+    Mixture *x = (Mixture *)g;
+    sg_mixture_learner_free(x->learner);
+    skeleton_guide_free(&x->skeleton);
+    free(x);
+}
+
+static const PathGuideOps mixture_ops = {
+    .name = "guided",
+    .destroy = mixture_destroy,
+    .pass_begin = mixture_pass_begin,
+    .side_job = mixture_side_job,
+    .pass_end = mixture_pass_end,
+    .path_learns = mixture_path_learns,
+    .vertex_begin = mixture_vertex_begin,
+    .vertex_end = mixture_vertex_end,
+    .pdf = mixture_pdf,
+    .sample = mixture_sample,
+    .learn = mixture_learn,
+    .stats = mixture_stats,
+};
+
+/* The learner's grid covers the triangles' bounds (local coordinates):
+ * 32 cells along the longest side, a few thousand regions in a room. */
+#define LEARNER_CELLS 32
+
+PathGuide *guide_mixture_create(const PathGuideSetup *setup, SgError *err)
+{
+    const SgRenderOptions *o = setup->opt;
+    const char *path = setup->path;
+    if (!o->guide.importance_point)
+        return sg_fail(err, "%s: %s sampling needs an importance cache", path, sg_sampling_name(o->sampling)), NULL;
+    if (o->alpha != SG_ALPHA_LEARNED && !(o->alpha > 0.0f && o->alpha <= 1.0f))
+        return sg_fail(err, "%s: the mixture weight alpha must be in (0, 1] to stay unbiased", path), NULL;
+    Mixture *x = calloc(1, sizeof *x);
+    if (!x)
+        return sg_fail(err, "%s: out of memory", path), NULL;
+    x->base.ops = &mixture_ops;
+    x->fixed = (SgMixtureCandidate){o->alpha, o->lobe_exponent};
+    x->roulette_learns = o->roulette == SG_ROULETTE_LEARNED;
+    x->pixels = (uint64_t)o->width * (uint64_t)o->height;
+    x->stride = 1;
+    if (!skeleton_guide_init(&x->skeleton, &o->guide, setup->geo->centre, setup->geo->scale, setup->lights, path,
+                             err)) {
+        mixture_destroy(&x->base);
+        return NULL;
+    }
+    if (o->alpha == SG_ALPHA_LEARNED && setup->lights->count) {
+        Vec3 lo, hi;
+        geometry_bounds(setup->geo, &lo, &hi);
+        SgError e;
+        x->learner = sg_mixture_learner_create(lo, hi, LEARNER_CELLS, setup->tiles, SG_MIXTURE_INITIAL, &e);
+        if (!x->learner) {
+            mixture_destroy(&x->base);
+            return sg_fail(err, "%s: %s", path, e.message), NULL;
+        }
+        x->view = sg_mixture_view(x->learner);
+        x->base.estimates_radiance = true;
+    }
+    return &x->base;
+}

@@ -1,0 +1,100 @@
+/* skeleton: the paper's rule as written (section 3.4): where a vertex is
+ * not directly lit, the bounce is drawn from a cosine-power lobe toward the
+ * importance point of the skeleton node nearest it, and from the BSDF
+ * where it is lit. Biased (the lobe's density is not weighed against the
+ * BSDF's); kept to reproduce the paper. */
+#include <stdlib.h>
+
+#include "path_guide.h"
+#include "skeleton_guide.h"
+
+typedef struct SkeletonRule {
+    PathGuide base;
+    SkeletonGuide skeleton;
+    float exponent;
+} SkeletonRule;
+
+typedef struct RuleVertex {
+    GuideQuery query;
+    bool asked;      /* the query was begun */
+    bool lobe;       /* the bounce follows the lobe alone */
+    SgFoldedLobe folded;
+} RuleVertex;
+_Static_assert(sizeof(RuleVertex) <= GUIDE_VERTEX_STATE, "RuleVertex fits GuideVertex.state");
+
+static inline RuleVertex *rule_vertex(GuideVertex *v) { return (RuleVertex *)v->state; }
+static inline const RuleVertex *rule_vertex_c(const GuideVertex *v) { return (const RuleVertex *)v->state; }
+
+static void rule_vertex_begin(PathGuide *g, const GuideHit *h, SgRng *rng, GuideVertex *v)
+{
+    SkeletonRule *s = (SkeletonRule *)g;
+    RuleVertex *rv = rule_vertex(v);
+    rv->lobe = false;
+    rv->asked = skeleton_guide_begin(&s->skeleton, h->p, h->n, rng, &rv->query);
+}
+
+static void rule_vertex_end(PathGuide *g, const GuideHit *h, bool lit, SgRng *rng, GuideVertex *v)
+{
+    (void)rng;
+    SkeletonRule *s = (SkeletonRule *)g;
+    RuleVertex *rv = rule_vertex(v);
+    Vec3 axis;
+    /* the query is finished even where the vertex is lit (the cache line it loaded is then wasted) */
+    if (rv->asked && skeleton_guide_end(&s->skeleton, &rv->query, h->p, h->n, &axis) && !lit) {
+        rv->lobe = true;
+        rv->folded = sg_folded_lobe(axis, h->n, s->exponent);
+    }
+}
+
+static float rule_pdf(const GuideVertex *v, Vec3 w, float cos_n)
+{
+    const RuleVertex *rv = rule_vertex_c(v);
+    return rv->lobe ? sg_pdf_cosine_power(rv->folded.axis, rv->folded.exponent, w) : guide_bsdf_pdf(v, w, cos_n);
+}
+
+static Vec3 rule_sample(GuideVertex *v, const float u[3], float *pdf)
+{
+    const RuleVertex *rv = rule_vertex(v);
+    if (!rv->lobe)
+        return guide_bsdf_sample(v, u, pdf);
+    Vec3 w = sg_sample_cosine_power(rv->folded.axis, rv->folded.exponent, u[1], u[2]);
+    v->by_guide = true;
+    *pdf = sg_pdf_cosine_power(rv->folded.axis, rv->folded.exponent, w);
+    return w;
+}
+
+static void rule_destroy(PathGuide *g)
+{
+    SkeletonRule *s = (SkeletonRule *)g;
+    skeleton_guide_free(&s->skeleton);
+    free(s);
+}
+
+static const PathGuideOps rule_ops = {
+    .name = "skeleton",
+    .lit_below_horizon = true, /* "directly lit" is the light sample's visibility, whatever its cosine */
+    .destroy = rule_destroy,
+    .vertex_begin = rule_vertex_begin,
+    .vertex_end = rule_vertex_end,
+    .pdf = rule_pdf,
+    .sample = rule_sample,
+};
+
+PathGuide *guide_skeleton_rule_create(const PathGuideSetup *setup, SgError *err)
+{
+    const SgRenderOptions *o = setup->opt;
+    if (!o->guide.importance_point)
+        return sg_fail(err, "%s: %s sampling needs an importance cache", setup->path, sg_sampling_name(o->sampling)),
+               NULL;
+    SkeletonRule *s = calloc(1, sizeof *s);
+    if (!s)
+        return sg_fail(err, "%s: out of memory", setup->path), NULL;
+    s->base.ops = &rule_ops;
+    s->exponent = o->lobe_exponent;
+    if (!skeleton_guide_init(&s->skeleton, &o->guide, setup->geo->centre, setup->geo->scale, setup->lights,
+                             setup->path, err)) {
+        rule_destroy(&s->base);
+        return NULL;
+    }
+    return &s->base;
+}
