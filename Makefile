@@ -1,8 +1,9 @@
 # Skeleton-guided path tracing toolchain.
-#   make            build bin/voxelize bin/skeletonize bin/importance bin/render
+#   make            build bin/voxelize bin/skeletonize bin/importance bin/render bin/merge
 #   make test       install missing packages, build, run every test
 #   make demo       install missing packages, build, run the pipeline on data/corridor
 #   make scene SCENE=path/to/scene.json   build out/NAME/ (only steps whose inputs changed)
+#   make farm SCENE=... SHARDS=4          the render in shards on Slurm (or here), merged
 #   make bench      speed and error benchmarks, writes bench/report.md (bench-quick, bench-long);
 #                   builds the Open PGL peer first (scripts/build-openpgl.sh) for render --sampling openpgl
 #   make openpgl    build the Open PGL peer once (build/openpgl) and render --sampling openpgl
@@ -56,7 +57,7 @@ LDLIBS += -L$(OPENPGL_PREFIX)/lib -Wl,-rpath,$(abspath $(OPENPGL_PREFIX)/lib) -l
 endif
 PROG_LDLIBS := $(filter-out -lcriterion,$(LDLIBS))
 
-ALL_STEPS := voxelize skeletonize importance render
+ALL_STEPS := voxelize skeletonize importance render merge
 # A step joins the build once it has a main.c.
 STEPS := $(foreach s,$(ALL_STEPS),$(if $(wildcard $(s)/main.c),$(s)))
 PROGRAMS := $(addprefix $(BIN)/,$(STEPS))
@@ -79,7 +80,7 @@ TEST_SUPPORT_OBJ := $(TEST_SUPPORT_SRC:%.c=$(BUILD)/%.o)
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
-.PHONY: all test check-tests demo scene bench bench-build bench-quick bench-long deps bench-deps fuzz fuzz-run clean distclean \
+.PHONY: all test check-tests demo scene farm bench bench-build bench-quick bench-long deps bench-deps fuzz fuzz-run clean distclean \
         openpgl FORCE
 .DEFAULT_GOAL := all
 
@@ -242,9 +243,17 @@ $(OUT)/importance.cache: $(OUT)/medium.vdb $(OUT)/skeleton.ply $(BIN)/importance
 
 $(OUT)/image.exr: $(SCENE) $(OUT)/importance.cache $(BIN)/render
 	$(BIN)/render $(SCENE) --cache $(OUT)/importance.cache -o $@ --png $(OUT)/image.png $(RENDER_FLAGS)
+
+# make farm SCENE=... [SHARDS=4] [FARM_OUT=out/NAME/farm] [RENDER_FLAGS=...]:
+# the render split into shards on Slurm (sbatch found), else here, and
+# merged (scripts/slurm-render.sh; README "Rendering on a cluster").
+SHARDS ?= 4
+FARM_OUT ?= $(OUT)/farm
+farm: $(PROGRAMS)
+	@bash scripts/slurm-render.sh $(SCENE) --shards $(SHARDS) --out $(FARM_OUT) --bin $(BIN) -- $(RENDER_FLAGS)
 else
-scene:
-	@echo "usage: make scene SCENE=path/to/scene.json" >&2; exit 2
+scene farm:
+	@echo "usage: make $@ SCENE=path/to/scene.json" >&2; exit 2
 endif
 
 FORCE:

@@ -238,6 +238,7 @@ void sg_cache_close(SgImportanceCache *cache)
 
 uint64_t sg_cache_geometry_hash(const SgImportanceCache *c) { return c->header.geometry_hash; }
 uint64_t sg_cache_skeleton_hash(const SgImportanceCache *c) { return c->header.skeleton_hash; }
+uint64_t sg_cache_checksum(const SgImportanceCache *c) { return c->header.checksum; }
 uint64_t sg_cache_medium_hash(const SgImportanceCache *c) { return c->header.medium_hash; }
 uint32_t sg_cache_light_count(const SgImportanceCache *c) { return c->header.light_count; }
 uint32_t sg_cache_node_count(const SgImportanceCache *c) { return c->header.node_count; }

@@ -98,6 +98,8 @@ bool sg_cache_node_importance_point(const SgImportanceCache *cache, uint32_t nod
 bool sg_cache_light_has_paths(const SgImportanceCache *cache, uint32_t light);
 
 uint64_t sg_cache_skeleton_hash(const SgImportanceCache *cache);
+/* The file's checksum (FNV-1a 64 of its bytes, verified on open): its identity. */
+uint64_t sg_cache_checksum(const SgImportanceCache *cache);
 uint64_t sg_cache_medium_hash(const SgImportanceCache *cache);
 uint32_t sg_cache_component_count(const SgImportanceCache *cache);
 uint64_t sg_cache_medium_voxels(const SgImportanceCache *cache);

@@ -11,7 +11,9 @@
 #include "color.h"
 #include "error.h"
 #include "error_metrics.h"
+#include "hash.h"
 #include "image_io.h"
+#include "input_file.h"
 #include "openpgl_guide.h"
 #include "output_file.h"
 #include "progress.h"
@@ -23,7 +25,7 @@ static const char *usage =
     "              [--spp N | --time SECONDS] [--seed N] [--threads N] -o image.exr\n"
     "              [--png image.png] [--exposure STOPS] [--reference ref.exr --log curve.csv]\n"
     "              [--max-depth N] [--exponent P] [--alpha A] [--roulette learned|albedo]\n"
-    "              [--size WxH] [--quiet]\n"
+    "              [--size WxH] [--shard K/N] [--quiet]\n"
     "\n"
     "Path traces SCENE.json (Embree 3) with next-event estimation and MIS.\n"
     "  --cache FILE      importance cache from bin/importance for this scene's geometry\n"
@@ -52,6 +54,9 @@ static const char *usage =
     "                    by expected contribution against the pixel's, docs/render.md) or\n"
     "                    albedo (survival = product of albedos after 2 bounces, as bsdf)\n"
     "  --size WxH        image size (default: the scene's image size, else 320x240)\n"
+    "  --shard K/N       render only shard K (0 <= K < N) of the render split into N: its\n"
+    "                    passes K, K+N, K+2N... of --spp in all (with --time: for that long);\n"
+    "                    bin/merge makes the whole image from the N shards' EXRs\n"
     "  --quiet           no summary line\n";
 
 typedef struct Args {
@@ -62,6 +67,7 @@ typedef struct Args {
     double time;
     uint64_t seed;
     long threads, max_depth, width, height;
+    long shard, shard_count;
     double exposure, exponent, alpha;
     bool has_exposure, has_exponent, has_alpha, quiet;
 } Args;
@@ -74,6 +80,7 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
     a->spp = -1;
     a->time = -1;
     a->threads = 0;
+    a->shard_count = 1;
     for (int i = 1; i < argc; i++) {
         const char *s = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -146,6 +153,16 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
                 return sg_fail(err, "--size: '%s' is not WxH", v);
             a->width = w;
             a->height = h;
+        } else if (!strcmp(s, "--shard")) {
+            NEED_VALUE();
+            char *end;
+            errno = 0;
+            long k = strtol(v, &end, 10);
+            long n = *end == '/' && end > v ? strtol(end + 1, &end, 10) : 0;
+            if (errno || *end || v[0] == '-' || n < 1 || n > SG_SHARDS_MAX || k < 0 || k >= n)
+                return sg_fail(err, "--shard: '%s' is not K/N with 0 <= K < N <= %d", v, SG_SHARDS_MAX);
+            a->shard = k;
+            a->shard_count = n;
         } else if (!strcmp(s, "--quiet")) {
             a->quiet = true;
         } else if (s[0] == '-' && s[1]) {
@@ -200,6 +217,37 @@ static void error_metrics(const float *x, const float *ref, size_t n, float scal
 
 static void format_u64(char *buf, size_t size, uint64_t v) { snprintf(buf, size, "%" PRIu64, v); }
 
+/* What bin/merge checks that shards agree on, as 16 hex digits each: the
+ * scene (its file's bytes and the geometry it loaded), the cache (its
+ * checksum, "none" where the mode reads none) and the recipe (every option
+ * that shapes the image besides the shard, the spp and the time). */
+typedef struct ShardIdentity {
+    char scene[17], cache[17], recipe[17];
+} ShardIdentity;
+
+static bool shard_identity(const Args *a, const SgScene *scene, const SgRenderOptions *o,
+                           const SgImportanceCache *cache, ShardIdentity *id, SgError *err)
+{
+    char *text;
+    size_t size;
+    if (!sg_read_file(a->scene, "scene", SG_LIMIT_PBRT_TEXT, &text, &size, err))
+        return false;
+    uint64_t h = sg_hash_bytes(SG_HASH_INIT, text, size);
+    free(text);
+    h = sg_hash_bytes(h, &scene->geometry_hash, sizeof scene->geometry_hash);
+    snprintf(id->scene, sizeof id->scene, "%016" PRIx64, h);
+    if (cache)
+        snprintf(id->cache, sizeof id->cache, "%016" PRIx64, sg_cache_checksum(cache));
+    else
+        snprintf(id->cache, sizeof id->cache, "none");
+    char recipe[256];
+    int n = snprintf(recipe, sizeof recipe, "size %dx%d sampling %s seed %" PRIu64 " depth %d exponent %.9g alpha %.9g "
+                     "roulette %s shards %d", o->width, o->height, sg_sampling_name(o->sampling), o->seed,
+                     o->max_depth, o->lobe_exponent, o->alpha, sg_roulette_name(o->roulette), o->shard_count);
+    snprintf(id->recipe, sizeof id->recipe, "%016" PRIx64, sg_hash_bytes(SG_HASH_INIT, recipe, (size_t)n));
+    return true;
+}
+
 int main(int argc, char **argv)
 {
     for (int i = 1; i < argc; i++)
@@ -251,6 +299,8 @@ int main(int argc, char **argv)
         o.alpha = (float)a.alpha;
     o.sampling = a.sampling;
     o.roulette = a.roulette;
+    o.shard = (int)a.shard;
+    o.shard_count = (int)a.shard_count;
     if (o.sampling == SG_SAMPLING_SKELETON && !a.has_exponent)
         o.lobe_exponent = 4.0f; /* the paper's p_skel for its corridor */
 
@@ -263,7 +313,14 @@ int main(int argc, char **argv)
                     guide.dropped == scene->light_count ? " (so it samples the BSDF only)" : "");
     }
 
-    int spp_target = a.spp > 0 ? (int)a.spp : scene->render.spp > 0 ? scene->render.spp : 16;
+    int spp_total = a.spp > 0 ? (int)a.spp : scene->render.spp > 0 ? scene->render.spp : 16;
+    /* a shard's share of the passes: K, K+N, K+2N... below the total */
+    int spp_target = spp_total / o.shard_count + (o.shard < spp_total % o.shard_count);
+    if (spp_target < 1 && a.time <= 0) {
+        sg_fail(&err, "%s: %d spp leave shard %d of %d no pass: ask for at least %d", a.scene, spp_total, o.shard,
+                o.shard_count, o.shard_count);
+        goto done;
+    }
     double exposure = a.has_exposure ? a.exposure : scene->render.exposure;
 
     r = sg_renderer_create(scene, &o, &err);
@@ -311,6 +368,14 @@ int main(int argc, char **argv)
             break;
     }
     sg_progress_end(&progress);
+
+    ShardIdentity id;
+    if (!shard_identity(&a, scene, &o, guide.cache, &id, &err))
+        goto done;
+    char shard_s[32], shard_count_s[32], exposure_s[32];
+    snprintf(shard_s, sizeof shard_s, "%d", o.shard);
+    snprintf(shard_count_s, sizeof shard_count_s, "%d", o.shard_count);
+    snprintf(exposure_s, sizeof exposure_s, "%.9g", exposure);
 
     sg_renderer_image(r, image);
     char spp_s[32], sec_s[32], seed_s[32], nonfinite_s[32], depth_s[32], exp_s[32], alpha_s[64];
@@ -363,6 +428,13 @@ int main(int argc, char **argv)
         {"sg:clamping", "none"},
         {"sg:scene", a.scene},
         {"sg:cache", guide.cache ? a.cache : ""},
+        {"sg:exposure", exposure_s},
+        /* for bin/merge */
+        {"sg:shards", shard_s},
+        {"sg:shard_count", shard_count_s},
+        {"sg:scene_hash", id.scene},
+        {"sg:cache_hash", id.cache},
+        {"sg:recipe", id.recipe},
     };
     /* The EXR last: it is make's target, so a run cut short before it
      * (a PNG or the curve written, then killed) is still run again. */
@@ -377,14 +449,17 @@ int main(int argc, char **argv)
                             (int)(sizeof attrs / sizeof attrs[0]), &err))
         goto done;
     if (!a.quiet) {
+        char shard_line[64] = "";
+        if (o.shard_count > 1)
+            snprintf(shard_line, sizeof shard_line, ", shard %d of %d", o.shard, o.shard_count);
         double paths = (double)o.width * o.height * sg_renderer_spp(r);
         fprintf(stderr,
                 "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s%s, roulette %s, seed "
-                "%s, %s NaN/inf samples\n",
+                "%s, %s NaN/inf samples%s\n",
                 o.width, o.height, sg_renderer_spp(r), render_seconds, paths / render_seconds * 1e-6,
                 (double)sg_renderer_rays(r) / render_seconds * 1e-6, sg_sampling_name(o.sampling),
                 o.sampling == SG_SAMPLING_GUIDED ? ", alpha " : "", o.sampling == SG_SAMPLING_GUIDED ? alpha_s : "",
-                guide_line, roulette, seed_s, nonfinite_s);
+                guide_line, roulette, seed_s, nonfinite_s, shard_line);
     }
     status = 0;
 

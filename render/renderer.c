@@ -83,6 +83,7 @@ void sg_render_options_default(SgRenderOptions *o, const SgScene *scene)
     o->lobe_exponent = 16.0f;
     o->alpha = SG_ALPHA_LEARNED;
     o->roulette = SG_ROULETTE_LEARNED;
+    o->shard_count = 1;
 }
 
 const char *sg_roulette_name(SgRoulette r) { return r == SG_ROULETTE_ALBEDO ? "albedo" : "learned"; }
@@ -114,6 +115,9 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
         return sg_fail(err, "%s: max depth must be at least 1", path), NULL;
     if (!(o->lobe_exponent >= 0.0f && o->lobe_exponent <= 1e5f))
         return sg_fail(err, "%s: lobe exponent must be in [0, 1e5]", path), NULL;
+    if (!(o->shard_count >= 1 && o->shard_count <= SG_SHARDS_MAX && o->shard >= 0 && o->shard < o->shard_count))
+        return sg_fail(err, "%s: shard %d of %d: want 0 <= shard < count <= %d", path, o->shard, o->shard_count,
+                       SG_SHARDS_MAX), NULL;
     if (o->roulette != SG_ROULETTE_LEARNED && o->roulette != SG_ROULETTE_ALBEDO)
         return sg_fail(err, "%s: unknown roulette %d", path, (int)o->roulette), NULL;
 
@@ -646,6 +650,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, const PathCtx *pc, Vec3 *s
 typedef struct PassCtx {
     SgRenderer *r;
     int tiles_x;
+    uint64_t pass;        /* in the whole render (shards: render/renderer.h) */
     uint64_t pass_key;
     uint64_t jitter_key;  /* the seed's: the same for every pass */
     bool first_pass;
@@ -669,11 +674,11 @@ static uint64_t mix64(uint64_t x)
  * the passes a pixel's points cover it evenly, so an edge seen directly (a
  * light's silhouette, whose in-or-out noise is otherwise most of the image's
  * squared error) converges faster than with independent jitter. */
-static void pixel_jitter(uint64_t key, size_t pix, int pass, float *jx, float *jy)
+static void pixel_jitter(uint64_t key, size_t pix, uint64_t pass, float *jx, float *jy)
 {
     uint64_t h = mix64(key ^ ((uint64_t)pix * 0x9e3779b97f4a7c15ULL));
-    double x = (double)(h >> 40) * (1.0 / 16777216.0) + pass * 0.75487766624669276;
-    double y = (double)(h & 0xffffff) * (1.0 / 16777216.0) + pass * 0.56984029099805327;
+    double x = (double)(h >> 40) * (1.0 / 16777216.0) + (double)pass * 0.75487766624669276;
+    double y = (double)(h & 0xffffff) * (1.0 / 16777216.0) + (double)pass * 0.56984029099805327;
     *jx = (float)(x - floor(x));
     *jy = (float)(y - floor(y));
     if (!(*jx < 1.0f)) /* rounding to float */
@@ -695,7 +700,7 @@ static void render_tile(PassCtx *pc, uint64_t index, int thread)
             SgRng rng;
             sg_rng_seed(&rng, pc->pass_key, pix);
             float jx, jy;
-            pixel_jitter(pc->jitter_key, pix, r->spp, &jx, &jy);
+            pixel_jitter(pc->jitter_key, pix, pc->pass, &jx, &jy);
             Vec3 dir = camera_ray(&r->camera, x, y, jx, jy);
             bool learns = r->guide->ops->path_learns && r->guide->ops->path_learns(r->guide, pix);
             PathCtx path = {.rng = &rng, .st = &st, .thread = thread, .first_pass = pc->first_pass,
@@ -751,9 +756,12 @@ void sg_renderer_pass(SgRenderer *r)
      * pixels' noise settles, and the passes wait for this */
     if (r->noise && r->spp > 1 && (r->spp < 8 || !(r->spp & (r->spp - 1)) || r->spp % 16 == 0))
         pixel_noise_estimate(r->noise, r->spp, r->pool);
+    /* the whole render's pass this one is (this one, unsharded) */
+    uint64_t pass = (uint64_t)r->opt.shard + (uint64_t)r->spp * (uint64_t)r->opt.shard_count;
     PassCtx pc = {.r = r,
                   .tiles_x = (r->opt.width + TILE - 1) / TILE,
-                  .pass_key = mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + (uint64_t)r->spp + 1),
+                  .pass = pass,
+                  .pass_key = mix64(r->opt.seed * 0x9e3779b97f4a7c15ULL + pass + 1),
                   .jitter_key = mix64(r->opt.seed ^ 0x6a09e667f3bcc909ULL),
                   .first_pass = r->spp == 0};
     const PathGuideOps *gops = r->guide->ops;

@@ -49,6 +49,7 @@ typedef struct SgGuide {
 } SgGuide;
 
 #define SG_ALPHA_LEARNED (-1.0f)
+#define SG_SHARDS_MAX 65536
 
 /* How paths are cut short (unbiased either way: a surviving path is
  * divided by its survival probability). */
@@ -81,11 +82,17 @@ typedef struct SgRenderOptions {
     float alpha;
     SgRoulette roulette;
     SgGuide guide;
+    /* A shard of a render split into shard_count (render farm): this
+     * renderer's pass p is pass shard + p * shard_count of the whole
+     * render, whose random numbers and pixel positions it takes, so that
+     * the shards' passes are disjoint and together are the whole render's.
+     * What a guide learns stays within its shard. Default 0 of 1. */
+    int shard, shard_count;
 } SgRenderOptions;
 
 /* Defaults: image size and depth from the scene (320x240, 8 when not
  * given), bsdf sampling, seed 0, every core, lobe exponent 16, alpha
- * learned, learned roulette. */
+ * learned, learned roulette, shard 0 of 1. */
 void sg_render_options_default(SgRenderOptions *o, const SgScene *scene);
 
 typedef struct SgRenderer SgRenderer;

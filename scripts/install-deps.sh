@@ -18,6 +18,8 @@ checks=(
   "libopenvdb-tools:/usr/bin/vdb_print"
   "openimageio-tools:/usr/bin/idiff"
   "fonts-dejavu-core:/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf"
+  "slurm-wlm:/usr/sbin/slurmctld"
+  "munge:/usr/sbin/munged"
 )
 if [ "${SG_WITH_OPENPGL:-0}" = 1 ]; then
   checks+=("cmake:/usr/bin/cmake" "ninja-build:/usr/bin/ninja")
