@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli.h"
 #include "render/renderer.h"
 
 /* What every input must agree on (a merge of different renders is no
@@ -60,17 +61,6 @@ static bool read_attribute(const char *path, const char *name, char *buf, bool r
     return !required;
 }
 
-static bool parse_long(const char *s, long lo, long hi, long *v)
-{
-    char *end;
-    errno = 0;
-    long x = strtol(s, &end, 10);
-    if (errno || end == s || *end || x < lo || x > hi)
-        return false;
-    *v = x;
-    return true;
-}
-
 static void input_free(Input *in)
 {
     free(in->rgb);
@@ -91,7 +81,7 @@ static bool input_read(Input *in, const char *path, SgError *err)
         if (!read_attribute(path, checked[i], in->checked[i], true, err))
             return false;
     long count;
-    if (!parse_long(in->checked[2], 1, SG_SHARDS_MAX, &count))
+    if (!sg_parse_long(in->checked[2], 1, SG_SHARDS_MAX, &count))
         return sg_fail(err, "%s: sg:shard_count '%s' is not a shard count", path, in->checked[2]);
     in->shards = calloc((size_t)count, 1);
     if (!in->shards)
@@ -99,7 +89,7 @@ static bool input_read(Input *in, const char *path, SgError *err)
     in->first = -1;
     for (char *tok = strtok(shards, ","); tok; tok = strtok(NULL, ",")) {
         long k;
-        if (!parse_long(tok, 0, count - 1, &k))
+        if (!sg_parse_long(tok, 0, count - 1, &k))
             return sg_fail(err, "%s: sg:shards holds '%s', not a shard of %ld", path, tok, count);
         if (in->shards[k])
             return sg_fail(err, "%s: sg:shards names shard %ld twice", path, k);
@@ -111,13 +101,13 @@ static bool input_read(Input *in, const char *path, SgError *err)
         return sg_fail(err, "%s: sg:shards is empty", path);
     if (!read_attribute(path, "spp", buf, true, err))
         return false;
-    if (!parse_long(buf, 1, 1L << 40, &in->spp))
+    if (!sg_parse_long(buf, 1, 1L << 40, &in->spp))
         return sg_fail(err, "%s: spp '%s' is not a positive count", path, buf);
     if (read_attribute(path, "seconds", buf, false, err) && buf[0])
         in->seconds = atof(buf);
     long nonfinite;
     if (read_attribute(path, "sg:nonfinite_samples", buf, false, err) && buf[0] &&
-        parse_long(buf, 0, LONG_MAX, &nonfinite))
+        sg_parse_long(buf, 0, LONG_MAX, &nonfinite))
         in->nonfinite = (uint64_t)nonfinite;
     if (read_attribute(path, "sg:guide_share", buf, false, err) && buf[0]) {
         in->guide_share = atof(buf);

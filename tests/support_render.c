@@ -167,3 +167,16 @@ bool sgt_fixed_point_guide(void *ctx, const double p[3], uint32_t light, double 
     memcpy(q, ((SgtFixedPoint *)ctx)->point, sizeof(double) * 3);
     return true;
 }
+
+SgScene *sgt_furnace_scene(void)
+{
+    SgScene *s = sgt_scene_new();
+    const float half[3] = {0.5f, 0.5f, 0.5f};
+    uint32_t m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, half, half);
+    const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1.5, 2};
+    sgt_add_box_inside(s, lo, hi, m);
+    const double pos[3] = {0.2, 0.1, 0.3}, at[3] = {1, 0.5, 2}, up[3] = {0, 1, 0};
+    sgt_set_camera(s, pos, at, up, 90, 32, 24);
+    sgt_finish(s);
+    return s;
+}

@@ -24,6 +24,10 @@ void sgt_finish(SgScene *s);
 /* Transforms every position by p * scale + offset (camera too). */
 void sgt_scale_offset(SgScene *s, double scale, const double offset[3]);
 
+/* The furnace: a closed box (-1,-1,-1)-(1,1.5,2), inward normals, albedo
+ * 0.5, emission 0.5 (L = 0.5 + 0.5 L = 1 everywhere), a 32x24 camera inside. */
+SgScene *sgt_furnace_scene(void);
+
 /* A guide stand-in (SgImportanceFn) whose importance point is always the
  * same world position: ctx is an SgtFixedPoint. */
 typedef struct SgtFixedPoint {

@@ -180,14 +180,7 @@ static FurnaceResult furnace(float pdf_error, int passes, int threads)
 {
     g_calls = (Calls){.last_pass_begun = -1};
     g_pdf_error = pdf_error;
-    SgScene *s = sgt_scene_new();
-    const float half[3] = {0.5f, 0.5f, 0.5f};
-    uint32_t m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, half, half);
-    const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1.5, 2};
-    sgt_add_box_inside(s, lo, hi, m);
-    const double pos[3] = {0.2, 0.1, 0.3}, at[3] = {1, 0.5, 2}, up[3] = {0, 1, 0};
-    sgt_set_camera(s, pos, at, up, 90, 32, 24);
-    sgt_finish(s);
+    SgScene *s = sgt_furnace_scene();
     SgRenderOptions o;
     sg_render_options_default(&o, s);
     o.threads = threads;

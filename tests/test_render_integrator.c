@@ -71,18 +71,7 @@ static Stats render_scene_stats(const SgScene *s, const SgRenderOptions *o, int 
 }
 
 /* Closed box, inward normals, albedo 0.5, emission 0.5: L = 0.5 + 0.5 L = 1. */
-static SgScene *furnace_scene(void)
-{
-    SgScene *s = sgt_scene_new();
-    const float half[3] = {0.5f, 0.5f, 0.5f};
-    uint32_t m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, half, half);
-    const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1.5, 2};
-    sgt_add_box_inside(s, lo, hi, m);
-    const double pos[3] = {0.2, 0.1, 0.3}, at[3] = {1, 0.5, 2}, up[3] = {0, 1, 0};
-    sgt_set_camera(s, pos, at, up, 90, 32, 24);
-    sgt_finish(s);
-    return s;
-}
+static SgScene *furnace_scene(void) { return sgt_furnace_scene(); }
 
 /* How a furnace is rendered, and what share of its bounces the guide's
  * lobe must draw (lobe_min <= share <= lobe_max). */
