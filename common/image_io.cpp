@@ -8,9 +8,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "color.h"
@@ -163,5 +165,41 @@ extern "C" bool sg_image_read_attribute(const char *path, const char *name, char
     in->close();
     if (size > 0)
         snprintf(buf, size, "%s", value.c_str());
+    return true;
+}
+
+extern "C" bool sg_image_read_attributes(const char *path, SgImageAttribute **attributes, int *count,
+                                         SgError *err)
+{
+    *attributes = nullptr;
+    *count = 0;
+    auto in = ImageInput::open(path);
+    if (!in) {
+        std::string msg = OIIO::geterror();
+        return sg_fail(err, "%s: cannot read: %s", path, msg.empty() ? "unknown format" : msg.c_str());
+    }
+    std::vector<std::pair<std::string, std::string>> all;
+    std::size_t bytes = 0;
+    for (const ParamValue &p : in->spec().extra_attribs) {
+        all.emplace_back(p.name().string(), p.get_string());
+        bytes += all.back().first.size() + all.back().second.size() + 2;
+    }
+    in->close();
+    // The table, then its strings, in one block: the caller has one free().
+    std::size_t table = all.size() * sizeof(SgImageAttribute);
+    auto *out = (SgImageAttribute *)malloc(table + bytes + 1);
+    if (!out)
+        return sg_fail(err, "%s: out of memory for %zu attributes", path, all.size());
+    char *text = (char *)out + table;
+    for (std::size_t i = 0; i < all.size(); i++) {
+        out[i].name = text;
+        std::memcpy(text, all[i].first.c_str(), all[i].first.size() + 1);
+        text += all[i].first.size() + 1;
+        out[i].value = text;
+        std::memcpy(text, all[i].second.c_str(), all[i].second.size() + 1);
+        text += all[i].second.size() + 1;
+    }
+    *attributes = out;
+    *count = (int)all.size();
     return true;
 }

@@ -31,6 +31,11 @@ bool sg_image_read(const char *path, int *width, int *height, float **rgb, SgErr
  * into buf; false with the cause in err when the file cannot be opened or
  * has no such attribute. */
 bool sg_image_read_attribute(const char *path, const char *name, char *buf, size_t size, SgError *err);
+/* Every attribute of an image's header as text (each as
+ * sg_image_read_attribute gives it), in the header's order: one allocation
+ * holds the *count entries and their strings; the caller frees *attributes.
+ * false with the cause in err when the file cannot be read as an image. */
+bool sg_image_read_attributes(const char *path, SgImageAttribute **attributes, int *count, SgError *err);
 
 #ifdef __cplusplus
 }

@@ -68,6 +68,11 @@ int main(int argc, char **argv)
         free(inputs);
         return 2;
     }
+    if (png && !strcmp(png, output)) {
+        fprintf(stderr, "merge: -o and --png both name %s\n", output);
+        free(inputs);
+        return 2;
+    }
     SgError err = {0};
     SgMerged *m = sg_merge_files(inputs, count, partial, &err);
     int status = 1;

@@ -1,121 +1,141 @@
 #include "merge.h"
 
-#include <errno.h>
 #include <limits.h>
-#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
-#include "render/renderer.h"
+#include "output_file.h"
+#include "render/renderer.h" /* SG_SHARDS_MAX */
 
-/* What every input must agree on (a merge of different renders is no
- * render), and what is copied where all agree. */
-static const char *const checked[] = {"sampling", "seed", "sg:shard_count", "sg:scene_hash", "sg:cache_hash",
-                                      "sg:recipe"};
+/* What every input must have and agree on: a merge of different renders is
+ * no render. */
+static const char *const checked[] = {"sampling",      "seed",          "sg:shard_count",
+                                      "sg:scene_hash", "sg:cache_hash", "sg:recipe"};
 #define CHECKED (int)(sizeof checked / sizeof checked[0])
-static const char *const copied[] = {"sg:max_depth", "sg:lobe_exponent", "sg:alpha", "sg:roulette", "sg:clamping",
-                                     "sg:scene", "sg:cache", "sg:exposure"};
-#define COPIED (int)(sizeof copied / sizeof copied[0])
-#define VALUE_MAX 512
 
 typedef struct Input {
     const char *path;
-    int width, height;
-    float *rgb;
-    long spp;
+    SgImageAttribute *attrs; /* its header, one allocation */
+    int attr_count;
+    long spp, nonfinite;
     double seconds, guide_share;
-    uint64_t nonfinite;
-    bool has_guide_share;
-    int first;            /* its lowest shard index: the merge's order */
-    char *shards;         /* per shard index: held */
-    char checked[CHECKED][VALUE_MAX];
-    char copied[COPIED][VALUE_MAX];
-    bool has_copied[COPIED];
+    bool has_seconds, has_nonfinite, has_guide_share;
+    int first;  /* its lowest shard index: the order of the sum */
+    char *held; /* per shard index: 1 where it holds that shard */
 } Input;
 
 struct SgMerged {
     int width, height, shard_count, held;
     float *rgb;
     long spp;
-    double seconds;
+    double seconds, exposure;
     char missing[1024];
-    /* the output's attributes and their text */
-    SgImageAttribute attrs[CHECKED + COPIED + 6];
+    SgImageAttribute *attrs; /* each name and value malloc'ed */
     int attr_count;
-    char values[CHECKED + COPIED + 6][VALUE_MAX];
-    char *shard_list;
-    double exposure;
 };
 
-static bool read_attribute(const char *path, const char *name, char *buf, bool required, SgError *err)
+static const char *find(const Input *in, const char *name)
 {
-    SgError e = {0};
-    if (sg_image_read_attribute(path, name, buf, VALUE_MAX, &e))
-        return true;
-    buf[0] = 0;
-    if (required)
-        sg_fail(err, "%s: not a render shard (no %s attribute)", path, name);
-    return !required;
+    for (int i = 0; i < in->attr_count; i++)
+        if (!strcmp(in->attrs[i].name, name))
+            return in->attrs[i].value;
+    return NULL;
+}
+
+static const char *required(const Input *in, const char *name, SgError *err)
+{
+    const char *v = find(in, name);
+    if (!v)
+        sg_fail(err, "%s: not a render shard (no %s attribute)", in->path, name);
+    return v;
 }
 
 static void input_free(Input *in)
 {
-    free(in->rgb);
-    free(in->shards);
+    free(in->attrs);
+    free(in->held);
 }
 
+/* sg:shards ("0,1,3") into in->held. */
+static bool parse_shards(Input *in, const char *list, int count, SgError *err)
+{
+    char *copy = strdup(list), *save = NULL;
+    in->held = calloc((size_t)count, 1);
+    if (!copy || !in->held) {
+        free(copy);
+        return sg_fail(err, "%s: out of memory", in->path);
+    }
+    bool ok = true;
+    in->first = -1;
+    for (char *tok = strtok_r(copy, ",", &save); tok && ok; tok = strtok_r(NULL, ",", &save)) {
+        long k;
+        if (!sg_parse_long(tok, 0, LONG_MAX, &k))
+            ok = sg_fail(err, "%s: sg:shards holds '%s', not a shard index", in->path, tok);
+        else if (k >= count)
+            ok = sg_fail(err, "%s: sg:shards holds shard %ld, not below sg:shard_count %d", in->path, k, count);
+        else if (in->held[k])
+            ok = sg_fail(err, "%s: sg:shards names shard %ld twice", in->path, k);
+        else {
+            in->held[k] = 1;
+            if (in->first < 0 || k < in->first)
+                in->first = (int)k;
+        }
+    }
+    free(copy);
+    if (ok && in->first < 0)
+        ok = sg_fail(err, "%s: sg:shards is empty", in->path);
+    return ok;
+}
+
+/* An input's header: what makes it a shard, and the numbers merge adds up.
+ * The pixels are read later, one input at a time. */
 static bool input_read(Input *in, const char *path, SgError *err)
 {
     memset(in, 0, sizeof *in);
     in->path = path;
-    char buf[VALUE_MAX];
-    /* the shard attributes first: a file not ours is said so, not read whole */
-    if (!read_attribute(path, "sg:shards", buf, true, err))
+    if (!sg_image_read_attributes(path, &in->attrs, &in->attr_count, err))
         return false;
-    char shards[VALUE_MAX];
-    snprintf(shards, sizeof shards, "%s", buf);
-    for (int i = 0; i < CHECKED; i++)
-        if (!read_attribute(path, checked[i], in->checked[i], true, err))
+    /* what says "ours" first, so that another EXR is named as such */
+    const char *shards = required(in, "sg:shards", err);
+    if (!shards || !required(in, "sg:shard_count", err) || !required(in, "sg:recipe", err))
+        return false;
+    for (int a = 0; a < CHECKED; a++)
+        if (!required(in, checked[a], err))
             return false;
-    long count;
-    if (!sg_parse_long(in->checked[2], 1, SG_SHARDS_MAX, &count))
-        return sg_fail(err, "%s: sg:shard_count '%s' is not a shard count", path, in->checked[2]);
-    in->shards = calloc((size_t)count, 1);
-    if (!in->shards)
-        return sg_fail(err, "%s: out of memory", path);
-    in->first = -1;
-    for (char *tok = strtok(shards, ","); tok; tok = strtok(NULL, ",")) {
-        long k;
-        if (!sg_parse_long(tok, 0, count - 1, &k))
-            return sg_fail(err, "%s: sg:shards holds '%s', not a shard of %ld", path, tok, count);
-        if (in->shards[k])
-            return sg_fail(err, "%s: sg:shards names shard %ld twice", path, k);
-        in->shards[k] = 1;
-        if (in->first < 0 || k < in->first)
-            in->first = (int)k;
-    }
-    if (in->first < 0)
-        return sg_fail(err, "%s: sg:shards is empty", path);
-    if (!read_attribute(path, "spp", buf, true, err))
+    const char *spp = required(in, "spp", err);
+    if (!spp)
         return false;
-    if (!sg_parse_long(buf, 1, 1L << 40, &in->spp))
-        return sg_fail(err, "%s: spp '%s' is not a positive count", path, buf);
-    if (read_attribute(path, "seconds", buf, false, err) && buf[0])
-        in->seconds = atof(buf);
-    long nonfinite;
-    if (read_attribute(path, "sg:nonfinite_samples", buf, false, err) && buf[0] &&
-        sg_parse_long(buf, 0, LONG_MAX, &nonfinite))
-        in->nonfinite = (uint64_t)nonfinite;
-    if (read_attribute(path, "sg:guide_share", buf, false, err) && buf[0]) {
-        in->guide_share = atof(buf);
+    long count;
+    const char *count_s = find(in, "sg:shard_count");
+    if (!sg_parse_long(count_s, 1, SG_SHARDS_MAX, &count))
+        return sg_fail(err, "%s: sg:shard_count '%s' is not a shard count (1 to %d)", path, count_s, SG_SHARDS_MAX);
+    if (!parse_shards(in, shards, (int)count, err))
+        return false;
+    /* at most 2^40 a shard: the sums below cannot overflow */
+    if (!sg_parse_long(spp, LONG_MIN, LONG_MAX, &in->spp) || in->spp > 1L << 40)
+        return sg_fail(err, "%s: spp '%s' is not a sample count", path, spp);
+    if (in->spp <= 0)
+        return sg_fail(err, "%s: spp %ld: a shard holds at least one sample per pixel", path, in->spp);
+    const char *v;
+    if ((v = find(in, "seconds"))) {
+        if (!sg_parse_double(v, 0, 1e300, &in->seconds))
+            return sg_fail(err, "%s: seconds '%s' is not a time", path, v);
+        in->has_seconds = true;
+    }
+    if ((v = find(in, "sg:nonfinite_samples"))) {
+        if (!sg_parse_long(v, 0, LONG_MAX / SG_SHARDS_MAX, &in->nonfinite))
+            return sg_fail(err, "%s: sg:nonfinite_samples '%s' is not a count", path, v);
+        in->has_nonfinite = true;
+    }
+    if ((v = find(in, "sg:guide_share"))) {
+        if (!sg_parse_double(v, 0, 1, &in->guide_share))
+            return sg_fail(err, "%s: sg:guide_share '%s' is not a share", path, v);
         in->has_guide_share = true;
     }
-    for (int i = 0; i < COPIED; i++)
-        in->has_copied[i] = read_attribute(path, copied[i], in->copied[i], false, err) && in->copied[i][0];
-    return sg_image_read(path, &in->width, &in->height, &in->rgb, err);
+    return true;
 }
 
 static int by_first_shard(const void *a, const void *b)
@@ -124,25 +144,190 @@ static int by_first_shard(const void *a, const void *b)
     return (x->first > y->first) - (x->first < y->first);
 }
 
-static void add_attribute(SgMerged *m, const char *name, const char *value)
+static bool add_attribute(SgMerged *m, const char *name, const char *value, SgError *err)
 {
-    int i = m->attr_count++;
-    snprintf(m->values[i], VALUE_MAX, "%s", value);
-    m->attrs[i] = (SgImageAttribute){name, m->values[i]};
+    SgImageAttribute *grown = realloc(m->attrs, (size_t)(m->attr_count + 1) * sizeof *grown);
+    if (!grown)
+        return sg_fail(err, "out of memory");
+    m->attrs = grown;
+    char *n = strdup(name), *v = strdup(value);
+    if (!n || !v) {
+        free(n);
+        free(v);
+        return sg_fail(err, "out of memory");
+    }
+    m->attrs[m->attr_count++] = (SgImageAttribute){n, v};
+    return true;
 }
 
-/* "0,1,3" of the shards held: ascending, the form render writes. */
+/* "0,1,3": the shards held, ascending (the form render writes). */
 static char *shard_list(const char *held, int count)
 {
-    size_t cap = (size_t)count * 7 + 1;
-    char *s = malloc(cap), *p = s;
+    size_t cap = (size_t)count * 7 + 1, n = 0;
+    char *s = malloc(cap);
     if (!s)
         return NULL;
-    *p = 0;
+    s[0] = 0;
     for (int k = 0; k < count; k++)
         if (held[k])
-            p += snprintf(p, cap - (size_t)(p - s), "%s%d", p == s ? "" : ",", k);
+            n += (size_t)snprintf(s + n, cap - n, "%s%d", n ? "," : "", k);
     return s;
+}
+
+/* m->missing ("0,2", cut with "..." when long) and m->held; the number missing. */
+static int list_missing(SgMerged *m, const char *held, int count)
+{
+    size_t n = 0, cap = sizeof m->missing;
+    int missing = 0;
+    for (int k = 0; k < count; k++) {
+        if (held[k]) {
+            m->held++;
+            continue;
+        }
+        if (missing++ == 0 || n + 16 < cap)
+            n += (size_t)snprintf(m->missing + n, cap - n, "%s%d", n ? "," : "", k);
+        else if (m->missing[n - 1] != '.')
+            n += (size_t)snprintf(m->missing + n, cap - n, ",...");
+    }
+    return missing;
+}
+
+/* Checks that the inputs are shards of one render and that each shard is
+ * held once; fills m->missing, m->held, m->shard_count and `held`. */
+static bool check_inputs(SgMerged *m, const Input *in, int count, bool partial, char **held, SgError *err)
+{
+    for (int i = 1; i < count; i++)
+        for (int a = 0; a < CHECKED; a++) {
+            const char *x = find(&in[0], checked[a]), *y = find(&in[i], checked[a]);
+            if (strcmp(x, y))
+                return sg_fail(err, "%s has %s '%s', %s has '%s': not shards of one render", in[0].path, checked[a],
+                               x, in[i].path, y);
+        }
+    int shards = m->shard_count = atoi(find(&in[0], "sg:shard_count"));
+    int *owner = malloc((size_t)shards * sizeof *owner);
+    *held = calloc((size_t)shards, 1);
+    if (!owner || !*held) {
+        free(owner);
+        return sg_fail(err, "out of memory");
+    }
+    for (int i = 0; i < count; i++)
+        for (int k = 0; k < shards; k++)
+            if (in[i].held[k]) {
+                if ((*held)[k]) {
+                    sg_fail(err, "%s and %s both hold shard %d of %d", in[owner[k]].path, in[i].path, k, shards);
+                    free(owner);
+                    return false;
+                }
+                (*held)[k] = 1;
+                owner[k] = i;
+            }
+    free(owner);
+    int missing = list_missing(m, *held, shards);
+    if (missing && !partial)
+        return sg_fail(err, "shard%s %s of %d %s missing (%d of %d given): --partial merges what is there",
+                       missing == 1 ? "" : "s", m->missing, shards, missing == 1 ? "is" : "are", m->held, shards);
+    return true;
+}
+
+/* The spp-weighted mean, in double, summed in shard order (in is sorted):
+ * the same floats whatever order the files were given in. One input's
+ * pixels are in memory at a time. */
+static bool weighted_mean(SgMerged *m, const Input *in, int count, SgError *err)
+{
+    double *sum = NULL;
+    size_t values = 0;
+    bool ok = true;
+    for (int i = 0; i < count && ok; i++) {
+        int w, h;
+        float *rgb;
+        if (!sg_image_read(in[i].path, &w, &h, &rgb, err)) {
+            ok = false;
+            break;
+        }
+        if (i == 0) {
+            m->width = w;
+            m->height = h;
+            values = (size_t)w * (size_t)h * 3;
+            sum = calloc(values, sizeof *sum);
+            if (!sum)
+                ok = sg_fail(err, "out of memory for a %dx%d image", w, h);
+        } else if (w != m->width || h != m->height) {
+            ok = sg_fail(err, "%s has size %dx%d, %s has %dx%d: not shards of one render", in[0].path, m->width,
+                         m->height, in[i].path, w, h);
+        }
+        double weight = (double)in[i].spp;
+        for (size_t v = 0; ok && v < values; v++)
+            sum[v] += weight * (double)rgb[v];
+        free(rgb);
+        m->spp += in[i].spp;
+    }
+    if (ok) {
+        m->rgb = malloc(values * sizeof *m->rgb);
+        if (!m->rgb)
+            ok = sg_fail(err, "out of memory for a %dx%d image", m->width, m->height);
+        for (size_t v = 0; ok && v < values; v++)
+            m->rgb[v] = (float)(sum[v] / (double)m->spp);
+    }
+    free(sum);
+    return ok;
+}
+
+/* The merged image's attributes, in render's order for the first four, then
+ * the first input's sg: attributes in its order. */
+static bool merged_attributes(SgMerged *m, const Input *in, int count, const char *held, SgError *err)
+{
+    bool all_seconds = true, all_nonfinite = true, all_share = true;
+    long nonfinite = 0;
+    double share = 0;
+    for (int i = 0; i < count; i++) {
+        all_seconds = all_seconds && in[i].has_seconds;
+        all_nonfinite = all_nonfinite && in[i].has_nonfinite;
+        all_share = all_share && in[i].has_guide_share;
+        m->seconds += in[i].seconds;
+        nonfinite += in[i].nonfinite;
+        share += (double)in[i].spp * in[i].guide_share;
+    }
+    char buf[64];
+    snprintf(buf, sizeof buf, "%ld", m->spp);
+    if (!add_attribute(m, "spp", buf, err))
+        return false;
+    snprintf(buf, sizeof buf, "%.3f", m->seconds);
+    if (all_seconds && !add_attribute(m, "seconds", buf, err))
+        return false;
+    if (!add_attribute(m, "sampling", find(&in[0], "sampling"), err) ||
+        !add_attribute(m, "seed", find(&in[0], "seed"), err))
+        return false;
+    for (int a = 0; a < in[0].attr_count; a++) {
+        const char *name = in[0].attrs[a].name, *value = in[0].attrs[a].value;
+        if (strncmp(name, "sg:", 3))
+            continue; /* spp... above; the rest is the file format's */
+        bool ok = true;
+        if (!strcmp(name, "sg:shards")) {
+            char *list = shard_list(held, m->shard_count);
+            ok = list ? add_attribute(m, name, list, err) : sg_fail(err, "out of memory");
+            free(list);
+        } else if (!strcmp(name, "sg:nonfinite_samples")) {
+            snprintf(buf, sizeof buf, "%ld", nonfinite);
+            ok = !all_nonfinite || add_attribute(m, name, buf, err);
+        } else if (!strcmp(name, "sg:guide_share")) {
+            /* two digits more than render writes: merged images merge again */
+            snprintf(buf, sizeof buf, "%.6f", share / (double)m->spp);
+            ok = !all_share || add_attribute(m, name, buf, err);
+        } else {
+            /* copied where all agree (the checked ones do by now) */
+            bool same = true;
+            for (int i = 1; i < count && same; i++) {
+                const char *other = find(&in[i], name);
+                same = other && !strcmp(other, value);
+            }
+            ok = !same || add_attribute(m, name, value, err);
+            if (same && !strcmp(name, "sg:exposure") && !sg_parse_double(value, -100, 100, &m->exposure))
+                m->exposure = 0;
+        }
+        if (!ok)
+            return false;
+    }
+    return true;
 }
 
 SgMerged *sg_merge_files(const char *const *paths, int count, bool partial, SgError *err)
@@ -152,145 +337,37 @@ SgMerged *sg_merge_files(const char *const *paths, int count, bool partial, SgEr
     Input *in = calloc((size_t)count, sizeof *in);
     SgMerged *m = calloc(1, sizeof *m);
     char *held = NULL;
-    double *sum = NULL;
-    if (!in || !m) {
+    bool ok = in && m;
+    if (!ok)
         sg_fail(err, "out of memory");
-        goto fail;
-    }
-    for (int i = 0; i < count; i++)
-        if (!input_read(&in[i], paths[i], err))
-            goto fail;
-    for (int i = 1; i < count; i++) {
-        if (in[i].width != in[0].width || in[i].height != in[0].height) {
-            sg_fail(err, "%s is %dx%d, %s is %dx%d: not shards of one render", in[0].path, in[0].width,
-                    in[0].height, in[i].path, in[i].width, in[i].height);
-            goto fail;
-        }
-        for (int a = 0; a < CHECKED; a++)
-            if (strcmp(in[i].checked[a], in[0].checked[a])) {
-                sg_fail(err, "%s has %s '%s', %s has '%s': not shards of one render", in[0].path, checked[a],
-                        in[0].checked[a], in[i].path, in[i].checked[a]);
-                goto fail;
-            }
-    }
-    int shards = atoi(in[0].checked[2]);
-    held = calloc((size_t)shards, sizeof *held);
-    int *owner = calloc((size_t)shards, sizeof *owner);
-    if (!held || !owner) {
-        free(owner);
-        sg_fail(err, "out of memory");
-        goto fail;
-    }
-    for (int i = 0; i < count; i++)
-        for (int k = 0; k < shards; k++)
-            if (in[i].shards[k]) {
-                if (held[k]) {
-                    sg_fail(err, "%s and %s both hold shard %d of %d", in[owner[k]].path, in[i].path, k, shards);
-                    free(owner);
-                    goto fail;
-                }
-                held[k] = 1;
-                owner[k] = i;
-            }
-    free(owner);
-    char *p = m->missing;
-    for (int k = 0; k < shards; k++)
-        if (!held[k]) {
-            if ((size_t)(p - m->missing) < sizeof m->missing - 16)
-                p += snprintf(p, sizeof m->missing - (size_t)(p - m->missing), "%s%d", p == m->missing ? "" : ",", k);
-            else if (p[-1] != '.')
-                p += snprintf(p, sizeof m->missing - (size_t)(p - m->missing), "...");
-        } else {
-            m->held++;
-        }
-    if (m->missing[0] && !partial) {
-        sg_fail(err, "shards %s of %d are missing (%d given): --partial merges what is there", m->missing, shards,
-                m->held);
-        goto fail;
-    }
-
-    /* the spp-weighted mean, in double, summed in shard order (the same
-     * result whatever order the files were given in) */
-    qsort(in, (size_t)count, sizeof *in, by_first_shard);
-    size_t values = (size_t)in[0].width * in[0].height * 3;
-    sum = calloc(values, sizeof *sum);
-    m->rgb = malloc(values * sizeof *m->rgb);
-    if (!sum || !m->rgb) {
-        sg_fail(err, "out of memory for a %dx%d image", in[0].width, in[0].height);
-        goto fail;
-    }
-    double share = 0;
-    bool all_share = true;
-    uint64_t nonfinite = 0;
-    for (int i = 0; i < count; i++) {
-        double w = (double)in[i].spp;
-        for (size_t v = 0; v < values; v++)
-            sum[v] += w * in[i].rgb[v];
-        m->spp += in[i].spp;
-        m->seconds += in[i].seconds;
-        nonfinite += in[i].nonfinite;
-        share += w * in[i].guide_share;
-        all_share = all_share && in[i].has_guide_share;
-    }
-    for (size_t v = 0; v < values; v++)
-        m->rgb[v] = (float)(sum[v] / (double)m->spp);
-    m->width = in[0].width;
-    m->height = in[0].height;
-    m->shard_count = shards;
-
-    char buf[64];
-    snprintf(buf, sizeof buf, "%ld", m->spp);
-    add_attribute(m, "spp", buf);
-    snprintf(buf, sizeof buf, "%.3f", m->seconds);
-    add_attribute(m, "seconds", buf);
-    for (int a = 0; a < CHECKED; a++)
-        add_attribute(m, checked[a], in[0].checked[a]);
-    m->shard_list = shard_list(held, shards);
-    if (!m->shard_list) {
-        sg_fail(err, "out of memory");
-        goto fail;
-    }
-    m->attrs[m->attr_count++] = (SgImageAttribute){"sg:shards", m->shard_list};
-    snprintf(buf, sizeof buf, "%llu", (unsigned long long)nonfinite);
-    add_attribute(m, "sg:nonfinite_samples", buf);
-    if (all_share) {
-        snprintf(buf, sizeof buf, "%.4f", share / (double)m->spp);
-        add_attribute(m, "sg:guide_share", buf);
-    }
-    for (int a = 0; a < COPIED; a++) {
-        bool same = in[0].has_copied[a];
-        for (int i = 1; i < count && same; i++)
-            same = in[i].has_copied[a] && !strcmp(in[i].copied[a], in[0].copied[a]);
-        if (same) {
-            add_attribute(m, copied[a], in[0].copied[a]);
-            if (!strcmp(copied[a], "sg:exposure"))
-                m->exposure = atof(in[0].copied[a]);
-        }
-    }
-    for (int i = 0; i < count; i++)
-        input_free(&in[i]);
-    free(in);
-    free(held);
-    free(sum);
-    return m;
-
-fail:
+    for (int i = 0; ok && i < count; i++)
+        ok = input_read(&in[i], paths[i], err);
+    ok = ok && check_inputs(m, in, count, partial, &held, err);
+    if (ok)
+        qsort(in, (size_t)count, sizeof *in, by_first_shard);
+    ok = ok && weighted_mean(m, in, count, err) && merged_attributes(m, in, count, held, err);
     if (in)
         for (int i = 0; i < count; i++)
             input_free(&in[i]);
     free(in);
     free(held);
-    free(sum);
-    sg_merged_free(m);
-    return NULL;
+    if (!ok) {
+        sg_merged_free(m);
+        return NULL;
+    }
+    return m;
 }
 
 void sg_merged_free(SgMerged *m)
 {
     if (!m)
         return;
+    for (int i = 0; i < m->attr_count; i++) {
+        free((char *)m->attrs[i].name); /* ours: add_attribute's copies */
+        free((char *)m->attrs[i].value);
+    }
+    free(m->attrs);
     free(m->rgb);
-    free(m->shard_list);
     free(m);
 }
 
@@ -304,10 +381,40 @@ int sg_merged_shard_count(const SgMerged *m) { return m->shard_count; }
 const char *sg_merged_missing(const SgMerged *m) { return m->missing; }
 double sg_merged_exposure(const SgMerged *m) { return m->exposure; }
 
+const SgImageAttribute *sg_merged_attributes(const SgMerged *m, int *count)
+{
+    *count = m->attr_count;
+    return m->attrs;
+}
+
+/* The image writers name the temporary file they were given: say the
+ * target instead. */
+static bool fail_as(SgError *err, const SgError *e, const char *tmp, const char *path)
+{
+    size_t n = strlen(tmp);
+    if (!strncmp(e->message, tmp, n))
+        return sg_fail(err, "%s%s", path, e->message + n);
+    return sg_fail(err, "%s: %s", path, e->message);
+}
+
 bool sg_merged_write(const SgMerged *m, const char *exr, const char *png, double exposure, SgError *err)
 {
-    /* the EXR last, as render does: it is what make and the farm wait for */
-    if (png && !sg_image_write_png(png, m->width, m->height, m->rgb, exposure, err))
+    char exr_tmp[4096], png_tmp[4096];
+    SgError e = {0};
+    sg_temp_path(exr, exr_tmp, sizeof exr_tmp);
+    if (png) {
+        sg_temp_path(png, png_tmp, sizeof png_tmp);
+        if (!sg_image_write_png(png_tmp, m->width, m->height, m->rgb, exposure, &e))
+            return fail_as(err, &e, png_tmp, png);
+    }
+    if (!sg_image_write_exr(exr_tmp, m->width, m->height, m->rgb, m->attrs, m->attr_count, &e)) {
+        if (png)
+            remove(png_tmp);
+        return fail_as(err, &e, exr_tmp, exr);
+    }
+    if (png && !sg_commit_temp(png_tmp, png, err)) {
+        remove(exr_tmp);
         return false;
-    return sg_image_write_exr(exr, m->width, m->height, m->rgb, m->attrs, m->attr_count, err);
+    }
+    return sg_commit_temp(exr_tmp, exr, err);
 }

@@ -71,6 +71,36 @@ Test(image_io, exr_round_trip_is_exact_with_metadata)
     cr_assert(strstr(err.message, path), "%s", err.message);
 }
 
+Test(image_io, every_attribute_read_back_at_once)
+{
+    float rgb[2 * 1 * 3] = {1, 2, 3, 4, 5, 6};
+    SgImageAttribute attrs[] = {{"spp", "64"}, {"sg:shards", "0,2"}, {"sg:scene", "a scene with spaces.json"}};
+    const char *path = "build/test_image_io_attributes.exr";
+    SgError err = {0};
+    cr_assert(sg_image_write_exr(path, 2, 1, rgb, attrs, 3, &err), "%s", err.message);
+    SgImageAttribute *back = NULL;
+    int count = 0;
+    cr_assert(sg_image_read_attributes(path, &back, &count, &err), "%s", err.message);
+    /* ours, each once with its value, among the format's own (compression...) */
+    for (int a = 0; a < 3; a++) {
+        int found = 0;
+        for (int i = 0; i < count; i++)
+            if (!strcmp(back[i].name, attrs[a].name)) {
+                found++;
+                cr_assert_str_eq(back[i].value, attrs[a].value);
+            }
+        cr_assert_eq(found, 1, "%s found %d times", attrs[a].name, found);
+    }
+    cr_assert_gt(count, 3, "the EXR header's own fields are missing");
+    free(back); /* one allocation */
+    unlink(path);
+    err = (SgError){0};
+    cr_assert_not(sg_image_read_attributes(path, &back, &count, &err));
+    cr_assert(strstr(err.message, path), "%s", err.message);
+    cr_assert_null(back);
+    cr_assert_eq(count, 0);
+}
+
 Test(image_io, png_applies_exposure_and_srgb)
 {
     const int w = 4, h = 1;
