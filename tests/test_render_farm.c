@@ -120,7 +120,7 @@ static void check_exact_merge(const char *dir, int shards, long total_spp)
     free(merged.rgb);
 }
 
-Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelled_shard, .timeout = 400)
+Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelled_shard)
 {
     start_cluster();
     const char *tmp = sg_test_tmpdir();
@@ -225,7 +225,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
 /* Without Slurm the script runs the same steps here; in bsdf mode, whose
  * passes learn nothing, the shards' passes are the single render's passes:
  * the merged image is that render's, to float rounding. */
-Test(render_farm, local_shards_are_the_single_render_in_bsdf_mode, .timeout = 200)
+Test(render_farm, local_shards_are_the_single_render_in_bsdf_mode)
 {
     const char *tmp = sg_test_tmpdir();
     const char *bin = bin_dir();
