@@ -290,6 +290,7 @@ static bool push_file(Parser *p, const char *path, const Token *from)
         return sg_fail(p->err, "%s: out of memory", path);
     }
     p->sources[p->source_count++] = src;
+    sg_builder_add_source(&p->core, text, size);
     snprintf(src->path, sizeof src->path, "%s", path);
     src->line = 1;
     src->text = text;

@@ -772,6 +772,7 @@ static SgScene *load_json_scene(const char *path, SgError *err)
     bool ok = sg_builder_begin(&b.core, path, err);
     SgScene *s = b.scene = b.core.scene;
     if (ok) {
+        sg_builder_add_source(&b.core, text, size);
         const char *slash = strrchr(path, '/');
         snprintf(b.base_dir, sizeof b.base_dir, "%.*s", slash ? (int)(slash - path + 1) : 0, path);
         b.material_overrides = cJSON_GetObjectItemCaseSensitive(root, "materials");

@@ -90,6 +90,11 @@ typedef struct SgScene {
     /* Identity of what the precompute depends on: geometry, materials'
      * emission and lights; not the camera. Same scene in, same hash out. */
     uint64_t geometry_hash;
+    /* Identity of the scene's text: FNV-1a 64 of every scene file the
+     * loader read (the JSON, or the pbrt file and its Includes), in the
+     * order read. With geometry_hash, what a render farm's shards of one
+     * render must share. */
+    uint64_t source_hash;
 
     /* What the loader could not honour (pbrt statements it does not
      * support, approximations made): one line each, no trailing newline.

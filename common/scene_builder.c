@@ -307,7 +307,13 @@ bool sg_builder_begin(SgSceneBuilder *b, const char *path, SgError *err)
     if (!b->scene)
         return sg_fail(err, "%s: out of memory", path);
     snprintf(b->scene->path, sizeof b->scene->path, "%s", path);
+    b->scene->source_hash = SG_HASH_INIT;
     return true;
+}
+
+void sg_builder_add_source(SgSceneBuilder *b, const char *text, size_t size)
+{
+    b->scene->source_hash = sg_hash_bytes(b->scene->source_hash, text, size);
 }
 
 bool sg_builder_finish(SgSceneBuilder *b, SgError *err)

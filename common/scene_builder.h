@@ -6,6 +6,7 @@
 #define SG_SCENE_BUILDER_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "error.h"
@@ -21,6 +22,9 @@ typedef struct SgSceneBuilder {
 
 /* Allocates the scene; on failure returns false and b->scene is NULL. */
 bool sg_builder_begin(SgSceneBuilder *b, const char *path, SgError *err);
+
+/* Adds a scene file's text to the scene's source_hash. */
+void sg_builder_add_source(SgSceneBuilder *b, const char *text, size_t size);
 
 /* Diffuse grey 0.5, ior 1.5, no emission. */
 void sg_material_default(SgMaterial *m, const char *name);

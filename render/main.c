@@ -13,7 +13,6 @@
 #include "error_metrics.h"
 #include "hash.h"
 #include "image_io.h"
-#include "input_file.h"
 #include "openpgl_guide.h"
 #include "output_file.h"
 #include "progress.h"
@@ -218,23 +217,17 @@ static void error_metrics(const float *x, const float *ref, size_t n, float scal
 static void format_u64(char *buf, size_t size, uint64_t v) { snprintf(buf, size, "%" PRIu64, v); }
 
 /* What bin/merge checks that shards agree on, as 16 hex digits each: the
- * scene (its file's bytes and the geometry it loaded), the cache (its
- * checksum, "none" where the mode reads none) and the recipe (every option
- * that shapes the image besides the shard, the spp and the time). */
+ * scene (the text the loader read and the geometry it loaded), the cache
+ * (its checksum, "none" where the mode reads none) and the recipe (every
+ * option that shapes the image besides the shard, the spp and the time). */
 typedef struct ShardIdentity {
     char scene[17], cache[17], recipe[17];
 } ShardIdentity;
 
-static bool shard_identity(const Args *a, const SgScene *scene, const SgRenderOptions *o,
-                           const SgImportanceCache *cache, ShardIdentity *id, SgError *err)
+static void shard_identity(const SgScene *scene, const SgRenderOptions *o, const SgImportanceCache *cache,
+                           ShardIdentity *id)
 {
-    char *text;
-    size_t size;
-    if (!sg_read_file(a->scene, "scene", SG_LIMIT_PBRT_TEXT, &text, &size, err))
-        return false;
-    uint64_t h = sg_hash_bytes(SG_HASH_INIT, text, size);
-    free(text);
-    h = sg_hash_bytes(h, &scene->geometry_hash, sizeof scene->geometry_hash);
+    uint64_t h = sg_hash_bytes(scene->source_hash, &scene->geometry_hash, sizeof scene->geometry_hash);
     snprintf(id->scene, sizeof id->scene, "%016" PRIx64, h);
     if (cache)
         snprintf(id->cache, sizeof id->cache, "%016" PRIx64, sg_cache_checksum(cache));
@@ -245,7 +238,6 @@ static bool shard_identity(const Args *a, const SgScene *scene, const SgRenderOp
                      "roulette %s shards %d", o->width, o->height, sg_sampling_name(o->sampling), o->seed,
                      o->max_depth, o->lobe_exponent, o->alpha, sg_roulette_name(o->roulette), o->shard_count);
     snprintf(id->recipe, sizeof id->recipe, "%016" PRIx64, sg_hash_bytes(SG_HASH_INIT, recipe, (size_t)n));
-    return true;
 }
 
 int main(int argc, char **argv)
@@ -370,8 +362,7 @@ int main(int argc, char **argv)
     sg_progress_end(&progress);
 
     ShardIdentity id;
-    if (!shard_identity(&a, scene, &o, guide.cache, &id, &err))
-        goto done;
+    shard_identity(scene, &o, guide.cache, &id);
     char shard_s[32], shard_count_s[32], exposure_s[32];
     snprintf(shard_s, sizeof shard_s, "%d", o.shard);
     snprintf(shard_count_s, sizeof shard_count_s, "%d", o.shard_count);
