@@ -11,7 +11,6 @@
 #include "lights.h"
 #include "material.h"
 #include "memory.h"
-#include "mixture_learning.h"
 #include "path_guide.h"
 #include "pixel_noise.h"
 #include "progress.h"

@@ -51,10 +51,15 @@ bool sg_test_exists(const char *path)
     return stat(path, &st) == 0;
 }
 
-const char *sg_test_program(const char *name, char *buf, size_t size)
+const char *sg_test_bin_dir(void)
 {
     const char *bin = getenv("SG_BIN");
-    snprintf(buf, size, "%s/%s", bin && *bin ? bin : "bin", name);
+    return bin && *bin ? bin : "bin";
+}
+
+const char *sg_test_program(const char *name, char *buf, size_t size)
+{
+    snprintf(buf, size, "%s/%s", sg_test_bin_dir(), name);
     return buf;
 }
 

@@ -11,7 +11,9 @@ const char *sg_test_tmpdir(void);
  * ring of 32 static slots: do not free. */
 char *sg_test_write(const char *dir, const char *name, const char *text);
 bool sg_test_exists(const char *path);
-/* Path of a program in bin/ (SG_BIN, else ./bin). */
+/* Where the programs are: SG_BIN, else bin. */
+const char *sg_test_bin_dir(void);
+/* Path of a program in sg_test_bin_dir(). */
 const char *sg_test_program(const char *name, char *buf, size_t size);
 /* Runs a shell command; returns its exit status and stores its stderr
  * (at most size bytes) in err_text if given. */

@@ -15,15 +15,6 @@
 #define SCENE "data/corridor/corridor.json"
 
 static char g_cluster[4096];
-static char g_bin[4096];
-
-static const char *bin_dir(void)
-{
-    const char *b = getenv("SG_BIN");
-    snprintf(g_bin, sizeof g_bin, "%s", b && *b ? b : "bin");
-    return g_bin;
-}
-
 typedef struct Image {
     int w, h;
     float *rgb;
@@ -54,12 +45,6 @@ static void mean_difference(const Image *a, const Image *b, double *mean, double
     }
     *mean = s / n;
     *se = sqrt(fmax(0.0, s2 / n - *mean * *mean) / (n - 1));
-}
-
-static int run(const char *cmd, char *out, size_t size)
-{
-    int status = sg_test_run(cmd, out, size);
-    return status;
 }
 
 static void stop_cluster(void)
@@ -124,7 +109,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
 {
     start_cluster();
     const char *tmp = sg_test_tmpdir();
-    const char *bin = bin_dir();
+    const char *bin = sg_test_bin_dir();
     char cmd[16384], err[4096];
 
     /* 1. four shards of a 32 spp render, merged */
@@ -132,7 +117,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
              "bash scripts/slurm-render.sh " SCENE " --shards 4 --out %s/farm --bin %s --wait -- --spp 32 "
              "--size 48x36 --seed 7 >/dev/null",
              tmp, bin);
-    int status = run(cmd, err, sizeof err);
+    int status = sg_test_run(cmd, err, sizeof err);
     cr_assert_eq(status, 0, "slurm-render failed (%d): %s", status, err);
     char dir[4200];
     snprintf(dir, sizeof dir, "%s/farm", tmp);
@@ -144,7 +129,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
              "%s/render " SCENE " --cache %s/farm/importance.cache --spp 32 --size 48x36 --seed 7 -o %s/single.exr "
              "--quiet",
              bin, tmp, tmp);
-    cr_assert_eq(run(cmd, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
     char path[4200];
     snprintf(path, sizeof path, "%s/farm/corridor.exr", tmp);
     Image merged = load(path);
@@ -164,7 +149,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
              "bash scripts/slurm-render.sh " SCENE " --shards 4 --out %s/farm2 --bin %s -- --spp 4000 --size 48x36 "
              "--seed 3 >/dev/null",
              tmp, bin);
-    cr_assert_eq(run(cmd, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
     char job[64] = "";
     for (int i = 0; i < 400 && !job[0]; i++) { /* shard 0 running */
         FILE *p = popen("squeue -h -n corridor-shards -t RUNNING -o '%i' | grep '_0$'", "r");
@@ -179,7 +164,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
     cr_assert(job[0], "shard 0 never ran");
     usleep(700000); /* well into its passes */
     snprintf(cmd, sizeof cmd, "scancel %s", job);
-    cr_assert_eq(run(cmd, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
     /* the merge can no longer run: Slurm drops it (kill-on-invalid-dep) */
     for (int i = 0; i < 600; i++) {
         FILE *p = popen("squeue -h -n corridor-shards,corridor-merge -o '%i'", "r");
@@ -193,21 +178,21 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
     }
     snprintf(cmd, sizeof cmd, "test ! -e %s/farm2/shards/corridor-0.exr && test ! -e %s/farm2/corridor.exr && "
              "! ls -a %s/farm2/shards | grep -q tmp", tmp, tmp, tmp);
-    cr_assert_eq(run(cmd, NULL, 0), 0, "a cancelled shard left a file behind (or the merge ran without it)");
+    cr_assert_eq(sg_test_run(cmd, NULL, 0), 0, "a cancelled shard left a file behind (or the merge ran without it)");
     snprintf(cmd, sizeof cmd, "ls %s/farm2/shards | wc -l | grep -qx 3", tmp);
-    cr_assert_eq(run(cmd, NULL, 0), 0, "the three other shards should have finished");
+    cr_assert_eq(sg_test_run(cmd, NULL, 0), 0, "the three other shards should have finished");
 
     /* the merge refuses what is left, and writes nothing */
     snprintf(cmd, sizeof cmd, "%s/merge %s/farm2/shards/corridor-1.exr %s/farm2/shards/corridor-2.exr "
              "%s/farm2/shards/corridor-3.exr -o %s/partial.exr", bin, tmp, tmp, tmp, tmp);
-    status = run(cmd, err, sizeof err);
+    status = sg_test_run(cmd, err, sizeof err);
     cr_assert_eq(status, 1, "merge of 3 of 4 shards: exit %d (%s)", status, err);
     cr_assert(strstr(err, "missing"), "the refusal does not say what is missing: %s", err);
     snprintf(path, sizeof path, "%s/partial.exr", tmp);
     cr_assert(!sg_test_exists(path), "a refused merge left %s", path);
 
     snprintf(cmd, sizeof cmd, "bash scripts/slurm-render.sh --resume %s/farm2 --wait >/dev/null", tmp);
-    status = run(cmd, err, sizeof err);
+    status = sg_test_run(cmd, err, sizeof err);
     cr_assert_eq(status, 0, "--resume failed (%d): %s", status, err);
     snprintf(dir, sizeof dir, "%s/farm2", tmp);
     check_exact_merge(dir, 4, 4000);
@@ -217,7 +202,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
              "%s/render " SCENE " --cache %s/farm2/importance.cache --spp 4000 --size 48x36 --seed 3 --shard 0/4 "
              "-o %s/shard0.exr --quiet && idiff -q -fail 0 -warn 0 %s/shard0.exr %s/farm2/shards/corridor-0.exr",
              bin, tmp, tmp, tmp, tmp);
-    status = run(cmd, err, sizeof err);
+    status = sg_test_run(cmd, err, sizeof err);
     cr_assert_eq(status, 0, "shard 0 rendered again differs (%d): %s", status, err);
     stop_cluster();
 }
@@ -228,20 +213,20 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
 Test(render_farm, local_shards_are_the_single_render_in_bsdf_mode)
 {
     const char *tmp = sg_test_tmpdir();
-    const char *bin = bin_dir();
+    const char *bin = sg_test_bin_dir();
     char cmd[16384], err[4096];
     snprintf(cmd, sizeof cmd,
              "bash scripts/slurm-render.sh " SCENE " --shards 3 --out %s/local --bin %s --local -- --sampling bsdf "
              "--spp 10 --size 48x36 --seed 5 >/dev/null",
              tmp, bin);
-    int status = run(cmd, err, sizeof err);
+    int status = sg_test_run(cmd, err, sizeof err);
     cr_assert_eq(status, 0, "slurm-render --local failed (%d): %s", status, err);
     char dir[4200];
     snprintf(dir, sizeof dir, "%s/local", tmp);
     check_exact_merge(dir, 3, 10); /* 4 + 3 + 3 passes */
     snprintf(cmd, sizeof cmd, "%s/render " SCENE " --sampling bsdf --spp 10 --size 48x36 --seed 5 -o %s/one.exr --quiet",
              bin, tmp);
-    cr_assert_eq(run(cmd, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
     char path[4200];
     snprintf(path, sizeof path, "%s/local/corridor.exr", tmp);
     Image merged = load(path);
@@ -260,18 +245,18 @@ Test(render_farm, local_shards_are_the_single_render_in_bsdf_mode)
 Test(render_farm, render_refuses_a_shard_it_cannot_render)
 {
     const char *tmp = sg_test_tmpdir();
-    const char *bin = bin_dir();
+    const char *bin = sg_test_bin_dir();
     char cmd[8192], err[2048];
     const char *bad[] = {"4/4", "-1/4", "1/0", "2", "a/b", "1/70000"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         snprintf(cmd, sizeof cmd, "%s/render " SCENE " --sampling bsdf --spp 4 --shard %s -o %s/x.exr", bin, bad[i],
                  tmp);
-        cr_assert_eq(run(cmd, err, sizeof err), 2, "--shard %s: %s", bad[i], err);
+        cr_assert_eq(sg_test_run(cmd, err, sizeof err), 2, "--shard %s: %s", bad[i], err);
         cr_assert(strstr(err, "--shard"), "--shard %s said: %s", bad[i], err);
     }
     /* 2 spp in 4 shards: shard 3 has no pass */
     snprintf(cmd, sizeof cmd, "%s/render " SCENE " --sampling bsdf --spp 2 --shard 3/4 --size 8x6 -o %s/x.exr", bin, tmp);
-    cr_assert_eq(run(cmd, err, sizeof err), 1, "%s", err);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 1, "%s", err);
     cr_assert(strstr(err, "no pass"), "said: %s", err);
     char path[4200];
     snprintf(path, sizeof path, "%s/x.exr", tmp);

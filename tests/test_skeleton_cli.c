@@ -14,12 +14,7 @@
 #include "../skeletonize/skeletonize.h"
 #include "medium.h"
 #include "skeleton_graph.h"
-
-static const char *bin_dir(void)
-{
-    const char *b = getenv("SG_BIN");
-    return b && *b ? b : "bin";
-}
+#include "support_files.h"
 
 static void tmp_path(char *out, size_t cap, const char *name)
 {
@@ -32,7 +27,7 @@ static int run(const char *args, char *err_text, size_t cap)
 {
     char errfile[256], cmd[2048];
     tmp_path(errfile, sizeof errfile, "stderr.txt");
-    snprintf(cmd, sizeof cmd, "%s %s/skeletonize %s 2>%s >/dev/null", run_env, bin_dir(), args,
+    snprintf(cmd, sizeof cmd, "%s %s/skeletonize %s 2>%s >/dev/null", run_env, sg_test_bin_dir(), args,
              errfile);
     int status = system(cmd);
     FILE *f = fopen(errfile, "r");
@@ -57,7 +52,7 @@ Test(skeletonize_cli, help)
 {
     char text[4096];
     char cmd[512];
-    snprintf(cmd, sizeof cmd, "%s/skeletonize --help | grep -q camera-constraint", bin_dir());
+    snprintf(cmd, sizeof cmd, "%s/skeletonize --help | grep -q camera-constraint", sg_test_bin_dir());
     cr_expect_eq(system(cmd), 0);
     cr_expect_eq(run("", text, sizeof text), 2, "no arguments: usage and status 2");
 }
