@@ -47,7 +47,7 @@ bool sg_ply_mesh_read(SgPlyMesh *mesh, const char *path, SgError *err)
     for (int e = 0; ok && e < header->element_count; e++) {
         const SgPlyElement *el = &header->elements[e];
         bool is_vertex = !strcmp(el->name, "vertex"), is_face = !strcmp(el->name, "face");
-        int px = -1, py = -1, pz = -1, pf = -1, pnx = -1, pny = -1, pnz = -1;
+        int px = -1, py = -1, pz = -1, pf = -1, pnx = -1, pny = -1, pnz = -1, pu = -1, pv = -1;
         for (int p = 0; p < el->property_count; p++) {
             const char *n = el->properties[p].name;
             bool list = el->properties[p].count_type != SG_PLY_NONE;
@@ -57,6 +57,13 @@ bool sg_ply_mesh_read(SgPlyMesh *mesh, const char *path, SgError *err)
             if (is_vertex && !list && !strcmp(n, "nx")) pnx = p;
             if (is_vertex && !list && !strcmp(n, "ny")) pny = p;
             if (is_vertex && !list && !strcmp(n, "nz")) pnz = p;
+            /* texture coordinates under the names pbrt-v4 reads */
+            if (is_vertex && !list && (!strcmp(n, "u") || !strcmp(n, "s") || !strcmp(n, "texture_u") ||
+                                       !strcmp(n, "texture_s")))
+                pu = p;
+            if (is_vertex && !list && (!strcmp(n, "v") || !strcmp(n, "t") || !strcmp(n, "texture_v") ||
+                                       !strcmp(n, "texture_t")))
+                pv = p;
             if (is_face && list && (!strcmp(n, "vertex_indices") || !strcmp(n, "vertex_index")))
                 pf = p;
         }
@@ -79,6 +86,13 @@ bool sg_ply_mesh_read(SgPlyMesh *mesh, const char *path, SgError *err)
             if (pnx >= 0 && pny >= 0 && pnz >= 0) {
                 mesh->normals = malloc((el->count ? el->count : 1) * 3 * sizeof(double));
                 if (!mesh->normals) {
+                    ok = sg_fail(err, "%s: out of memory", path);
+                    break;
+                }
+            }
+            if (pu >= 0 && pv >= 0) {
+                mesh->uvs = malloc((el->count ? el->count : 1) * 2 * sizeof(float));
+                if (!mesh->uvs) {
                     ok = sg_fail(err, "%s: out of memory", path);
                     break;
                 }
@@ -109,6 +123,8 @@ bool sg_ply_mesh_read(SgPlyMesh *mesh, const char *path, SgError *err)
                     if (is_vertex && mesh->normals && (p == pnx || p == pny || p == pnz))
                         mesh->normals[3 * row + (p == pnx ? 0 : p == pny ? 1 : 2)] =
                             isfinite(v) ? v : 0;
+                    if (is_vertex && mesh->uvs && (p == pu || p == pv))
+                        mesh->uvs[2 * row + (p == pv)] = isfinite(v) ? (float)v : 0.0f;
                     continue;
                 }
                 double count;
@@ -169,5 +185,6 @@ void sg_ply_mesh_release(SgPlyMesh *mesh)
     free(mesh->positions);
     free(mesh->indices);
     free(mesh->normals);
+    free(mesh->uvs);
     memset(mesh, 0, sizeof *mesh);
 }

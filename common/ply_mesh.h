@@ -17,6 +17,7 @@ typedef struct SgPlyMesh {
     uint32_t triangle_count;
     uint32_t *indices;   /* 3 * triangle_count; polygons are fanned */
     double *normals;     /* 3 * vertex_count from nx ny nz, or NULL if the file has none */
+    float *uvs;          /* 2 * vertex_count from u v (or s t), or NULL if the file has none */
 } SgPlyMesh;
 
 bool sg_ply_mesh_read(SgPlyMesh *mesh, const char *path, SgError *err);

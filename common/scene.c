@@ -130,23 +130,35 @@ static bool apply_material_json(const char *path, const cJSON *obj, const char *
             m->type = SG_MATERIAL_MIRROR;
         else if (t && !strcmp(t, "dielectric"))
             m->type = SG_MATERIAL_DIELECTRIC;
+        else if (t && !strcmp(t, "conductor"))
+            m->type = SG_MATERIAL_CONDUCTOR;
+        else if (t && !strcmp(t, "coateddiffuse"))
+            m->type = SG_MATERIAL_COATED_DIFFUSE;
         else
-            return sg_fail(err, "%s: %s.type must be diffuse, glossy, mirror or dielectric", path,
-                           owner);
+            return sg_fail(err,
+                           "%s: %s.type must be diffuse, glossy, mirror, dielectric, conductor or coateddiffuse",
+                           path, owner);
     }
-    double exponent = m->exponent, ior = m->ior;
+    if (m->type == SG_MATERIAL_CONDUCTOR && !cJSON_GetObjectItemCaseSensitive(obj, "eta")) {
+        const float copper_eta[3] = {0.200f, 0.924f, 1.10f}, copper_k[3] = {3.91f, 2.45f, 2.14f}; /* pbrt's default */
+        memcpy(m->eta, copper_eta, sizeof copper_eta);
+        memcpy(m->k, copper_k, sizeof copper_k);
+    }
+    double exponent = m->exponent, ior = m->ior, roughness = m->roughness[0];
     if (!member_color(path, obj, owner, "albedo", m->diffuse, err) ||
         !member_color(path, obj, owner, "specular", m->specular, err) ||
         !member_color(path, obj, owner, "emission", m->emission, err) ||
         !member_number(path, obj, owner, "exponent", 0, 1e7, &exponent, err) ||
-        !member_number(path, obj, owner, "ior", 1.0, 10.0, &ior, err))
+        !member_number(path, obj, owner, "ior", 1.0, 10.0, &ior, err) ||
+        !member_number(path, obj, owner, "roughness", 0, 1, &roughness, err) ||
+        !member_color(path, obj, owner, "eta", m->eta, err) || !member_color(path, obj, owner, "k", m->k, err))
         return false;
     m->exponent = (float)exponent;
     m->ior = (float)ior;
+    m->roughness[0] = m->roughness[1] = (float)roughness; /* GGX alpha */
     /* Keep energy conservation: albedos above 1 would make furnaces explode. */
     for (int a = 0; a < 3; a++)
-        if (m->diffuse[a] + m->specular[a] > 1.0f && m->type != SG_MATERIAL_MIRROR &&
-            m->type != SG_MATERIAL_DIELECTRIC)
+        if (m->diffuse[a] + m->specular[a] > 1.0f && (m->type == SG_MATERIAL_DIFFUSE || m->type == SG_MATERIAL_GLOSSY))
             return sg_fail(err, "%s: %s: albedo + specular exceeds 1 (not energy conserving)",
                            path, owner);
     return true;

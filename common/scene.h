@@ -23,7 +23,42 @@ typedef enum SgMaterialType {
     SG_MATERIAL_GLOSSY,     /* diffuse + normalized Phong lobe (specular, exponent) */
     SG_MATERIAL_MIRROR,     /* perfect reflection tinted by specular */
     SG_MATERIAL_DIELECTRIC, /* smooth glass with index ior */
+    SG_MATERIAL_CONDUCTOR,  /* metal: GGX microfacets (roughness), complex
+                             * Fresnel of eta + i k; a mirror below alpha 1e-3 */
+    SG_MATERIAL_COATED_DIFFUSE, /* a diffuse base (diffuse) under a GGX
+                                 * dielectric coat of index ior (roughness) */
 } SgMaterialType;
+
+/* What a texture's value is made of: another texture or a constant. */
+typedef struct SgTextureInput {
+    uint32_t texture; /* 1 + index in scene->textures; 0: the constant `value` */
+    float value[3];
+} SgTextureInput;
+
+typedef enum SgTextureKind {
+    SG_TEXTURE_IMAGE,        /* an image file, looked up at (u, v) */
+    SG_TEXTURE_SCALE,        /* input[0] times input[1] */
+    SG_TEXTURE_MIX,          /* (1 - input[2]) input[0] + input[2] input[1] */
+    SG_TEXTURE_CHECKERBOARD, /* input[0] on the even squares of (u, v), input[1] on the odd */
+} SgTextureKind;
+
+typedef enum SgTextureWrap { SG_WRAP_REPEAT, SG_WRAP_CLAMP, SG_WRAP_BLACK } SgTextureWrap;
+
+/* A texture as pbrt-v4 defines its imagemap, scale, mix and checkerboard
+ * (2D, uv mapping). Its lookup coordinates are
+ *   s = uscale u + udelta,  t = vscale v + vdelta. */
+typedef struct SgTexture {
+    SgTextureKind kind;
+    float uscale, vscale, udelta, vdelta;
+    /* image */
+    char *path;       /* NULL: the file could not be read (then mean is grey 0.5) */
+    float gamma;      /* how its values are encoded: 0 linear, -1 sRGB, else an exponent */
+    float scale;      /* multiplies the value */
+    bool invert;      /* 1 - value (after scale), as pbrt */
+    SgTextureWrap wrap;
+    SgTextureInput input[3];
+    float mean[3];    /* the average value, for what cannot look up (u, v) */
+} SgTexture;
 
 typedef struct SgMaterial {
     char name[64];
@@ -33,6 +68,13 @@ typedef struct SgMaterial {
     float exponent;    /* Ns: Phong exponent */
     float ior;         /* Ni */
     float emission[3]; /* Ke: emitted radiance; non-zero makes its triangles lights */
+    float roughness[2]; /* conductor, coated diffuse: GGX alpha along the tangent and bitangent */
+    float eta[3], k[3]; /* conductor: complex index of refraction per channel */
+    /* 1 + index in scene->textures of what varies `diffuse` over the
+     * surface (diffuse, glossy and coated diffuse: the albedo; conductor:
+     * its reflectance at normal incidence, in place of eta and k); 0: none.
+     * `diffuse` then holds the texture's mean. */
+    uint32_t diffuse_texture;
 } SgMaterial;
 
 /* A light is a connected set of emissive triangles of one material (a quad
@@ -72,8 +114,12 @@ typedef struct SgScene {
     uint32_t *triangle_material; /* triangle_count */
     uint32_t *triangle_light; /* triangle_count: light index or SG_NO_LIGHT */
 
+    float *uvs;               /* 2 * vertex_count texture coordinates, or NULL: none in the scene */
+
     uint32_t material_count;
     SgMaterial *materials;
+    uint32_t texture_count;
+    SgTexture *textures;
 
     uint32_t light_count;
     SgLight *lights;

@@ -41,6 +41,41 @@ bool sg_builder_add_vertices(SgSceneBuilder *b, uint32_t count, SgError *err)
                 3 * sizeof(double), err, b->path);
 }
 
+/* The uv array covers at least `needed` vertices; new entries are (0, 0). */
+static bool reserve_uvs(SgSceneBuilder *b, uint32_t needed, SgError *err)
+{
+    uint32_t old = b->uv_capacity;
+    if (!grow((void **)&b->scene->uvs, &b->uv_capacity, needed, 2 * sizeof(float), err, b->path))
+        return false;
+    if (b->uv_capacity > old)
+        memset(b->scene->uvs + 2 * (size_t)old, 0, 2 * sizeof(float) * (b->uv_capacity - old));
+    return true;
+}
+
+bool sg_builder_set_uvs(SgSceneBuilder *b, uint32_t first, uint32_t count, const float *uv, SgError *err)
+{
+    if ((uint64_t)first + count > b->scene->vertex_count)
+        return sg_fail(err, "%s: texture coordinates for vertices the scene does not have", b->path);
+    if (!reserve_uvs(b, first + count, err))
+        return false;
+    for (size_t i = 0; i < 2 * (size_t)count; i++) /* a NaN would poison the texture lookups */
+        b->scene->uvs[2 * (size_t)first + i] = isfinite(uv[i]) ? uv[i] : 0.0f;
+    return true;
+}
+
+bool sg_builder_add_texture(SgSceneBuilder *b, const SgTexture *t, uint32_t *id, SgError *err)
+{
+    SgScene *s = b->scene;
+    if (!grow((void **)&s->textures, &b->texture_capacity, s->texture_count + 1, sizeof(SgTexture), err, b->path))
+        return false;
+    SgTexture *dst = &s->textures[s->texture_count];
+    *dst = *t;
+    if (t->path && !(dst->path = strdup(t->path)))
+        return sg_fail(err, "%s: out of memory", b->path);
+    *id = s->texture_count++;
+    return true;
+}
+
 bool sg_builder_add_triangles(SgSceneBuilder *b, uint32_t count, SgError *err)
 {
     SgScene *s = b->scene;
@@ -291,6 +326,10 @@ void sg_scene_free(SgScene *s)
     free(s->triangle_material);
     free(s->triangle_light);
     free(s->materials);
+    for (uint32_t i = 0; i < s->texture_count; i++)
+        free(s->textures[i].path);
+    free(s->textures);
+    free(s->uvs);
     free(s->lights);
     free(s->light_triangles);
     for (uint32_t i = 0; i < s->warning_count; i++)
@@ -319,6 +358,8 @@ void sg_builder_add_source(SgSceneBuilder *b, const char *text, size_t size)
 bool sg_builder_finish(SgSceneBuilder *b, SgError *err)
 {
     if (!group_lights(b, err))
+        return false;
+    if (b->scene->uvs && !reserve_uvs(b, b->scene->vertex_count, err)) /* the meshes after the last with uv */
         return false;
     b->scene->degenerate_dropped = b->dropped_degenerate;
     compute_bounds_and_hash(b->scene);

@@ -16,7 +16,7 @@
 typedef struct SgSceneBuilder {
     SgScene *scene;
     const char *path; /* the scene file, for messages */
-    uint32_t vertex_capacity, triangle_capacity, material_capacity;
+    uint32_t vertex_capacity, triangle_capacity, material_capacity, texture_capacity, uv_capacity;
     uint32_t dropped_degenerate;
 } SgSceneBuilder;
 
@@ -45,6 +45,12 @@ bool sg_builder_append_mesh(SgSceneBuilder *b, const char *file, const double *p
                             uint32_t vertex_count, const uint32_t *indices,
                             uint32_t triangle_count, const SgTransform *xf, uint32_t material,
                             SgError *err);
+
+/* Texture coordinates of vertices [first, first + count) (already added);
+ * vertices given none keep (0, 0). Non-finite values become 0. */
+bool sg_builder_set_uvs(SgSceneBuilder *b, uint32_t first, uint32_t count, const float *uv, SgError *err);
+/* Appends a texture (its path copied); *id its index. */
+bool sg_builder_add_texture(SgSceneBuilder *b, const SgTexture *t, uint32_t *id, SgError *err);
 
 /* Groups lights, computes bounds and hash, records the degenerate count.
  * The caller has checked that there are triangles. */

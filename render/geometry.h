@@ -67,6 +67,7 @@ typedef struct Hit {
     bool found;
     uint32_t tri;
     float t;
+    float b1, b2; /* barycentrics: the point is (1 - b1 - b2) a + b1 b + b2 c */
     Vec3 p;
 } Hit;
 
@@ -95,6 +96,8 @@ static inline Hit intersect(const Geometry *g, Vec3 o, Vec3 d, float tfar)
     const uint32_t *id = g->indices + 3 * h.tri;
     Vec3 a = g->vertices[id[0]], b = g->vertices[id[1]], c = g->vertices[id[2]];
     float u = rh.hit.u, v = rh.hit.v;
+    h.b1 = u;
+    h.b2 = v;
     h.p = v3_add(v3_add(v3_scale(a, 1.0f - u - v), v3_scale(b, u)), v3_scale(c, v));
     return h;
 }

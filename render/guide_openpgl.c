@@ -57,7 +57,7 @@ static void pgl_vertex_end(PathGuide *g, const GuideHit *h, bool lit, SgRng *rng
     PglVertex *pv = pgl_vertex(v);
     /* Cycles' share for the guide: its guiding probability times the
      * BSDF's diffuse share (a glossy lobe is not guided) */
-    float share = OPENPGL_GUIDING_PROBABILITY * h->m->diffuse_weight;
+    float share = OPENPGL_GUIDING_PROBABILITY * v->bsdf.lobe.diffuse_weight;
     float u = sg_rng_float(rng);
     bool on = share > 0.0f && sg_pgl_guide_at(o->field, h->thread, h->p, h->n, u);
     *pv = (PglVertex){.field = on ? o->field : NULL, .thread = h->thread, .alpha = 1.0f - share};
@@ -68,7 +68,7 @@ static float pgl_pdf(const GuideVertex *v, Vec3 w, float cos_n)
     const PglVertex *pv = pgl_vertex_c(v);
     if (!pv->field)
         return guide_bsdf_pdf(v, w, cos_n);
-    return pv->alpha * sg_pdf_glossy(&v->bsdf, w) + (1.0f - pv->alpha) * sg_pgl_guide_pdf(pv->field, pv->thread, w);
+    return pv->alpha * bsdf_pdf(&v->bsdf, w) + (1.0f - pv->alpha) * sg_pgl_guide_pdf(pv->field, pv->thread, w);
 }
 
 static Vec3 pgl_sample(GuideVertex *v, const float u[3], float *pdf)
@@ -79,12 +79,12 @@ static Vec3 pgl_sample(GuideVertex *v, const float u[3], float *pdf)
     Vec3 w;
     v->by_guide = !(u[0] < pv->alpha);
     if (!v->by_guide) {
-        w = sg_sample_glossy(&v->bsdf, u[0] / pv->alpha, u[1], u[2]);
+        w = bsdf_sample(&v->bsdf, u[0] / pv->alpha, u[1], u[2]);
     } else {
         float guide_pdf;
         w = sg_pgl_guide_sample(pv->field, pv->thread, u[1], u[2], &guide_pdf);
     }
-    *pdf = pgl_pdf(v, w, v3_dot(w, v->bsdf.n));
+    *pdf = pgl_pdf(v, w, v3_dot(w, v->bsdf.lobe.n));
     return w;
 }
 

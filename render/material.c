@@ -3,6 +3,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "microfacet.h"
+
 void material_init(Material *m, const SgMaterial *src)
 {
     memset(m, 0, sizeof *m);
@@ -29,9 +31,33 @@ void material_init(Material *m, const SgMaterial *src)
         if (ls <= 0.0f)
             m->type = SG_MATERIAL_DIFFUSE;
         m->roughness = m->diffuse_weight > 0.0f ? 1.0f : sqrtf(2.0f / (m->exponent + 2.0f));
+    } else if (m->type == SG_MATERIAL_CONDUCTOR) {
+        m->eta = v3(fmaxf(src->eta[0], 1e-3f), fmaxf(src->eta[1], 1e-3f), fmaxf(src->eta[2], 1e-3f));
+        m->k = v3(fmaxf(src->k[0], 0), fmaxf(src->k[1], 0), fmaxf(src->k[2], 0));
+        m->ax = fmaxf(src->roughness[0], 0);
+        m->ay = fmaxf(src->roughness[1], 0);
+        m->delta = fmaxf(m->ax, m->ay) < SG_GGX_SMOOTH_ALPHA;
+        m->ax = fmaxf(m->ax, SG_GGX_SMOOTH_ALPHA);
+        m->ay = fmaxf(m->ay, SG_GGX_SMOOTH_ALPHA);
+        m->ks = sg_fresnel_conductor3(1.0f, m->eta, m->k);
+        m->kd = v3(0, 0, 0);
+        m->diffuse_weight = 0.0f;
+        m->roughness = sqrtf(m->ax * m->ay);
+    } else if (m->type == SG_MATERIAL_COATED_DIFFUSE) {
+        m->kd = v3(fminf(m->kd.x, 1), fminf(m->kd.y, 1), fminf(m->kd.z, 1));
+        /* alpha 0 would be a smooth coat: the narrowest GGX lobe stands in */
+        m->ax = fmaxf(src->roughness[0], SG_GGX_SMOOTH_ALPHA);
+        m->ay = fmaxf(src->roughness[1], SG_GGX_SMOOTH_ALPHA);
+        m->fdr = sg_fresnel_diffuse_internal(m->ior);
+        float f0 = sg_fresnel_dielectric(1.0f, m->ior);
+        m->ks = v3(f0, f0, f0);
+        m->roughness = 1.0f;
+        m->diffuse_weight = 0.5f; /* per vertex, from its albedo (render/bsdf.c) */
     } else if (m->type == SG_MATERIAL_MIRROR) {
         if (v3_max_component(m->ks) <= 0.0f)
             m->ks = v3(1, 1, 1); /* a mirror given without Ks reflects fully */
         m->ks = v3(fminf(m->ks.x, 1), fminf(m->ks.y, 1), fminf(m->ks.z, 1));
     }
+    m->delta = m->delta || m->type == SG_MATERIAL_MIRROR || m->type == SG_MATERIAL_DIELECTRIC;
+    m->texture = src->diffuse_texture;
 }

@@ -1,10 +1,13 @@
-/* The renderer's materials: diffuse, glossy (diffuse plus a normalized
- * Phong lobe), mirror and dielectric, made from the scene's SgMaterial with
- * energy conservation enforced, and the BSDF value of the non-delta ones. */
+/* The renderer's materials, made from the scene's SgMaterial with energy
+ * conservation enforced: diffuse, glossy (diffuse plus a normalized Phong
+ * lobe), mirror and dielectric (smooth), conductor (GGX, or a mirror with
+ * its Fresnel when smooth) and coated diffuse. render/bsdf.h turns one into
+ * the BSDF at a vertex. */
 #ifndef SG_RENDER_MATERIAL_H
 #define SG_RENDER_MATERIAL_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "color.h"
 #include "sampling.h"
@@ -13,31 +16,22 @@
 
 typedef struct Material {
     SgMaterialType type;
-    Vec3 kd, ks, emission;
+    Vec3 kd, ks, emission; /* conductor: ks its reflectance at normal incidence */
     float exponent, ior;
     float diffuse_weight; /* probability of sampling the diffuse part */
-    float roughness;      /* for Open PGL: 1 diffuse, sqrt(2 / (p + 2)) a Phong lobe alone */
+    float roughness;      /* for Open PGL: 1 diffuse, sqrt(2 / (p + 2)) a Phong lobe alone, GGX alpha */
     bool emissive;
     bool black;           /* no scattering at all */
+    bool delta;           /* a specular bounce: mirror, glass, smooth conductor */
+    Vec3 eta, k;          /* conductor: complex index of refraction */
+    float ax, ay;         /* conductor, coated diffuse: GGX alpha */
+    float fdr;            /* coated diffuse: the coat's diffuse reflectance from inside */
+    uint32_t texture;     /* 1 + index of the texture that varies kd (SgMaterial.diffuse_texture); 0: none */
 } Material;
 
 void material_init(Material *m, const SgMaterial *src);
 
 /* Luminance of a linear RGB value (common/color.h). */
 static inline float luminance(Vec3 c) { return sg_luminancef(c.x, c.y, c.z); }
-
-/* BSDF value (times nothing) of a diffuse/glossy material, wi above the surface. */
-static inline Vec3 material_eval(const Material *m, const SgGlossyLobe *lobe, Vec3 wi)
-{
-    Vec3 f = v3_scale(m->kd, SG_INV_PI);
-    if (m->type == SG_MATERIAL_GLOSSY) {
-        float c = v3_dot(wi, lobe->r);
-        if (c > 0.0f) {
-            float s = (m->exponent + 2.0f) * (0.5f * SG_INV_PI) * sg_pow_exponent(sg_minf(c, 1.0f), m->exponent);
-            f = v3_add(f, v3_scale(m->ks, s));
-        }
-    }
-    return f;
-}
 
 #endif

@@ -34,6 +34,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "bsdf.h"
 #include "error.h"
 #include "geometry.h"
 #include "lights.h"
@@ -72,7 +73,7 @@ typedef struct GuideHit {
  * record for learn(). */
 #define GUIDE_VERTEX_STATE 112
 typedef struct GuideVertex {
-    SgGlossyLobe bsdf; /* the material's sampling lobe; bsdf.n is the shading normal */
+    Bsdf bsdf;         /* the material's BSDF; bsdf.lobe.n is the shading normal */
     /* set by vertex_begin */
     bool learn;        /* learn() hears what this vertex's bounce brought back */
     float rms;         /* the root mean square of what a bounce from here
@@ -120,7 +121,7 @@ typedef struct PathGuideOps {
 
     void (*vertex_begin)(PathGuide *g, const GuideHit *h, SgRng *rng, GuideVertex *v);
     void (*vertex_end)(PathGuide *g, const GuideHit *h, bool lit, SgRng *rng, GuideVertex *v);
-    /* w a unit direction, cos_n its cosine with bsdf.n (> 0) */
+    /* w a unit direction, cos_n its cosine with bsdf.lobe.n (> 0) */
     float (*pdf)(const GuideVertex *v, Vec3 w, float cos_n);
     /* a direction from u[0..2] and its density pdf() (any side of the
      * surface: the integrator ends the path below it); sets by_guide */
@@ -167,13 +168,13 @@ void path_guide_stats(const PathGuide *g, GuideStats *s);
 static inline float guide_bsdf_pdf(const GuideVertex *v, Vec3 w, float cos_n)
 {
     (void)cos_n;
-    return sg_pdf_glossy(&v->bsdf, w);
+    return bsdf_pdf(&v->bsdf, w);
 }
 static inline Vec3 guide_bsdf_sample(GuideVertex *v, const float u[3], float *pdf)
 {
-    Vec3 w = sg_sample_glossy(&v->bsdf, u[0], u[1], u[2]);
+    Vec3 w = bsdf_sample(&v->bsdf, u[0], u[1], u[2]);
     v->by_guide = false;
-    *pdf = sg_pdf_glossy(&v->bsdf, w);
+    *pdf = bsdf_pdf(&v->bsdf, w);
     return w;
 }
 

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "bsdf.h"
 #include "camera.h"
 #include "geometry.h"
 #include "lights.h"
@@ -16,6 +17,7 @@
 #include "progress.h"
 #include "rng.h"
 #include "sampling.h"
+#include "textures.h"
 #include "threads.h"
 #include "vecmath.h"
 
@@ -28,6 +30,7 @@ struct SgRenderer {
 
     uint32_t material_count;
     Material *materials;
+    TextureSet *textures; /* NULL: no material is textured */
 
     LightSet lights;
     PathGuide *guide;     /* how bounces are drawn: one of path_guide.h's */
@@ -159,6 +162,11 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
     }
     camera_init(&r->camera, &s->camera, r->geo.centre, o->width, o->height);
     r->pool = sg_thread_pool_create(o->threads);
+    if (textures_needed(s) && !(r->textures = texture_set_create(s, r->geo.indices, sg_thread_pool_size(r->pool),
+                                                                  o->texture_cache_mb, path, err))) {
+        sg_renderer_free(r);
+        return NULL;
+    }
     PathGuideSetup gs = {.opt = &r->opt, .geo = &r->geo, .lights = &r->lights,
                          .threads = sg_thread_pool_size(r->pool), .tiles = (uint32_t)(r->tiles_x * r->tiles_y),
                          .path = path};
@@ -202,6 +210,7 @@ void sg_renderer_free(SgRenderer *r)
     sg_thread_pool_free(r->pool);
     path_guide_free(r->guide);
     free(r->materials);
+    texture_set_free(r->textures);
     light_set_free(&r->lights);
     pixel_noise_free(r->noise);
     free(r->sum);
@@ -361,7 +370,7 @@ static bool take_bounce(const PathGuide *guide, BounceVertex *v, PathState *ps, 
     Vec3 wi = guide->ops->sample(&v->g, u, &pdf);
     st->bounces++;
     st->lobe_bounces += v->g.by_guide;
-    float cos_x = v3_dot(wi, v->g.bsdf.n);
+    float cos_x = v3_dot(wi, v->g.bsdf.lobe.n);
     bool above = cos_x > 0.0f && pdf > 0.0f;
     if (pr) {
         pr->v = v->g;
@@ -369,7 +378,7 @@ static bool take_bounce(const PathGuide *guide, BounceVertex *v, PathState *ps, 
     }
     if (!above)
         return false; /* below the surface: f = 0, the path ends */
-    Vec3 f = material_eval(v->m, &v->g.bsdf, wi);
+    Vec3 f = bsdf_eval(&v->g.bsdf, wi);
     Vec3 weight = v3_scale(f, cos_x / pdf);
     ps->beta = v3_mul(ps->beta, weight);
     if (v->seg)
@@ -382,18 +391,43 @@ static bool take_bounce(const PathGuide *guide, BounceVertex *v, PathState *ps, 
     return true;
 }
 
-/* A mirror's or glass's bounce (a delta distribution: no guide). */
-static void specular_bounce(const SgRenderer *r, const Material *m, Vec3 p, Vec3 wo, Vec3 n, bool entering,
-                            PathState *ps, SgRng *rng, GuideSegment *seg)
+/* The material's albedo at a hit: its texture's value there, or kd. */
+static Vec3 surface_albedo(const SgRenderer *r, const Material *m, const Hit *h, int thread)
 {
+    if (!m->texture)
+        return m->kd;
+    Vec3 c = texture_set_eval_at(r->textures, m->texture, h->tri, h->b1, h->b2, thread);
+    Vec3 top = m->type == SG_MATERIAL_GLOSSY ? v3_sub(v3(1, 1, 1), m->ks) : v3(1, 1, 1); /* kd + ks <= 1 */
+    return v3(sg_minf(sg_maxf(c.x, 0.0f), top.x), sg_minf(sg_maxf(c.y, 0.0f), top.y),
+              sg_minf(sg_maxf(c.z, 0.0f), top.z));
+}
+
+/* A mirror's, smooth conductor's or glass's bounce (a delta distribution:
+ * no guide). */
+static void specular_bounce(const SgRenderer *r, const Material *m, const Hit *h, Vec3 wo, Vec3 n, bool entering,
+                            PathState *ps, SgRng *rng, GuideSegment *seg, int thread)
+{
+    Vec3 p = h->p;
     ps->specular_bounce = true;
-    if (m->type == SG_MATERIAL_MIRROR) {
+    if (m->type == SG_MATERIAL_MIRROR || m->type == SG_MATERIAL_CONDUCTOR) {
+        Vec3 tint = m->ks;
+        if (m->type == SG_MATERIAL_CONDUCTOR) { /* its Fresnel at this angle */
+            float cos_i = v3_dot(wo, n);
+            if (m->texture) {
+                Vec3 a = surface_albedo(r, m, h, thread);
+                Vec3 k = v3(sg_conductor_k_of_reflectance(a.x), sg_conductor_k_of_reflectance(a.y),
+                            sg_conductor_k_of_reflectance(a.z));
+                tint = sg_fresnel_conductor3(cos_i, v3(1, 1, 1), k);
+            } else {
+                tint = sg_fresnel_conductor3(cos_i, m->eta, m->k);
+            }
+        }
         ps->d = v3_normalize(sg_reflect(wo, n));
-        ps->beta = v3_mul(ps->beta, m->ks);
-        ps->rr_beta = v3_mul(ps->rr_beta, m->ks);
+        ps->beta = v3_mul(ps->beta, tint);
+        ps->rr_beta = v3_mul(ps->rr_beta, tint);
         ps->o = offset_origin(&r->geo, p, n);
         if (seg)
-            r->guide->ops->record_bounce(seg, ps->d, 1.0f, m->ks, true, 1.0f, 0.0f);
+            r->guide->ops->record_bounce(seg, ps->d, 1.0f, tint, true, 1.0f, 0.0f);
         return;
     }
     float eta = entering ? 1.0f / m->ior : m->ior; /* eta_i / eta_t */
@@ -440,7 +474,7 @@ static LightSample sample_light(const SgRenderer *r, const BounceVertex *v, bool
     Vec3 y;
     if (!light_set_sample(&r->lights, r->geo.vertices, r->geo.indices, ul, ut, ua, ub, &t, &y))
         return ls;
-    Vec3 n = v->g.bsdf.n;
+    Vec3 n = v->g.bsdf.lobe.n;
     Vec3 to = v3_sub(y, v->origin);
     float dist2 = v3_dot(to, to);
     float dist = sqrtf(dist2);
@@ -456,7 +490,7 @@ static LightSample sample_light(const SgRenderer *r, const BounceVertex *v, bool
     if (cos_x > 0.0f) {
         const Material *lm = &r->materials[r->geo.tris[t].material];
         float pl = light_set_pdf(&r->lights, r->geo.tris[t].light, dist2, cos_l);
-        Vec3 f = material_eval(v->m, &v->g.bsdf, wi);
+        Vec3 f = bsdf_eval(&v->g.bsdf, wi);
         ls.c = v3_scale(v3_mul(f, lm->emission), cos_x / pl);
         ls.wi = wi;
         ls.cos_x = cos_x;
@@ -528,14 +562,13 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, const PathCtx *pc, Vec3 *s
             if (depth + 1 >= r->opt.max_depth)
                 break;
 
-            if (m->type == SG_MATERIAL_MIRROR || m->type == SG_MATERIAL_DIELECTRIC) {
-                specular_bounce(r, m, h.p, wo, n, cos_o < 0.0f, &ps, rng, seg);
+            if (m->delta) {
+                specular_bounce(r, m, &h, wo, n, cos_o < 0.0f, &ps, rng, seg, pc->thread);
             } else {
                 if (m->black)
                     break;
                 BounceVertex v = {.m = m, .p = h.p, .seg = seg};
-                v.g.bsdf = sg_glossy_lobe(n, wo, m->type == SG_MATERIAL_GLOSSY ? m->exponent : 0.0f,
-                                          m->diffuse_weight);
+                bsdf_init(&v.g.bsdf, m, n, wo, surface_albedo(r, m, &h, pc->thread));
                 v.g.learn = false;
                 v.g.rms = -1.0f;
                 v.g.by_guide = false;
@@ -569,7 +602,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, const PathCtx *pc, Vec3 *s
                  * drawn: it decides on the bounce alone, and a path cut here
                  * keeps its direct light and pays for no direction, pdf or
                  * guide lobe it would not follow. */
-                ps.rr_beta = v3_mul(ps.rr_beta, v3_add(m->kd, m->ks));
+                ps.rr_beta = v3_mul(ps.rr_beta, v.g.bsdf.albedo);
                 if (pc->pixel_deviation > 0.0f && v.g.rms >= 0.0f) {
                     /* learned: by what the bounce brings back, against the pixel's noise */
                     float worth = luminance(ps.beta) * v.g.rms / pc->pixel_deviation;

@@ -88,6 +88,7 @@ typedef struct SgRenderOptions {
      * the shards' passes are disjoint and together are the whole render's.
      * What a guide learns stays within its shard. Default 0 of 1. */
     int shard, shard_count;
+    double texture_cache_mb; /* texels held in memory at most; 0: TEXTURE_CACHE_MB_DEFAULT (render/textures.h) */
 } SgRenderOptions;
 
 /* Defaults: image size and depth from the scene (320x240, 8 when not

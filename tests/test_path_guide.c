@@ -88,7 +88,7 @@ static void uniform_vertex_end(PathGuide *g, const GuideHit *h, bool lit, SgRng 
 static float uniform_pdf(const GuideVertex *v, Vec3 w, float cos_n)
 {
     const UniformVertex *uv = (const UniformVertex *)v->state;
-    float pdf = (1.0f - UNIFORM_SHARE) * sg_pdf_glossy(&v->bsdf, w) +
+    float pdf = (1.0f - UNIFORM_SHARE) * bsdf_pdf(&v->bsdf, w) +
                 UNIFORM_SHARE * (cos_n > 0.0f ? 1.0f / (2.0f * (float)M_PI) : 0.0f);
     return pdf * uv->pdf_error;
 }
@@ -97,15 +97,15 @@ static Vec3 uniform_sample(GuideVertex *v, const float u[3], float *pdf)
     Vec3 w;
     v->by_guide = !(u[0] < 1.0f - UNIFORM_SHARE);
     if (!v->by_guide) {
-        w = sg_sample_glossy(&v->bsdf, u[0] / (1.0f - UNIFORM_SHARE), u[1], u[2]);
+        w = bsdf_sample(&v->bsdf, u[0] / (1.0f - UNIFORM_SHARE), u[1], u[2]);
     } else { /* uniform over the hemisphere around n */
-        Vec3 n = v->bsdf.n;
+        Vec3 n = v->bsdf.lobe.n;
         float z = u[1], r = sqrtf(fmaxf(0.0f, 1.0f - z * z)), phi = 2.0f * (float)M_PI * u[2];
         Vec3 t = fabsf(n.x) > 0.5f ? v3(0, 1, 0) : v3(1, 0, 0);
         Vec3 b1 = v3_normalize(v3_cross(n, t)), b2 = v3_cross(n, b1);
         w = v3_add(v3_add(v3_scale(b1, r * cosf(phi)), v3_scale(b2, r * sinf(phi))), v3_scale(n, z));
     }
-    *pdf = uniform_pdf(v, w, v3_dot(w, v->bsdf.n));
+    *pdf = uniform_pdf(v, w, v3_dot(w, v->bsdf.lobe.n));
     return w;
 }
 static void uniform_learn(PathGuide *g, int tile, const GuideVertex *v, const BounceOutcome *o)

@@ -10,8 +10,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "../render/bsdf.h"
 #include "../render/sampling.h"
 #include "rng.h"
+#include "scene_builder.h"
 
 #define THETA_BINS 80
 #define PHI_BINS 160
@@ -361,6 +363,46 @@ static void mixture_lobe_axis_below_surface_keeps_support_case(void)
     assert_chi2("mixture lobe below", mixture_sample, mixture_pdf, &m, 13, 8);
 }
 
+/* ---- the microfacet BSDFs (render/bsdf.h) ------------------------------- */
+
+static Vec3 bsdf_sample_fn(const void *c, float u0, float u1, float u2) { return bsdf_sample(c, u0, u1, u2); }
+static float bsdf_pdf_fn(const void *c, Vec3 w) { return bsdf_pdf(c, w); }
+
+/* A conductor (gold's index) or a coated diffuse of GGX alpha (ax, ay). */
+static Bsdf microfacet_bsdf(SgMaterialType type, float ax, float ay, Vec3 n, Vec3 wo)
+{
+    SgMaterial sm;
+    sg_material_default(&sm, "test");
+    sm.type = type;
+    sm.roughness[0] = ax;
+    sm.roughness[1] = ay;
+    const float eta[3] = {0.143f, 0.375f, 1.44f}, k[3] = {3.98f, 2.39f, 1.60f}, kd[3] = {0.6f, 0.4f, 0.2f};
+    memcpy(sm.eta, eta, sizeof eta);
+    memcpy(sm.k, k, sizeof k);
+    memcpy(sm.diffuse, kd, sizeof kd);
+    Material m;
+    material_init(&m, &sm);
+    Bsdf b;
+    bsdf_init(&b, &m, n, wo, m.kd);
+    return b;
+}
+
+static void conductor_case(float ax, float ay, Vec3 n, Vec3 wo, uint64_t seed, int sub)
+{
+    char name[64];
+    snprintf(name, sizeof name, "conductor GGX %g x %g", ax, ay);
+    Bsdf b = microfacet_bsdf(SG_MATERIAL_CONDUCTOR, ax, ay, n, wo);
+    assert_chi2(name, bsdf_sample_fn, bsdf_pdf_fn, &b, seed, sub);
+}
+
+static void coated_case(float alpha, Vec3 n, Vec3 wo, uint64_t seed, int sub)
+{
+    char name[64];
+    snprintf(name, sizeof name, "coated diffuse GGX %g", alpha);
+    Bsdf b = microfacet_bsdf(SG_MATERIAL_COATED_DIFFUSE, alpha, alpha, n, wo);
+    assert_chi2(name, bsdf_sample_fn, bsdf_pdf_fn, &b, seed, sub);
+}
+
 /* ---- the chi-square tests: one list declares them and counts them ------ */
 
 #define CHI2_CASES(X) \
@@ -377,7 +419,14 @@ static void mixture_lobe_axis_below_surface_keeps_support_case(void)
     X(glossy_pure_phong_200, glossy_pure_phong_200_case()) \
     X(mixture_half, mixture_half_case()) \
     X(mixture_glossy_small_alpha, mixture_glossy_small_alpha_case()) \
-    X(mixture_lobe_axis_below_surface_keeps_support, mixture_lobe_axis_below_surface_keeps_support_case())
+    X(mixture_lobe_axis_below_surface_keeps_support, mixture_lobe_axis_below_surface_keeps_support_case()) \
+    X(conductor_ggx_0_3, conductor_case(0.3f, 0.3f, tilted(0.1f, -0.2f, 1.0f), tilted(0.4f, 0.3f, 0.8f), 16, 8)) \
+    X(conductor_ggx_1_0_grazing, conductor_case(1.0f, 1.0f, v3(0, 0, 1), tilted(0.95f, 0.0f, 0.1f), 17, 8)) \
+    X(conductor_ggx_anisotropic_grazing, \
+      conductor_case(0.08f, 0.4f, v3(0, 1, 0), tilted(0.3f, 0.15f, -0.9f), 18, 16)) \
+    X(conductor_ggx_0_05_narrow, conductor_case(0.05f, 0.05f, v3(0, 0, 1), tilted(-0.3f, 0.2f, 0.9f), 19, 32)) \
+    X(coated_diffuse_ggx_0_2, coated_case(0.2f, tilted(-0.2f, 0.1f, 1.0f), tilted(0.5f, 0.5f, 0.6f), 20, 16)) \
+    X(coated_diffuse_ggx_0_1_grazing, coated_case(0.1f, v3(0, 0, 1), tilted(0.97f, 0.1f, 0.08f), 21, 16))
 
 #define CHI2_TEST(name, call) \
     Test(render_sampling, name) { call; }

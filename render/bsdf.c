@@ -1,0 +1,119 @@
+#include "bsdf.h"
+
+#include <math.h>
+
+/* The coated diffuse is the classic two-layer model (Weidlich & Wilkie
+ * 2007; Tungsten's and Mitsuba's rough plastic): a GGX dielectric coat
+ * reflects F(wo.h) of the light as a microfacet lobe; what it lets in
+ * (1 - F(wi.n)) reaches the base, which reflects R of it diffusely; of the
+ * light going back up, the coat lets out 1 - F of each direction and
+ * returns fdr of the whole to the base, again and again:
+ *   f = D G F(wo.h) / (4 cos_o cos_i)
+ *     + (1 - F(cos_i)) (1 - F(cos_o)) R / (pi ior^2 (1 - R fdr)).
+ * Its albedo is at most F + (1 - F) = 1. pbrt-v4's coateddiffuse follows
+ * the same light through a stochastic layer walk; this closed form leaves
+ * out the rough coat's own spread of what crosses it (the crossings use
+ * the smooth interface's Fresnel), measured against pbrt where it can be
+ * (docs/render.md, "Materials"). */
+
+/* The tangent frame around the normal, made again where needed rather
+ * than kept: a vertex's BSDF is copied along the path, small is fast. */
+static Vec3 to_local(const Bsdf *b, Vec3 w)
+{
+    Vec3 t, bt;
+    v3_basis(b->lobe.n, &t, &bt);
+    return v3(v3_dot(w, t), v3_dot(w, bt), v3_dot(w, b->lobe.n));
+}
+
+static Vec3 to_world(const Bsdf *b, Vec3 l)
+{
+    Vec3 t, bt;
+    v3_basis(b->lobe.n, &t, &bt);
+    return v3_add(v3_add(v3_scale(t, l.x), v3_scale(bt, l.y)), v3_scale(b->lobe.n, l.z));
+}
+
+/* What the base gives back, per unit of what the coat lets through to it
+ * and out again: R, and R fdr R, ... */
+static inline float coated_base(float r, float fdr) { return r / (1.0f - r * fdr); }
+
+void bsdf_init_microfacet(Bsdf *b, const Material *m, Vec3 n, Vec3 wo, Vec3 albedo)
+{
+    b->kind = m->type == SG_MATERIAL_CONDUCTOR ? BSDF_CONDUCTOR : BSDF_COATED;
+    b->lobe.n = n;
+    b->lobe.r = n;
+    b->lobe.exponent = 0.0f;
+    b->wo = to_local(b, wo);
+    b->wo.z = sg_maxf(b->wo.z, 1e-6f); /* wo faces n; keep it above at grazing angles */
+    b->ax = m->ax;
+    b->ay = m->ay;
+    if (b->kind == BSDF_CONDUCTOR) {
+        b->lobe.diffuse_weight = 0.0f;
+        if (m->texture) { /* pbrt: a reflectance in place of eta and k */
+            b->ks = v3(1, 1, 1);
+            b->k = v3(sg_conductor_k_of_reflectance(albedo.x), sg_conductor_k_of_reflectance(albedo.y),
+                      sg_conductor_k_of_reflectance(albedo.z));
+            b->albedo = albedo;
+        } else {
+            b->ks = m->eta;
+            b->k = m->k;
+            b->albedo = m->ks;
+        }
+        return;
+    }
+    b->kd = albedo;
+    b->ior = m->ior;
+    b->fdr = m->fdr;
+    /* the coat with the share of its Fresnel at wo; the base with what it gives back */
+    float f = sg_fresnel_dielectric(b->wo.z, b->ior);
+    float base = (1.0f - f) * (1.0f - b->fdr) * coated_base(luminance(albedo), b->fdr);
+    b->lobe.diffuse_weight = base / (f + base);
+    /* the smooth layer's albedo from wo (its rough coat loses a little more) */
+    b->albedo = v3(f + (1.0f - f) * (1.0f - b->fdr) * coated_base(albedo.x, b->fdr),
+                   f + (1.0f - f) * (1.0f - b->fdr) * coated_base(albedo.y, b->fdr),
+                   f + (1.0f - f) * (1.0f - b->fdr) * coated_base(albedo.z, b->fdr));
+}
+
+/* The microfacet lobe's D G / (4 cos_o cos_i) and wo.h, for wi above. */
+static float microfacet_lobe(const Bsdf *b, Vec3 wi, float *cos_oh)
+{
+    Vec3 h = v3_normalize(v3_add(b->wo, wi));
+    *cos_oh = v3_dot(b->wo, h);
+    if (!(*cos_oh > 0.0f))
+        return 0.0f;
+    return sg_ggx_d(h, b->ax, b->ay) * sg_ggx_g(b->wo, wi, b->ax, b->ay) / (4.0f * b->wo.z * wi.z);
+}
+
+Vec3 bsdf_eval_microfacet(const Bsdf *b, Vec3 wi)
+{
+    Vec3 l = to_local(b, wi);
+    if (!(l.z > 0.0f))
+        return v3(0, 0, 0);
+    float cos_oh;
+    float lobe = microfacet_lobe(b, l, &cos_oh);
+    if (b->kind == BSDF_CONDUCTOR)
+        return v3_scale(sg_fresnel_conductor3(cos_oh, b->ks, b->k), lobe);
+    float spec = lobe * sg_fresnel_dielectric(cos_oh, b->ior);
+    float cross = (1.0f - sg_fresnel_dielectric(l.z, b->ior)) * (1.0f - sg_fresnel_dielectric(b->wo.z, b->ior)) /
+                  (SG_PI * b->ior * b->ior);
+    return v3(spec + cross * coated_base(b->kd.x, b->fdr), spec + cross * coated_base(b->kd.y, b->fdr),
+              spec + cross * coated_base(b->kd.z, b->fdr));
+}
+
+float bsdf_pdf_microfacet(const Bsdf *b, Vec3 wi)
+{
+    Vec3 l = to_local(b, wi);
+    float pdf = sg_ggx_pdf_reflect(b->wo, l, b->ax, b->ay);
+    if (b->kind == BSDF_CONDUCTOR)
+        return pdf;
+    float pd = b->lobe.diffuse_weight;
+    return (1.0f - pd) * pdf + pd * sg_maxf(l.z, 0.0f) * SG_INV_PI;
+}
+
+Vec3 bsdf_sample_microfacet(const Bsdf *b, float u0, float u1, float u2)
+{
+    if (b->kind == BSDF_COATED && u0 < b->lobe.diffuse_weight)
+        return sg_sample_cosine_hemisphere(b->lobe.n, u1, u2);
+    Vec3 h = sg_ggx_sample_visible(b->wo, b->ax, b->ay, u1, u2);
+    Vec3 wi = v3_sub(v3_scale(h, 2.0f * v3_dot(b->wo, h)), b->wo);
+    return v3_normalize(to_world(b, wi));
+}

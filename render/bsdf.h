@@ -1,0 +1,105 @@
+/* The BSDF at a diffuse, glossy or rough vertex, made from its material
+ * and (where textured) the albedo at the hit, in the frame of the shading
+ * normal on wo's side. Reflection only: every kind is zero below the
+ * surface, though its sampler may draw there (a valid direction with f = 0,
+ * so that each pdf is a density over the whole sphere, as sampling.h's).
+ *   PHONG      diffuse + normalized Phong lobe (sampling.h's SgGlossyLobe):
+ *              the diffuse and glossy materials, bit for bit as before
+ *   CONDUCTOR  GGX microfacets with a conductor's complex Fresnel
+ *   COATED     a diffuse base under a GGX dielectric coat (below)
+ * The samplers draw from the density bsdf_pdf returns: tests hold them to
+ * it by chi-square (tests/test_render_bsdf.c), and a white furnace to
+ * energy conservation. */
+#ifndef SG_RENDER_BSDF_H
+#define SG_RENDER_BSDF_H
+
+#include <stdbool.h>
+
+#include "material.h"
+#include "microfacet.h"
+#include "sampling.h"
+#include "vecmath.h"
+
+typedef enum BsdfKind { BSDF_PHONG, BSDF_CONDUCTOR, BSDF_COATED } BsdfKind;
+
+typedef struct Bsdf {
+    /* PHONG: its lobes; every kind: lobe.n, the shading normal, and
+     * lobe.diffuse_weight, the probability that the sampler draws from a
+     * diffuse part (Open PGL guides that share) */
+    SgGlossyLobe lobe;
+    BsdfKind kind;
+    Vec3 kd;          /* PHONG: diffuse albedo; COATED: the base's albedo */
+    Vec3 ks;          /* PHONG: the Phong lobe's albedo; CONDUCTOR: eta */
+    Vec3 k;           /* CONDUCTOR: the absorption part of the index */
+    Vec3 albedo;      /* about what the surface reflects: the albedo roulette's factor */
+    /* microfacet kinds */
+    Vec3 wo;          /* in the frame (t, b, lobe.n) of v3_basis(lobe.n) */
+    float ax, ay;     /* GGX alpha along t and b */
+    float ior;        /* COATED: the coat's index */
+    float fdr;        /* COATED: diffuse reflectance of the coat from inside */
+} Bsdf;
+
+/* The BSDF of material m at a vertex: shading normal n on wo's side, wo
+ * the direction back along the incoming ray, albedo the material's
+ * `diffuse` there (its texture's value, or m->kd). */
+static inline void bsdf_init(Bsdf *b, const Material *m, Vec3 n, Vec3 wo, Vec3 albedo);
+
+/* f(wo, wi) for wi above the surface (wi.n > 0). */
+static inline Vec3 bsdf_eval(const Bsdf *b, Vec3 wi);
+/* Density of bsdf_sample's directions. */
+static inline float bsdf_pdf(const Bsdf *b, Vec3 wi);
+/* A direction from u0 (which lobe), u1, u2. */
+static inline Vec3 bsdf_sample(const Bsdf *b, float u0, float u1, float u2);
+
+/* The microfacet kinds' halves of the above (render/bsdf.c); the Phong kind
+ * is the common one and stays inline. */
+void bsdf_init_microfacet(Bsdf *b, const Material *m, Vec3 n, Vec3 wo, Vec3 albedo);
+Vec3 bsdf_eval_microfacet(const Bsdf *b, Vec3 wi);
+float bsdf_pdf_microfacet(const Bsdf *b, Vec3 wi);
+Vec3 bsdf_sample_microfacet(const Bsdf *b, float u0, float u1, float u2);
+
+static inline void bsdf_init(Bsdf *b, const Material *m, Vec3 n, Vec3 wo, Vec3 albedo)
+{
+    if (m->type == SG_MATERIAL_CONDUCTOR || m->type == SG_MATERIAL_COATED_DIFFUSE) {
+        bsdf_init_microfacet(b, m, n, wo, albedo);
+        return;
+    }
+    b->kind = BSDF_PHONG;
+    b->kd = albedo;
+    b->ks = m->ks;
+    float weight = m->diffuse_weight;
+    if (m->texture) { /* the texture moves the balance of the two parts */
+        float ld = luminance(albedo), ls = luminance(m->ks);
+        weight = ld + ls > 0.0f ? ld / (ld + ls) : 1.0f;
+    }
+    b->lobe = sg_glossy_lobe(n, wo, m->type == SG_MATERIAL_GLOSSY ? m->exponent : 0.0f, weight);
+    b->albedo = v3_add(b->kd, b->ks);
+}
+
+static inline Vec3 bsdf_eval(const Bsdf *b, Vec3 wi)
+{
+    if (b->kind != BSDF_PHONG)
+        return bsdf_eval_microfacet(b, wi);
+    Vec3 f = v3_scale(b->kd, SG_INV_PI);
+    if (b->lobe.diffuse_weight < 1.0f) {
+        float c = v3_dot(wi, b->lobe.r);
+        if (c > 0.0f) {
+            float p = b->lobe.exponent;
+            float s = (p + 2.0f) * (0.5f * SG_INV_PI) * sg_pow_exponent(sg_minf(c, 1.0f), p);
+            f = v3_add(f, v3_scale(b->ks, s));
+        }
+    }
+    return f;
+}
+
+static inline float bsdf_pdf(const Bsdf *b, Vec3 wi)
+{
+    return b->kind == BSDF_PHONG ? sg_pdf_glossy(&b->lobe, wi) : bsdf_pdf_microfacet(b, wi);
+}
+
+static inline Vec3 bsdf_sample(const Bsdf *b, float u0, float u1, float u2)
+{
+    return b->kind == BSDF_PHONG ? sg_sample_glossy(&b->lobe, u0, u1, u2) : bsdf_sample_microfacet(b, u0, u1, u2);
+}
+
+#endif
