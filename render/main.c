@@ -24,7 +24,7 @@ static const char *usage =
     "              [--spp N | --time SECONDS] [--seed N] [--threads N] -o image.exr\n"
     "              [--png image.png] [--exposure STOPS] [--reference ref.exr --log curve.csv]\n"
     "              [--max-depth N] [--exponent P] [--alpha A] [--roulette learned|albedo]\n"
-    "              [--size WxH] [--shard K/N] [--quiet]\n"
+    "              [--size WxH] [--shard K/N] [--texture-cache MB] [--quiet]\n"
     "\n"
     "Path traces SCENE.json (Embree 3) with next-event estimation and MIS.\n"
     "  --cache FILE      importance cache from bin/importance for this scene's geometry\n"
@@ -56,6 +56,8 @@ static const char *usage =
     "  --shard K/N       render only shard K (0 <= K < N) of the render split into N: its\n"
     "                    passes K, K+N, K+2N... of --spp in all (with --time: for that long);\n"
     "                    bin/merge makes the whole image from the N shards' EXRs\n"
+    "  --texture-cache MB  texels held in memory at most (default 256): image textures\n"
+    "                    load tile by tile as paths look them up\n"
     "  --quiet           no summary line\n";
 
 typedef struct Args {
@@ -69,6 +71,7 @@ typedef struct Args {
     long shard, shard_count;
     double exposure, exponent, alpha;
     bool has_exposure, has_exponent, has_alpha, quiet;
+    double texture_cache_mb;
 } Args;
 
 static bool parse_args(int argc, char **argv, Args *a, SgError *err)
@@ -162,6 +165,10 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
                 return sg_fail(err, "--shard: '%s' is not K/N with 0 <= K < N <= %d", v, SG_SHARDS_MAX);
             a->shard = k;
             a->shard_count = n;
+        } else if (!strcmp(s, "--texture-cache")) {
+            NEED_VALUE();
+            if (!sg_parse_double(v, 1, 1048576, &a->texture_cache_mb))
+                return sg_fail(err, "--texture-cache: '%s' is not a size in MB in [1, 1048576]", v);
         } else if (!strcmp(s, "--quiet")) {
             a->quiet = true;
         } else if (s[0] == '-' && s[1]) {
@@ -293,6 +300,7 @@ int main(int argc, char **argv)
     o.roulette = a.roulette;
     o.shard = (int)a.shard;
     o.shard_count = (int)a.shard_count;
+    o.texture_cache_mb = a.texture_cache_mb;
     if (o.sampling == SG_SAMPLING_SKELETON && !a.has_exponent)
         o.lobe_exponent = 4.0f; /* the paper's p_skel for its corridor */
 
@@ -443,6 +451,10 @@ int main(int argc, char **argv)
         char shard_line[64] = "";
         if (o.shard_count > 1)
             snprintf(shard_line, sizeof shard_line, ", shard %d of %d", o.shard, o.shard_count);
+        size_t texture_images = 0, texture_cache = sg_renderer_texture_cache(r, &texture_images);
+        if (texture_images)
+            fprintf(stderr, "render: textures: %.1f MB cached of %.1f MB of images\n", texture_cache / 1048576.0,
+                    texture_images / 1048576.0);
         double paths = (double)o.width * o.height * sg_renderer_spp(r);
         fprintf(stderr,
                 "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s%s, roulette %s, seed "

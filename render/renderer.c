@@ -825,6 +825,12 @@ double sg_renderer_guided_fraction(const SgRenderer *r)
     return gs.guided_fraction;
 }
 
+size_t sg_renderer_texture_cache(const SgRenderer *r, size_t *images)
+{
+    *images = 0;
+    return r->textures ? texture_set_cache_bytes(r->textures, images) : 0;
+}
+
 uint64_t sg_renderer_rays(const SgRenderer *r) { return atomic_load(&((SgRenderer *)r)->rays); }
 
 double sg_renderer_branches_per_path(const SgRenderer *r)

@@ -129,6 +129,9 @@ double sg_renderer_lobe_share(const SgRenderer *r);
 int sg_renderer_training_passes(const SgRenderer *r);
 double sg_renderer_training_seconds(const SgRenderer *r);
 /* Rays traced so far (camera, bounce and shadow rays). */
+/* Bytes of texels the texture cache holds; *images: the images' full size
+ * (0 and 0 without textures). */
+size_t sg_renderer_texture_cache(const SgRenderer *r, size_t *images);
 uint64_t sg_renderer_rays(const SgRenderer *r);
 /* Branches the learned roulette split off, per camera path, so far. */
 double sg_renderer_branches_per_path(const SgRenderer *r);
