@@ -62,7 +62,7 @@ ALL_STEPS := voxelize skeletonize importance render merge
 STEPS := $(foreach s,$(ALL_STEPS),$(if $(wildcard $(s)/main.c),$(s)))
 PROGRAMS := $(addprefix $(BIN)/,$(STEPS))
 
-COMMON_C := $(wildcard common/*.c)
+COMMON_C := $(wildcard common/*.c common/*/*.c)
 COMMON_CXX := $(wildcard common/*.cpp)
 COMMON_OBJ := $(COMMON_C:%.c=$(BUILD)/%.o) $(COMMON_CXX:%.cpp=$(BUILD)/%.o)
 
@@ -86,8 +86,12 @@ BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
 all: $(PROGRAMS)
 
+# Rebuilt from scratch so that the object of a removed source does not stay
+# in it; ar names members by file name alone, so no two sources in common/
+# and its folders may share one.
 $(BUILD)/libcommon.a: $(COMMON_OBJ)
 	@mkdir -p $(@D)
+	rm -f $@
 	$(AR) rcs $@ $^
 
 define STEP_RULES

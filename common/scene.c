@@ -1,5 +1,5 @@
 /* Scene loading: the JSON description (cJSON) and its meshes (Assimp);
- * a .pbrt file goes to pbrt_scene.c. Both fill the flat world-space arrays
+ * a .pbrt file goes to pbrt/. Both fill the flat world-space arrays
  * through scene_builder.h. See README.md, "Scene format". */
 #include "scene.h"
 

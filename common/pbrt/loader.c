@@ -1,0 +1,513 @@
+/* pbrt scene files, the loader: transforms, coordinate systems and
+ * attribute blocks, camera and film, the statement dispatcher, the camera
+ * in our terms, and the entry point sg_pbrt_scene_load. The conventions it
+ * follows are in pbrt_parser.h. */
+#include "pbrt_scene.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pbrt_parser.h"
+#include "vecmath.h"
+
+/* ---- transforms --------------------------------------------------------- */
+
+static bool finite_matrix(const SgTransform *m)
+{
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++)
+            if (!isfinite(m->m[i][j]))
+                return false;
+    return true;
+}
+
+static bool transform_statement(Parser *p, const Token *t)
+{
+    SgTransform m;
+    sg_transform_identity(&m);
+    if (pbrt_token_is(t, "Translate")) {
+        double v[3];
+        if (!pbrt_need_number(p, t, &v[0]) || !pbrt_need_number(p, t, &v[1]) ||
+            !pbrt_need_number(p, t, &v[2]))
+            return false;
+        for (int a = 0; a < 3; a++)
+            m.m[a][3] = v[a];
+    } else if (pbrt_token_is(t, "Scale")) {
+        double v[3];
+        if (!pbrt_need_number(p, t, &v[0]) || !pbrt_need_number(p, t, &v[1]) ||
+            !pbrt_need_number(p, t, &v[2]))
+            return false;
+        for (int a = 0; a < 3; a++)
+            m.m[a][a] = v[a];
+    } else if (pbrt_token_is(t, "Rotate")) {
+        double v[4];
+        for (int i = 0; i < 4; i++)
+            if (!pbrt_need_number(p, t, &v[i]))
+                return false;
+        if (!sg_transform_rotation(&m, v[0], v + 1))
+            return pbrt_fail_at(p, t, "Rotate: the axis is zero");
+    } else if (pbrt_token_is(t, "LookAt")) {
+        double v[9];
+        for (int i = 0; i < 9; i++)
+            if (!pbrt_need_number(p, t, &v[i]))
+                return false;
+        double pos[3] = {v[0], v[1], v[2]}, dir[3], up[3] = {v[6], v[7], v[8]}, right[3],
+               new_up[3];
+        d3_sub(v + 3, pos, dir);
+        double dl = d3_length(dir), ul = d3_length(up);
+        if (!(dl > 0))
+            return pbrt_fail_at(p, t, "LookAt: the eye and the target coincide");
+        for (int a = 0; a < 3; a++) {
+            dir[a] /= dl;
+            up[a] = ul > 0 ? up[a] / ul : 0;
+        }
+        d3_cross(up, dir, right);
+        double rl = d3_length(right);
+        if (!(rl > 1e-12))
+            return pbrt_fail_at(p, t, "LookAt: the up vector is parallel to the view direction");
+        for (int a = 0; a < 3; a++)
+            right[a] /= rl;
+        d3_cross(dir, right, new_up);
+        SgTransform world_from_camera;
+        sg_transform_identity(&world_from_camera);
+        for (int a = 0; a < 3; a++) {
+            world_from_camera.m[a][0] = right[a];
+            world_from_camera.m[a][1] = new_up[a];
+            world_from_camera.m[a][2] = dir[a];
+            world_from_camera.m[a][3] = pos[a];
+        }
+        if (!sg_transform_inverse(&world_from_camera, &m))
+            return pbrt_fail_at(p, t, "LookAt: singular view");
+    } else { /* Transform, ConcatTransform: 16 numbers, column by column */
+        double v[16];
+        if (!pbrt_need_bracketed_numbers(p, t, 16, v))
+            return false;
+        for (int i = 0; i < 4; i++)
+            for (int j = 0; j < 4; j++)
+                m.m[i][j] = v[4 * j + i];
+        if (pbrt_token_is(t, "Transform")) {
+            p->state.ctm = m;
+            return true;
+        }
+    }
+    if (!finite_matrix(&m))
+        return pbrt_fail_at(p, t, "%.*s: non-finite numbers", (int)t->len, t->s);
+    sg_transform_multiply(&p->state.ctm, &m, &p->state.ctm);
+    return true;
+}
+
+static NamedTransform *find_coordinate_system(Parser *p, const Token *name)
+{
+    for (size_t i = 0; i < p->coordinate_system_count; i++)
+        if (pbrt_string_is(name, p->coordinate_systems[i].name))
+            return &p->coordinate_systems[i];
+    return NULL;
+}
+
+static bool set_coordinate_system(Parser *p, const Token *name, const SgTransform *m)
+{
+    NamedTransform *n = find_coordinate_system(p, name);
+    if (!n) {
+        if (!RESERVE(p, p->coordinate_systems, p->coordinate_system_count,
+                     p->coordinate_system_capacity, 1))
+            return false;
+        n = &p->coordinate_systems[p->coordinate_system_count];
+        if (!(n->name = pbrt_token_dup(name)))
+            return sg_fail(p->err, "%s: out of memory", p->core.path);
+        p->coordinate_system_count++;
+    }
+    n->m = *m;
+    return true;
+}
+
+/* ---- attribute blocks --------------------------------------------------- */
+
+bool pbrt_push_state(Parser *p, const Token *begin)
+{
+    if (!RESERVE(p, p->saved, p->saved_count, p->saved_capacity, 1))
+        return false;
+    p->saved[p->saved_count].state = p->state;
+    p->saved[p->saved_count].begin = *begin;
+    p->saved_count++;
+    return true;
+}
+
+bool pbrt_pop_state(Parser *p, const Token *t, bool transform_only)
+{
+    if (p->saved_count == 0)
+        return pbrt_fail_at(p, t, "%.*s without a matching %s", (int)t->len, t->s,
+                            transform_only ? "TransformBegin" : "AttributeBegin");
+    GraphicsState *s = &p->saved[--p->saved_count].state;
+    if (transform_only)
+        p->state.ctm = s->ctm;
+    else
+        p->state = *s;
+    return true;
+}
+
+/* ---- camera, film and the rest ------------------------------------------ */
+
+static bool camera_statement(Parser *p, const Token *statement)
+{
+    Token type;
+    if (!pbrt_need_string(p, statement, &type) || !pbrt_parse_params(p))
+        return false;
+    if (p->in_world)
+        return pbrt_fail_at(p, statement, "Camera after WorldBegin");
+    if (!pbrt_string_is(&type, "perspective"))
+        pbrt_warn_at(p, statement, "Camera \"%.*s\" is taken as a perspective camera",
+                     (int)type.len, type.s);
+    double fov, lens, aspect;
+    if (!pbrt_param_float(p, "fov", 90, &fov) || !pbrt_param_float(p, "lensradius", 0, &lens) ||
+        !pbrt_param_float(p, "frameaspectratio", 0, &aspect))
+        return false;
+    if (!(fov > 0 && fov < 180))
+        return pbrt_fail_at(p, statement, "Camera: fov %g is not in (0, 180) degrees", fov);
+    if (lens > 0)
+        pbrt_warn_at(p, statement, "depth of field (lensradius) is ignored: pinhole camera");
+    if (pbrt_find_param(p, "screenwindow") || pbrt_find_param(p, "frameaspectratio"))
+        pbrt_warn_at(p, statement, "Camera screenwindow/frameaspectratio are ignored");
+    p->camera_from_world = p->state.ctm;
+    SgTransform world_from_camera;
+    if (!sg_transform_inverse(&p->camera_from_world, &world_from_camera))
+        return pbrt_fail_at(p, statement, "Camera: the camera transform is singular");
+    p->has_camera = true;
+    p->fov = fov;
+    Token camera_name = {.s = "camera", .len = 6, .quoted = true};
+    return set_coordinate_system(p, &camera_name, &world_from_camera);
+}
+
+static bool film_statement(Parser *p, const Token *statement)
+{
+    Token type;
+    if (!pbrt_need_string(p, statement, &type) || !pbrt_parse_params(p))
+        return false;
+    double w, h;
+    if (!pbrt_param_float(p, "xresolution", 1280, &w) ||
+        !pbrt_param_float(p, "yresolution", 720, &h))
+        return false;
+    if (!(w >= 1 && w <= 65536 && h >= 1 && h <= 65536))
+        return pbrt_fail_at(p, statement, "Film resolution %gx%g is out of range", w, h);
+    p->film_width = (int)w;
+    p->film_height = (int)h;
+    if (pbrt_find_param(p, "cropwindow") || pbrt_find_param(p, "pixelbounds"))
+        pbrt_warn_at(p, statement, "Film cropwindow/pixelbounds are ignored: the whole image");
+    return true;
+}
+
+/* A statement with a name and parameters we read but do not use. */
+static bool skip_named_statement(Parser *p, const Token *statement)
+{
+    Token name;
+    return pbrt_need_string(p, statement, &name) && pbrt_parse_params(p);
+}
+
+static bool include_statement(Parser *p, const Token *statement)
+{
+    Token name;
+    if (!pbrt_need_string(p, statement, &name))
+        return false;
+    char path[8192];
+    if (!pbrt_resolve_path(p, statement, &name, path, sizeof path))
+        return false;
+    return pbrt_push_file(p, path, statement);
+}
+
+static bool statement(Parser *p, const Token *t)
+{
+    if (t->quoted)
+        return pbrt_fail_at(p, t, "expected a statement, found the string \"%.*s\"",
+                            (int)(t->len > 40 ? 40 : t->len), t->s);
+    if (pbrt_token_is(t, "[") || pbrt_token_is(t, "]"))
+        return pbrt_fail_at(p, t, "'%c' outside a parameter list", t->s[0]);
+    if (pbrt_token_is(t, "AttributeBegin") || pbrt_token_is(t, "TransformBegin"))
+        return pbrt_push_state(p, t);
+    if (pbrt_token_is(t, "AttributeEnd"))
+        return pbrt_pop_state(p, t, false);
+    if (pbrt_token_is(t, "TransformEnd"))
+        return pbrt_pop_state(p, t, true);
+    if (pbrt_token_is(t, "Translate") || pbrt_token_is(t, "Scale") || pbrt_token_is(t, "Rotate") ||
+        pbrt_token_is(t, "LookAt") || pbrt_token_is(t, "Transform") ||
+        pbrt_token_is(t, "ConcatTransform"))
+        return transform_statement(p, t);
+    if (pbrt_token_is(t, "Identity")) {
+        sg_transform_identity(&p->state.ctm);
+        return true;
+    }
+    if (pbrt_token_is(t, "CoordinateSystem") || pbrt_token_is(t, "CoordSysTransform")) {
+        Token name;
+        if (!pbrt_need_string(p, t, &name))
+            return false;
+        if (pbrt_token_is(t, "CoordinateSystem"))
+            return set_coordinate_system(p, &name, &p->state.ctm);
+        NamedTransform *n = find_coordinate_system(p, &name);
+        if (!n)
+            return pbrt_fail_at(p, &name, "CoordSysTransform \"%.*s\": no such coordinate system",
+                                (int)name.len, name.s);
+        p->state.ctm = n->m;
+        return true;
+    }
+    if (pbrt_token_is(t, "ReverseOrientation")) {
+        p->state.reverse_orientation = !p->state.reverse_orientation;
+        return true;
+    }
+    if (pbrt_token_is(t, "WorldBegin")) {
+        if (p->in_world)
+            return pbrt_fail_at(p, t, "WorldBegin twice");
+        p->in_world = true;
+        sg_transform_identity(&p->state.ctm);
+        Token world = {.s = "world", .len = 5, .quoted = true};
+        return set_coordinate_system(p, &world, &p->state.ctm);
+    }
+    if (pbrt_token_is(t, "WorldEnd")) /* pbrt-v3 */
+        return true;
+    if (pbrt_token_is(t, "Camera"))
+        return camera_statement(p, t);
+    if (pbrt_token_is(t, "Film"))
+        return film_statement(p, t);
+    if (pbrt_token_is(t, "Sampler") || pbrt_token_is(t, "Integrator")) {
+        Token name;
+        if (!pbrt_need_string(p, t, &name) || !pbrt_parse_params(p))
+            return false;
+        double v;
+        if (pbrt_token_is(t, "Sampler") && pbrt_find_param(p, "pixelsamples")) {
+            if (!pbrt_param_float(p, "pixelsamples", 16, &v))
+                return false;
+            if (v >= 1 && v <= (1 << 24))
+                p->core.scene->render.spp = (int)v;
+        }
+        if (pbrt_token_is(t, "Integrator")) {
+            if (!pbrt_param_float(p, "maxdepth", 5, &v))
+                return false;
+            if (v >= 1 && v <= 1024)
+                p->core.scene->render.max_depth = (int)v;
+        }
+        return true;
+    }
+    if (pbrt_token_is(t, "PixelFilter") || pbrt_token_is(t, "Accelerator"))
+        return skip_named_statement(p, t);
+    if (pbrt_token_is(t, "ColorSpace")) {
+        Token name;
+        if (!pbrt_need_string(p, t, &name))
+            return false;
+        if (!pbrt_string_is(&name, "srgb"))
+            pbrt_warn_at(p, t, "ColorSpace \"%.*s\" is ignored: colours are taken as sRGB",
+                         (int)name.len, name.s);
+        return true;
+    }
+    if (pbrt_token_is(t, "Option")) {
+        Token name, value;
+        return pbrt_need_string(p, t, &name) && pbrt_need_token(p, t, &value);
+    }
+    if (pbrt_token_is(t, "Shape"))
+        return pbrt_shape_statement(p, t);
+    if (pbrt_token_is(t, "Material"))
+        return pbrt_material_statement(p, t);
+    if (pbrt_token_is(t, "MakeNamedMaterial"))
+        return pbrt_make_named_material_statement(p, t);
+    if (pbrt_token_is(t, "NamedMaterial"))
+        return pbrt_named_material_statement(p, t);
+    if (pbrt_token_is(t, "Texture"))
+        return pbrt_texture_statement(p, t);
+    if (pbrt_token_is(t, "AreaLightSource"))
+        return pbrt_area_light_statement(p, t);
+    if (pbrt_token_is(t, "LightSource")) {
+        Token type;
+        if (!pbrt_need_string(p, t, &type) || !pbrt_parse_params(p))
+            return false;
+        pbrt_warn_at(p, t, "LightSource \"%.*s\" is not supported (only area lights): left out",
+                     (int)type.len, type.s);
+        return true;
+    }
+    if (pbrt_token_is(t, "MakeNamedMedium")) {
+        if (!skip_named_statement(p, t))
+            return false;
+        pbrt_warn_at(p, t, "participating media are not supported: left out");
+        return true;
+    }
+    if (pbrt_token_is(t, "MediumInterface")) {
+        Token inside, outside;
+        if (!pbrt_need_string(p, t, &inside))
+            return false;
+        if (pbrt_next_token(p, &outside) && !outside.quoted)
+            pbrt_unget_token(p, &outside);
+        return !p->err->failed;
+    }
+    if (pbrt_token_is(t, "Attribute")) {
+        if (!skip_named_statement(p, t))
+            return false;
+        pbrt_warn_at(p, t, "Attribute statements are ignored");
+        return true;
+    }
+    if (pbrt_token_is(t, "ActiveTransform")) {
+        Token which;
+        if (!pbrt_need_token(p, t, &which))
+            return false;
+        if (!pbrt_token_is(&which, "All") && !pbrt_token_is(&which, "StartTime") &&
+            !pbrt_token_is(&which, "EndTime"))
+            return pbrt_fail_at(p, &which, "ActiveTransform takes All, StartTime or EndTime");
+        pbrt_warn_at(p, t, "motion (ActiveTransform) is ignored: every transform applies");
+        return true;
+    }
+    if (pbrt_token_is(t, "TransformTimes")) {
+        double a, b;
+        return pbrt_need_number(p, t, &a) && pbrt_need_number(p, t, &b);
+    }
+    if (pbrt_token_is(t, "ObjectBegin"))
+        return pbrt_object_begin(p, t);
+    if (pbrt_token_is(t, "ObjectEnd"))
+        return pbrt_object_end(p, t);
+    if (pbrt_token_is(t, "ObjectInstance"))
+        return pbrt_object_instance(p, t);
+    if (pbrt_token_is(t, "Include") || pbrt_token_is(t, "Import"))
+        return include_statement(p, t);
+    return pbrt_fail_at(p, t, "unknown statement \"%.*s\"", (int)(t->len > 40 ? 40 : t->len), t->s);
+}
+
+/* ---- the camera in our terms -------------------------------------------- */
+
+static bool finish_camera(Parser *p)
+{
+    SgScene *s = p->core.scene;
+    s->camera.width = p->film_width;
+    s->camera.height = p->film_height;
+    SgTransform w;
+    if (!p->has_camera) { /* pbrt's default: at the origin looking down +z */
+        sg_transform_identity(&p->camera_from_world);
+        p->fov = 90;
+    }
+    if (!sg_transform_inverse(&p->camera_from_world, &w))
+        return sg_fail(p->err, "%s: the camera transform is singular", p->core.path);
+    double pos[4], dir[3], up[3], right[3];
+    for (int r = 0; r < 4; r++)
+        pos[r] = w.m[r][3];
+    if (!(fabs(pos[3]) > 1e-300))
+        return sg_fail(p->err, "%s: the camera transform is projective", p->core.path);
+    for (int a = 0; a < 3; a++) {
+        pos[a] /= pos[3];
+        right[a] = w.m[a][0];
+        up[a] = w.m[a][1];
+        dir[a] = w.m[a][2];
+    }
+    double dl = d3_length(dir), ul = d3_length(up);
+    if (!(dl > 0 && ul > 0))
+        return sg_fail(p->err, "%s: the camera transform is degenerate", p->core.path);
+    for (int a = 0; a < 3; a++) {
+        s->camera.position[a] = pos[a];
+        s->camera.look_at[a] = pos[a] + dir[a] / dl;
+        s->camera.up[a] = up[a] / ul;
+    }
+    /* Our image's right is view x up; pbrt's is camera +x. */
+    double ours[3];
+    d3_cross(dir, up, ours);
+    if (d3_dot(ours, right) < 0) {
+        Token none = {0};
+        pbrt_warn_at(p, &none, "the camera transform does not mirror the image as pbrt's screen "
+                          "mapping expects (no \"Scale -1 1 1\"): our image is pbrt's mirrored "
+                          "left to right");
+    }
+    /* pbrt's fov spans the shorter image axis; ours is vertical. */
+    double aspect = (double)s->camera.width / s->camera.height;
+    double fov = p->fov;
+    if (aspect < 1)
+        fov = 2 * atan(tan(fov * M_PI / 360) / aspect) * 180 / M_PI;
+    s->camera.fov_deg = fov;
+    s->has_camera = true;
+    return true;
+}
+
+/* ---- entry point -------------------------------------------------------- */
+
+static void parser_release(Parser *p)
+{
+    for (size_t i = 0; i < p->source_count; i++) {
+        free(p->sources[i]->text);
+        free(p->sources[i]);
+    }
+    free(p->sources);
+    free(p->params);
+    free(p->numbers);
+    free(p->strings);
+    free(p->bools);
+    free(p->saved);
+    for (size_t i = 0; i < p->material_count; i++)
+        free(p->materials[i].name);
+    free(p->materials);
+    free(p->emissive);
+    for (size_t i = 0; i < p->texture_count; i++)
+        free(p->textures[i].name);
+    free(p->textures);
+    for (size_t i = 0; i < p->coordinate_system_count; i++)
+        free(p->coordinate_systems[i].name);
+    free(p->coordinate_systems);
+    for (size_t i = 0; i < p->object_count; i++) {
+        for (size_t k = 0; k < p->objects[i].shape_count; k++) {
+            free(p->objects[i].shapes[k].positions);
+            free(p->objects[i].shapes[k].indices);
+        }
+        free(p->objects[i].shapes);
+        free(p->objects[i].name);
+    }
+    free(p->objects);
+    free(p->warnings);
+    for (size_t i = 0; i < p->image_count; i++)
+        free(p->images[i].path);
+    free(p->images);
+}
+
+SgScene *sg_pbrt_scene_load(const char *path, SgError *err)
+{
+    Parser p;
+    memset(&p, 0, sizeof p);
+    p.err = err;
+    if (!sg_builder_begin(&p.core, path, err))
+        return NULL;
+    SgScene *s = p.core.scene;
+    const char *slash = strrchr(path, '/');
+    snprintf(p.base_dir, sizeof p.base_dir, "%.*s", slash ? (int)(slash - path + 1) : 0, path);
+    p.film_width = 1280; /* pbrt's defaults */
+    p.film_height = 720;
+    s->render.max_depth = 5;
+    sg_transform_identity(&p.state.ctm);
+    PbrtMaterial fallback; /* pbrt's default: diffuse 0.5 */
+    memset(&fallback, 0, sizeof fallback);
+    sg_material_default(&fallback.material, "default");
+    fallback.scene_id = UINT32_MAX;
+    bool ok = pbrt_add_material(&p, &fallback, &p.state.material) && pbrt_push_file(&p, path, NULL);
+    Token t;
+    while (ok && pbrt_next_token(&p, &t))
+        ok = statement(&p, &t);
+    ok = ok && !err->failed;
+    if (ok && p.defining)
+        ok = pbrt_fail_at(&p, &p.defining_begin, "ObjectBegin has no matching ObjectEnd");
+    if (ok && p.saved_count) {
+        const Token *begin = &p.saved[p.saved_count - 1].begin;
+        ok = pbrt_fail_at(&p, begin, "%.*s has no matching %s", (int)begin->len, begin->s,
+                          pbrt_token_is(begin, "TransformBegin") ? "TransformEnd" : "AttributeEnd");
+    }
+    for (size_t i = 0; ok && i < p.material_count; i++)
+        if (p.materials[i].pending)
+            ok = pbrt_fail_at(&p, &p.materials[i].first_use,
+                              "NamedMaterial \"%s\" is never defined", p.materials[i].name);
+    ok = ok && finish_camera(&p);
+    if (ok && s->triangle_count == 0)
+        ok = sg_fail(err, "%s: the scene has no triangles%s", path,
+                     p.core.dropped_degenerate ? " (all were degenerate)" : "");
+    ok = ok && sg_builder_finish(&p.core, err);
+    if (ok)
+        for (size_t i = 0; i < p.warning_count; i++) {
+            const Warning *w = &p.warnings[i];
+            if (w->count > 1)
+                sg_scene_add_warning(s, "%s: %s (%u times)", w->where, w->kind, w->count);
+            else
+                sg_scene_add_warning(s, "%s: %s", w->where, w->kind);
+        }
+    parser_release(&p);
+    if (!ok) {
+        sg_scene_free(s);
+        return NULL;
+    }
+    return s;
+}

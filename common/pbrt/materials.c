@@ -1,0 +1,395 @@
+/* pbrt scene files, materials: pbrt-v4's (and pbrt-v3's) materials mapped
+ * onto ours, named materials with forward references, and area lights. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pbrt_parser.h"
+
+static void clamp_albedo(Parser *p, const Token *at, float c[3], const char *what)
+{
+    for (int a = 0; a < 3; a++)
+        if (c[a] > 1) {
+            pbrt_warn_at(p, at, "%s above 1 clamped to 1", what);
+            c[a] = 1;
+        }
+}
+
+/* pbrt-v3's roughness remapping (a fit in log roughness). */
+static double v3_roughness_to_alpha(double rough)
+{
+    double x = log(fmax(rough, 1e-3));
+    return 1.62142 + 0.819955 * x + 0.1734 * x * x + 0.0171201 * x * x * x +
+           0.000640711 * x * x * x * x;
+}
+
+/* Microfacet roughness to a Phong exponent (alpha^2 = 2 / (n + 2)).
+ * fallback: the material's default roughness; v3: pbrt-v3's remapping. */
+static bool roughness_exponent_of(Parser *p, double fallback, bool v3, double *exponent,
+                                  double *alpha_out)
+{
+    double rough, u, v;
+    bool remap;
+    if (!pbrt_param_scalar(p, "uroughness", fallback, &u) ||
+        !pbrt_param_scalar(p, "vroughness", fallback, &v) ||
+        !pbrt_param_bool(p, "remaproughness", true, &remap) ||
+        !pbrt_param_scalar(p, "roughness", 0.5 * (u + v), &rough))
+        return false;
+    if (!(rough >= 0))
+        rough = 0;
+    double alpha = !remap ? rough : v3 ? v3_roughness_to_alpha(rough) : sqrt(rough);
+    *alpha_out = alpha;
+    double n = alpha > 0 ? 2 / (alpha * alpha) - 2 : 1e4;
+    *exponent = fmin(fmax(n, 1), 1e4);
+    return true;
+}
+
+static bool roughness_exponent(Parser *p, double *exponent, double *alpha_out)
+{
+    return roughness_exponent_of(p, 0, false, exponent, alpha_out);
+}
+
+/* Smooth-enough conductors become mirrors: a Phong lobe this narrow is a
+ * mirror to every practical purpose and cheaper to sample. */
+#define MIRROR_ALPHA 0.02
+
+static bool make_material(Parser *p, const Token *at, const Token *type, const char *label,
+                          PbrtMaterial *out)
+{
+    memset(out, 0, sizeof *out);
+    out->scene_id = UINT32_MAX;
+    SgMaterial *m = &out->material;
+    sg_material_default(m, label);
+    static const float half[3] = {0.5f, 0.5f, 0.5f};
+    const Param *displacement = pbrt_find_param(p, "displacement");
+    if (displacement || pbrt_find_param(p, "normalmap"))
+        pbrt_warn_at(p, at, "bump and normal maps (\"displacement\", \"normalmap\") are ignored");
+    if (pbrt_string_is(type, "diffuse") || pbrt_string_is(type, "diffusetransmission") ||
+        pbrt_string_is(type, "subsurface") || pbrt_string_is(type, "measured") ||
+        pbrt_string_is(type, "hair") || pbrt_string_is(type, "kdsubsurface") ||
+        pbrt_string_is(type, "fourier") || pbrt_string_is(type, "disney")) {
+        if (!pbrt_string_is(type, "diffuse"))
+            pbrt_warn_at(p, at, "Material \"%.*s\" is not supported: diffuse instead",
+                         (int)type->len, type->s);
+        if (!pbrt_param_color(p, "reflectance", half, m->diffuse, NULL))
+            return false;
+        clamp_albedo(p, at, m->diffuse, "reflectance");
+        m->type = SG_MATERIAL_DIFFUSE;
+        return true;
+    }
+    if (pbrt_string_is(type, "coateddiffuse")) {
+        double exponent, alpha, eta;
+        float reflectance[3];
+        if (!pbrt_param_color(p, "reflectance", half, reflectance, NULL) ||
+            !roughness_exponent(p, &exponent, &alpha) || !pbrt_param_scalar(p, "eta", 1.5, &eta))
+            return false;
+        clamp_albedo(p, at, reflectance, "reflectance");
+        if (!(eta >= 1))
+            eta = 1.5;
+        /* The coat reflects its normal-incidence Fresnel; the base gets the rest. */
+        double f0 = (eta - 1) * (eta - 1) / ((eta + 1) * (eta + 1));
+        m->type = SG_MATERIAL_GLOSSY;
+        for (int a = 0; a < 3; a++) {
+            m->diffuse[a] = (float)(reflectance[a] * (1 - f0));
+            m->specular[a] = (float)f0;
+        }
+        m->exponent = (float)exponent;
+        return true;
+    }
+    if (pbrt_string_is(type, "conductor") || pbrt_string_is(type, "coatedconductor") ||
+        pbrt_string_is(type, "metal")) {
+        if (pbrt_string_is(type, "coatedconductor"))
+            pbrt_warn_at(p, at, "Material \"coatedconductor\" is approximated by its conductor");
+        float eta[3], k[3], reflectance[3];
+        bool has_reflectance;
+        const NamedMetal *cu = &pbrt_named_metals[3];
+        bool coated = pbrt_string_is(type, "coatedconductor"), v3 = pbrt_string_is(type, "metal");
+        if (!pbrt_param_color(p, coated ? "conductor.eta" : "eta", cu->eta, eta, NULL) ||
+            !pbrt_param_color(p, coated ? "conductor.k" : "k", cu->k, k, NULL) ||
+            !pbrt_param_color(p, "reflectance", half, reflectance, &has_reflectance))
+            return false;
+        for (int a = 0; a < 3; a++) {
+            double n = eta[a], kk = k[a];
+            double f0 = ((n - 1) * (n - 1) + kk * kk) / ((n + 1) * (n + 1) + kk * kk);
+            m->specular[a] = has_reflectance ? fminf(reflectance[a], 1) : (float)f0;
+            m->diffuse[a] = 0;
+        }
+        double exponent, alpha;
+        if (!roughness_exponent_of(p, v3 ? 0.01 : 0, v3, &exponent, &alpha))
+            return false;
+        m->type = alpha < MIRROR_ALPHA ? SG_MATERIAL_MIRROR : SG_MATERIAL_GLOSSY;
+        m->exponent = (float)exponent;
+        return true;
+    }
+    /* pbrt-v3 materials: Bitterli's collection first came in v3 syntax. */
+    if (pbrt_string_is(type, "matte") || pbrt_string_is(type, "translucent")) {
+        if (pbrt_string_is(type, "translucent"))
+            pbrt_warn_at(p, at, "Material \"translucent\" is taken as diffuse (its Kd)");
+        if (!pbrt_param_color(p, "Kd", half, m->diffuse, NULL))
+            return false;
+        clamp_albedo(p, at, m->diffuse, "Kd");
+        m->type = SG_MATERIAL_DIFFUSE;
+        return true;
+    }
+    if (pbrt_string_is(type, "plastic") || pbrt_string_is(type, "substrate") ||
+        pbrt_string_is(type, "uber")) {
+        bool substrate = pbrt_string_is(type, "substrate");
+        float d = substrate ? 0.5f : 0.25f;
+        const float kd[3] = {d, d, d};
+        double exponent, alpha, opacity;
+        if (!pbrt_param_color(p, "Kd", kd, m->diffuse, NULL) ||
+            !pbrt_param_color(p, "Ks", kd, m->specular, NULL) ||
+            !roughness_exponent_of(p, 0.1, true, &exponent, &alpha) ||
+            !pbrt_param_scalar(p, "opacity", 1, &opacity))
+            return false;
+        if (opacity < 1 || pbrt_find_param(p, "Kr") || pbrt_find_param(p, "Kt"))
+            pbrt_warn_at(p, at, "uber opacity, Kr and Kt are ignored");
+        for (int a = 0; a < 3; a++) { /* keep energy: scale the pair down */
+            float sum = m->diffuse[a] + m->specular[a];
+            if (sum > 1) {
+                m->diffuse[a] /= sum;
+                m->specular[a] /= sum;
+            }
+        }
+        m->type = SG_MATERIAL_GLOSSY;
+        m->exponent = (float)exponent;
+        return true;
+    }
+    if (pbrt_string_is(type, "mirror")) {
+        const float kr[3] = {0.9f, 0.9f, 0.9f};
+        if (!pbrt_param_color(p, "Kr", kr, m->specular, NULL))
+            return false;
+        clamp_albedo(p, at, m->specular, "Kr");
+        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
+        m->type = SG_MATERIAL_MIRROR;
+        return true;
+    }
+    if (pbrt_string_is(type, "glass")) {
+        double ior;
+        if (!pbrt_param_scalar(p, "index", 1.5, &ior) ||
+            (pbrt_find_param(p, "eta") && !pbrt_param_scalar(p, "eta", 1.5, &ior)))
+            return false;
+        if (ior > 0 && ior < 1)
+            ior = 1 / ior;
+        if (!(ior >= 1 && ior <= 10))
+            return pbrt_fail_at(p, at, "glass index %g is out of range", ior);
+        m->type = SG_MATERIAL_DIELECTRIC;
+        m->ior = (float)ior;
+        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
+        return true;
+    }
+    if (pbrt_string_is(type, "dielectric") || pbrt_string_is(type, "thindielectric")) {
+        if (pbrt_string_is(type, "thindielectric"))
+            pbrt_warn_at(p, at, "Material \"thindielectric\" is taken as a solid dielectric");
+        float eta[3];
+        if (!pbrt_param_color(p, "eta", (const float[3]){1.5f, 1.5f, 1.5f}, eta, NULL))
+            return false;
+        double ior = eta[1];
+        if (ior > 0 && ior < 1)
+            ior = 1 / ior;
+        if (!(ior >= 1 && ior <= 10))
+            return pbrt_fail_at(p, at, "dielectric eta %g is out of range", (double)eta[1]);
+        double exponent, alpha;
+        if (!roughness_exponent(p, &exponent, &alpha))
+            return false;
+        if (alpha > 0)
+            pbrt_warn_at(p, at, "rough dielectrics are taken as smooth");
+        m->type = SG_MATERIAL_DIELECTRIC;
+        m->ior = (float)ior;
+        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
+        return true;
+    }
+    if (pbrt_string_is(type, "interface") || pbrt_string_is(type, "") ||
+        pbrt_string_is(type, "none")) {
+        out->invisible = true;
+        return true;
+    }
+    if (pbrt_string_is(type, "mix")) {
+        const Param *names = pbrt_find_param(p, "materials");
+        double amount;
+        if (!pbrt_param_scalar(p, "amount", 0.5, &amount))
+            return false;
+        pbrt_warn_at(p, at, "Material \"mix\" is replaced by the material with the larger weight");
+        if (names && names->kind == PARAM_STRINGS && names->count == 2) {
+            const Token *pick = &p->strings[names->first + (amount > 0.5 ? 1 : 0)];
+            for (size_t i = p->material_count; i-- > 0;)
+                if (p->materials[i].name && pbrt_string_is(pick, p->materials[i].name)) {
+                    *out = p->materials[i];
+                    out->name = NULL;
+                    out->scene_id = UINT32_MAX;
+                    out->pending = false;
+                    snprintf(out->material.name, sizeof out->material.name, "%s", label);
+                    return true;
+                }
+        }
+        return true;
+    }
+    pbrt_warn_at(p, at, "Material \"%.*s\" is not supported: grey diffuse instead", (int)type->len,
+                 type->s);
+    return true;
+}
+
+bool pbrt_add_material(Parser *p, const PbrtMaterial *m, uint32_t *index)
+{
+    if (!RESERVE(p, p->materials, p->material_count, p->material_capacity, 1))
+        return false;
+    p->materials[p->material_count] = *m;
+    *index = (uint32_t)p->material_count++;
+    return true;
+}
+
+bool pbrt_material_statement(Parser *p, const Token *statement)
+{
+    Token type;
+    if (!pbrt_need_string(p, statement, &type) || !pbrt_parse_params(p))
+        return false;
+    char label[64];
+    snprintf(label, sizeof label, "%.*s@%d", (int)(type.len > 40 ? 40 : type.len), type.s,
+             statement->line);
+    PbrtMaterial m;
+    return make_material(p, statement, &type, label, &m) &&
+           pbrt_add_material(p, &m, &p->state.material);
+}
+
+bool pbrt_make_named_material_statement(Parser *p, const Token *statement)
+{
+    Token name;
+    if (!pbrt_need_string(p, statement, &name) || !pbrt_parse_params(p))
+        return false;
+    const Token *type = pbrt_param_string(p, "type");
+    if (!type)
+        return pbrt_fail_at(p, statement, "MakeNamedMaterial \"%.*s\" has no \"string type\"",
+                            (int)name.len, name.s);
+    char label[64];
+    snprintf(label, sizeof label, "%.*s", (int)(name.len > 63 ? 63 : name.len), name.s);
+    PbrtMaterial m;
+    uint32_t index;
+    if (!make_material(p, statement, type, label, &m))
+        return false;
+    for (size_t i = p->material_count; i-- > 0;) {
+        PbrtMaterial *old = &p->materials[i];
+        if (!old->name || !pbrt_string_is(&name, old->name))
+            continue;
+        if (!old->pending) {
+            pbrt_warn_at(p, statement,
+                         "MakeNamedMaterial redefines a name: later uses get the new one");
+            break;
+        }
+        /* Fill in the forward reference, and what shapes already got. */
+        old->material = m.material;
+        old->invisible = m.invisible;
+        old->pending = false;
+        SgScene *scene = p->core.scene;
+        if (old->scene_id != UINT32_MAX)
+            scene->materials[old->scene_id] = m.material;
+        for (size_t k = 0; k < p->emissive_count; k++)
+            if (p->emissive[k].material == i) {
+                SgMaterial *e = &scene->materials[p->emissive[k].scene_id];
+                float emission[3];
+                memcpy(emission, e->emission, sizeof emission);
+                *e = m.material;
+                memcpy(e->emission, emission, sizeof emission);
+            }
+        return true;
+    }
+    if (!(m.name = pbrt_token_dup(&name)))
+        return sg_fail(p->err, "%s: out of memory", p->core.path);
+    if (!pbrt_add_material(p, &m, &index)) {
+        free(m.name);
+        return false;
+    }
+    return true;
+}
+
+bool pbrt_named_material_statement(Parser *p, const Token *statement)
+{
+    Token name;
+    if (!pbrt_need_string(p, statement, &name))
+        return false;
+    for (size_t i = p->material_count; i-- > 0;)
+        if (p->materials[i].name && pbrt_string_is(&name, p->materials[i].name)) {
+            p->state.material = (uint32_t)i;
+            return true;
+        }
+    PbrtMaterial m;
+    memset(&m, 0, sizeof m);
+    char label[64];
+    snprintf(label, sizeof label, "%.*s", (int)(name.len > 63 ? 63 : name.len), name.s);
+    sg_material_default(&m.material, label);
+    m.scene_id = UINT32_MAX;
+    m.pending = true;
+    m.first_use = name;
+    if (!(m.name = pbrt_token_dup(&name)))
+        return sg_fail(p->err, "%s: out of memory", p->core.path);
+    if (!pbrt_add_material(p, &m, &p->state.material)) {
+        free(m.name);
+        return false;
+    }
+    return true;
+}
+
+/* The scene material of the current state (emissive copies cached). */
+bool pbrt_current_scene_material(Parser *p, bool emissive, uint32_t *id)
+{
+    PbrtMaterial *m = &p->materials[p->state.material];
+    if (!emissive) {
+        if (m->scene_id == UINT32_MAX &&
+            !sg_builder_add_material(&p->core, &m->material, &m->scene_id, p->err))
+            return false;
+        *id = m->scene_id;
+        return true;
+    }
+    const float *L = p->state.radiance;
+    for (size_t i = 0; i < p->emissive_count; i++) {
+        EmissiveMaterial *e = &p->emissive[i];
+        if (e->material == p->state.material && !memcmp(e->radiance, L, sizeof e->radiance)) {
+            *id = e->scene_id;
+            return true;
+        }
+    }
+    SgMaterial copy = m->material;
+    memcpy(copy.emission, L, sizeof copy.emission);
+    if (!RESERVE(p, p->emissive, p->emissive_count, p->emissive_capacity, 1) ||
+        !sg_builder_add_material(&p->core, &copy, id, p->err))
+        return false;
+    EmissiveMaterial *e = &p->emissive[p->emissive_count++];
+    e->material = p->state.material;
+    memcpy(e->radiance, L, sizeof e->radiance);
+    e->scene_id = *id;
+    return true;
+}
+
+bool pbrt_area_light_statement(Parser *p, const Token *statement)
+{
+    Token type;
+    if (!pbrt_need_string(p, statement, &type) || !pbrt_parse_params(p))
+        return false;
+    if (!pbrt_string_is(&type, "diffuse")) {
+        pbrt_warn_at(p, statement, "AreaLightSource \"%.*s\" is not supported: shapes not emissive",
+                     (int)type.len, type.s);
+        p->state.area_light = false;
+        return true;
+    }
+    float L[3];
+    double scale;
+    bool two_sided;
+    if (!pbrt_param_color(p, "L", (const float[3]){1, 1, 1}, L, NULL) ||
+        !pbrt_param_float(p, "scale", 1, &scale) ||
+        !pbrt_param_bool(p, "twosided", false, &two_sided))
+        return false;
+    if (!(scale >= 0))
+        return pbrt_fail_at(p, statement, "AreaLightSource: \"scale\" must not be negative");
+    if (two_sided)
+        pbrt_warn_at(p, statement, "two-sided area lights emit on their front side only");
+    if (pbrt_find_param(p, "power"))
+        pbrt_warn_at(p, statement,
+                     "area light \"power\" is ignored (\"L\" and \"scale\" are used)");
+    if (pbrt_find_param(p, "filename"))
+        pbrt_warn_at(p, statement, "image area lights are taken as uniform");
+    for (int a = 0; a < 3; a++)
+        L[a] = (float)(L[a] * scale);
+    memcpy(p->state.radiance, L, sizeof L);
+    p->state.area_light = L[0] > 0 || L[1] > 0 || L[2] > 0;
+    return true;
+}

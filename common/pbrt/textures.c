@@ -1,0 +1,148 @@
+/* pbrt scene files, textures: each `Texture` becomes its average colour
+ * (image maps: the mean of the image file). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "color.h"
+#include "image_io.h"
+#include "pbrt_parser.h"
+
+static bool has_suffix(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), k = strlen(suffix);
+    if (n < k)
+        return false;
+    for (size_t i = 0; i < k; i++) {
+        char a = s[n - k + i], b = suffix[i];
+        if ((a >= 'A' && a <= 'Z' ? a + 32 : a) != b)
+            return false;
+    }
+    return true;
+}
+
+/* The mean linear colour of an image file (cached by path). gamma: 0 for
+ * linear data, -1 for sRGB, else the exponent. False if it cannot be read. */
+static bool image_average(Parser *p, const char *path, double gamma, float out[3])
+{
+    for (size_t i = 0; i < p->image_count; i++)
+        if (!strcmp(p->images[i].path, path) && p->images[i].linear == (gamma == 0)) {
+            memcpy(out, p->images[i].value, 3 * sizeof(float));
+            return p->images[i].readable;
+        }
+    int w = 0, h = 0;
+    float *rgb = NULL;
+    SgError ignored = {0};
+    bool readable = sg_image_read(path, &w, &h, &rgb, &ignored);
+    double sum[3] = {0, 0, 0};
+    if (readable) {
+        /* A few hundred thousand pixels give the mean well enough. */
+        size_t step = 1 + (size_t)w * (size_t)h / 262144, n = 0;
+        for (size_t i = 0; i < (size_t)w * (size_t)h; i += step, n++)
+            for (int c = 0; c < 3; c++) {
+                double v = rgb[3 * i + c];
+                v = !isfinite(v) || v < 0 ? 0 : v;
+                sum[c] += gamma == 0 ? v : gamma < 0 ? sg_srgb_to_linear(v) : pow(v, gamma);
+            }
+        for (int c = 0; c < 3; c++)
+            out[c] = (float)(sum[c] / (double)(n ? n : 1));
+    }
+    free(rgb);
+    if (RESERVE(p, p->images, p->image_count, p->image_capacity, 1)) {
+        ImageAverage *a = &p->images[p->image_count];
+        if ((a->path = strdup(path))) {
+            a->linear = gamma == 0;
+            a->readable = readable;
+            memcpy(a->value, readable ? out : (const float[3]){0, 0, 0}, sizeof a->value);
+            p->image_count++;
+        }
+    }
+    return readable;
+}
+
+bool pbrt_texture_statement(Parser *p, const Token *statement)
+{
+    Token name, type, klass;
+    if (!pbrt_need_string(p, statement, &name) || !pbrt_need_string(p, statement, &type) ||
+        !pbrt_need_string(p, statement, &klass) || !pbrt_parse_params(p))
+        return false;
+    if (!pbrt_string_is(&type, "spectrum") && !pbrt_string_is(&type, "float") &&
+        !pbrt_string_is(&type, "color"))
+        return pbrt_fail_at(p, &type, "Texture \"%.*s\": type must be \"spectrum\" or \"float\"",
+                            (int)name.len, name.s);
+    static const float grey[3] = {0.5f, 0.5f, 0.5f}, one[3] = {1, 1, 1};
+    float value[3];
+    memcpy(value, grey, sizeof value);
+    if (pbrt_string_is(&klass, "constant")) {
+        if (!pbrt_param_color(p, "value", one, value, NULL))
+            return false;
+    } else if (pbrt_string_is(&klass, "scale")) {
+        float tex[3], scale[3];
+        if (!pbrt_param_color(p, "tex", one, tex, NULL) ||
+            !pbrt_param_color(p, "scale", one, scale, NULL))
+            return false;
+        for (int a = 0; a < 3; a++)
+            value[a] = tex[a] * scale[a];
+    } else if (pbrt_string_is(&klass, "mix") || pbrt_string_is(&klass, "checkerboard")) {
+        static const float zero[3] = {0, 0, 0};
+        float a[3], b[3];
+        double amount = 0.5;
+        if (!pbrt_param_color(p, "tex1", one, a, NULL) ||
+            !pbrt_param_color(p, "tex2", zero, b, NULL) ||
+            (pbrt_string_is(&klass, "mix") && !pbrt_param_scalar(p, "amount", 0.5, &amount)))
+            return false;
+        for (int c = 0; c < 3; c++)
+            value[c] = (float)((1 - amount) * a[c] + amount * b[c]);
+    } else if (pbrt_string_is(&klass, "imagemap")) {
+        const Token *file = pbrt_param_string(p, "filename");
+        const Token *encoding = pbrt_param_string(p, "encoding");
+        float scale[3];
+        bool invert;
+        if (!pbrt_param_color(p, "scale", one, scale, NULL) ||
+            !pbrt_param_bool(p, "invert", false, &invert))
+            return false;
+        if (!file)
+            return pbrt_fail_at(p, statement, "imagemap texture without \"string filename\"");
+        char path[8192];
+        if (!pbrt_resolve_path(p, statement, file, path, sizeof path))
+            return false;
+        /* pbrt's default: 8-bit images hold sRGB, float formats linear values */
+        double gamma = has_suffix(path, ".exr") || has_suffix(path, ".pfm") ||
+                               has_suffix(path, ".hdr")
+                           ? 0
+                           : -1;
+        if (encoding && pbrt_string_is(encoding, "linear"))
+            gamma = 0;
+        else if (encoding && pbrt_string_is(encoding, "sRGB"))
+            gamma = -1;
+        else if (encoding && encoding->len > 6 && encoding->len < 40 &&
+                 !memcmp(encoding->s, "gamma ", 6)) {
+            char number[40];
+            snprintf(number, sizeof number, "%.*s", (int)encoding->len - 6, encoding->s + 6);
+            gamma = atof(number) > 0 ? atof(number) : -1;
+        }
+        float average[3];
+        if (!image_average(p, path, gamma, average)) {
+            memcpy(average, grey, sizeof average);
+            pbrt_warn_at(p, statement, "image textures that cannot be read (missing files) are "
+                                  "taken as grey 0.5");
+        }
+        for (int c = 0; c < 3; c++) {
+            value[c] = average[c] * scale[c];
+            if (invert)
+                value[c] = value[c] < 1 ? 1 - value[c] : 0;
+        }
+    } else {
+        pbrt_warn_at(p, statement, "Texture \"%.*s\" is not supported: taken as grey 0.5",
+                     (int)klass.len, klass.s);
+    }
+    if (!RESERVE(p, p->textures, p->texture_count, p->texture_capacity, 1))
+        return false;
+    Texture *t = &p->textures[p->texture_count];
+    if (!(t->name = pbrt_token_dup(&name)))
+        return sg_fail(p->err, "%s: out of memory", p->core.path);
+    memcpy(t->value, value, sizeof value);
+    p->texture_count++;
+    return true;
+}
