@@ -286,22 +286,25 @@ Test(pbrt_materials, mapped_to_ours)
     cr_expect_float_eq(m->diffuse[2], 0.3f, 1e-6);
     cr_expect_str_eq(m->name, "wall");
 
-    m = material_of(s, 1); /* coat: Fresnel 0.04 at eta 1.5; exponent 2/a^2 - 2 */
-    cr_expect_eq(m->type, SG_MATERIAL_GLOSSY);
-    cr_expect_float_eq(m->diffuse[1], 0.2f * 0.96f, 1e-6, "texture scale 0.5 of 0.4, minus coat");
-    cr_expect_float_eq(m->specular[0], 0.04f, 1e-6);
-    cr_expect_float_eq(m->exponent, 198.0f, 1e-3);
+    m = material_of(s, 1); /* a GGX coat of alpha 0.1 over the base */
+    cr_expect_eq(m->type, SG_MATERIAL_COATED_DIFFUSE);
+    cr_expect_float_eq(m->diffuse[1], 0.2f, 1e-6, "texture scale 0.5 of 0.4");
+    cr_expect_eq(m->diffuse_texture, 0, "a scaled constant does not vary");
+    cr_expect_float_eq(m->roughness[0], 0.1f, 1e-6);
+    cr_expect_float_eq(m->ior, 1.5f, 1e-6);
 
-    m = material_of(s, 2); /* smooth gold: a mirror with gold's normal reflectance */
-    cr_expect_eq(m->type, SG_MATERIAL_MIRROR);
-    cr_expect(m->specular[0] > 0.9f && m->specular[2] < 0.45f && m->specular[2] > 0.3f,
-              "gold %g %g %g", m->specular[0], m->specular[1], m->specular[2]);
+    m = material_of(s, 2); /* smooth gold: gold's complex index, alpha 0 (the renderer's mirror) */
+    cr_expect_eq(m->type, SG_MATERIAL_CONDUCTOR);
+    cr_expect_float_eq(m->roughness[0], 0.0f, 1e-9);
+    cr_expect(fabsf(m->eta[0] - 0.143f) < 1e-3f && fabsf(m->k[2] - 1.60f) < 1e-2f, "gold eta %g k %g", m->eta[0],
+              m->k[2]);
 
-    m = material_of(s, 3);
-    cr_expect_eq(m->type, SG_MATERIAL_GLOSSY);
-    cr_expect_float_eq(m->specular[1], 0.8f, 1e-6);
-    cr_expect_float_eq(m->exponent, (float)(2 / 0.09 - 2), 1e-3);
-    cr_expect_float_eq(m->diffuse[0], 0.0f, 1e-9);
+    m = material_of(s, 3); /* a reflectance: pbrt's eta 1 and the k that reflects it */
+    cr_expect_eq(m->type, SG_MATERIAL_CONDUCTOR);
+    cr_expect_float_eq(m->diffuse[1], 0.8f, 1e-6);
+    cr_expect_float_eq(m->roughness[1], 0.3f, 1e-6);
+    cr_expect_float_eq(m->eta[1], 1.0f, 1e-6);
+    cr_expect_float_eq(m->k[1], 2 * sqrtf(0.8f) / sqrtf(0.2f), 1e-4);
 
     m = material_of(s, 4);
     cr_expect_eq(m->type, SG_MATERIAL_DIELECTRIC);
@@ -309,6 +312,8 @@ Test(pbrt_materials, mapped_to_ours)
 
     m = material_of(s, 5);
     cr_expect_float_eq(m->diffuse[0], 0.5f, 1e-6, "image textures: grey");
+    cr_assert(m->diffuse_texture > 0 && m->diffuse_texture <= s->texture_count, "a texture, though missing");
+    cr_expect_null(s->textures[m->diffuse_texture - 1].path, "its file could not be read");
     cr_expect(has_warning(s, "image textures"));
 
     m = material_of(s, 6);
@@ -335,10 +340,16 @@ Test(pbrt_materials, textures_as_their_average)
     cr_expect_float_eq(m->diffuse[0], 0.75f * 0.2f + 0.25f, 1e-6);
     cr_expect_float_eq(m->diffuse[2], 0.75f * 0.6f + 0.25f, 1e-6);
     m = material_of(s, 1);
-    cr_expect_float_eq(m->diffuse[0], 0.5f * 0.96f, 1e-6, "checkerboard: mean of the two");
+    cr_expect_float_eq(m->diffuse[0], 0.5f, 1e-6, "checkerboard: mean of the two");
     cr_expect_float_eq(m->diffuse[1], 0.0f, 1e-9);
-    /* remaproughness (default true): alpha = sqrt(0.25) = 0.5, n = 2/0.25 - 2 */
-    cr_expect_float_eq(m->exponent, 6.0f, 1e-4);
+    cr_assert(m->diffuse_texture > 0, "a checkerboard varies");
+    const SgTexture *t = &s->textures[m->diffuse_texture - 1];
+    cr_expect_eq(t->kind, SG_TEXTURE_CHECKERBOARD);
+    cr_expect(t->input[0].value[0] == 1.0f && t->input[1].value[2] == 1.0f, "its two colours");
+    /* remaproughness (default true): alpha = sqrt(0.25) = 0.5 */
+    cr_expect_float_eq(m->roughness[0], 0.5f, 1e-6);
+    /* the mix of a constant with a constant does not vary */
+    cr_expect_eq(material_of(s, 0)->diffuse_texture, 0);
     cr_expect_eq(s->warning_count, 0);
     sg_scene_free(s);
 }
@@ -408,9 +419,10 @@ Test(pbrt_materials, pbrt_v3_materials)
     cr_expect(m->type == SG_MATERIAL_MIRROR && fabsf(m->specular[1] - 0.9f) < 1e-6f);
     m = material_of(s, 3);
     cr_expect(m->type == SG_MATERIAL_DIELECTRIC && fabsf(m->ior - 1.7f) < 1e-6f);
-    m = material_of(s, 4); /* v3 remapping of 0.001: alpha ~ 0.05, a glossy copper */
-    cr_expect_eq(m->type, SG_MATERIAL_GLOSSY);
-    cr_expect(m->specular[0] > m->specular[2], "copper is red");
+    m = material_of(s, 4); /* v3 remapping of 0.001: alpha ~ 0.05, a rough copper */
+    cr_expect_eq(m->type, SG_MATERIAL_CONDUCTOR);
+    cr_expect(m->roughness[0] > 0.03f && m->roughness[0] < 0.08f, "alpha %g", m->roughness[0]);
+    cr_expect(m->k[0] > m->k[2], "copper's index");
     m = material_of(s, 5);
     cr_expect(m->type == SG_MATERIAL_GLOSSY && fabsf(m->diffuse[0] - 0.5f) < 1e-6f);
     cr_expect_eq(s->warning_count, 0);
@@ -425,8 +437,8 @@ Test(pbrt_materials, named_before_defined_like_pbrt_v4)
                                 "    \"float roughness\" 0 \"rgb reflectance\" [ 0.9 0.9 0.9 ]\n");
     cr_assert_eq(s->triangle_count, 2);
     for (uint32_t t = 0; t < 2; t++) {
-        cr_expect_eq(material_of(s, t)->type, SG_MATERIAL_MIRROR, "triangle %u", t);
-        cr_expect_float_eq(material_of(s, t)->specular[0], 0.9f, 1e-6);
+        cr_expect_eq(material_of(s, t)->type, SG_MATERIAL_CONDUCTOR, "triangle %u", t);
+        cr_expect_float_eq(material_of(s, t)->diffuse[0], 0.9f, 1e-6);
     }
     cr_expect_float_eq(material_of(s, 1)->emission[0], 2.0f, 1e-6, "keeps its emission");
     cr_expect_float_eq(material_of(s, 0)->emission[0], 0.0f, 1e-9);
@@ -694,10 +706,11 @@ Test(pbrt_shared, material_mapping_of_the_shared_scenes)
     for (uint32_t i = 0; i < s->material_count; i++) {
         const SgMaterial *m = &s->materials[i];
         if (!strcmp(m->name, "Mirror"))
-            mirror += m->type == SG_MATERIAL_MIRROR && m->specular[1] > 0.95f;
+            mirror += m->type == SG_MATERIAL_CONDUCTOR && m->roughness[0] == 0.0f && m->k[1] > 3.0f; /* silver */
         if (!strcmp(m->name, "BulbGlass"))
             glass += m->type == SG_MATERIAL_DIELECTRIC && fabsf(m->ior - 1.5f) < 1e-6f;
-        glossy += m->type == SG_MATERIAL_GLOSSY;
+        glossy += m->type == SG_MATERIAL_COATED_DIFFUSE;
+        glossy += m->type == SG_MATERIAL_CONDUCTOR && m->roughness[0] > 0.0f;
     }
     cr_expect_eq(mirror, 1, "the silver mirror");
     cr_expect_eq(glass, 1);

@@ -170,6 +170,15 @@ bool pbrt_param_color(Parser *p, const char *name, const float fallback[3], floa
     return pbrt_fail_at(p, &at, "\"%s %s\" is not a colour", type, name);
 }
 
+uint32_t pbrt_param_texture(Parser *p, const char *name)
+{
+    const Param *param = pbrt_find_param(p, name);
+    if (!param || strcmp(param->type, "texture") || param->kind != PARAM_STRINGS || !param->count)
+        return 0;
+    const Texture *tex = find_texture(p, &p->strings[param->first]);
+    return tex ? tex->scene_texture : 0;
+}
+
 /* A float parameter that may also be a (float) texture: its average. */
 bool pbrt_param_scalar(Parser *p, const char *name, double fallback, double *out)
 {

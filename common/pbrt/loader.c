@@ -446,6 +446,7 @@ static void parser_release(Parser *p)
         for (size_t k = 0; k < p->objects[i].shape_count; k++) {
             free(p->objects[i].shapes[k].positions);
             free(p->objects[i].shapes[k].indices);
+            free(p->objects[i].shapes[k].uvs);
         }
         free(p->objects[i].shapes);
         free(p->objects[i].name);

@@ -50,6 +50,27 @@ static bool roughness_exponent(Parser *p, double *exponent, double *alpha_out)
     return roughness_exponent_of(p, 0, false, exponent, alpha_out);
 }
 
+/* pbrt-v4's GGX alphas along u and v: "uroughness" and "vroughness",
+ * each defaulting to "roughness", remapped by sqrt unless remaproughness
+ * is false (v3: pbrt-v3's fit). A roughness texture counts as its mean. */
+static bool ggx_alphas(Parser *p, const Token *at, double fallback, bool v3, float alpha[2])
+{
+    double rough, uv[2];
+    bool remap;
+    if (!pbrt_param_scalar(p, "roughness", fallback, &rough) ||
+        !pbrt_param_scalar(p, "uroughness", rough, &uv[0]) || !pbrt_param_scalar(p, "vroughness", rough, &uv[1]) ||
+        !pbrt_param_bool(p, "remaproughness", true, &remap))
+        return false;
+    for (int i = 0; i < 2; i++) {
+        double r = uv[i] >= 0 ? uv[i] : 0;
+        alpha[i] = (float)(!remap ? r : v3 ? v3_roughness_to_alpha(r) : sqrt(r));
+    }
+    if (fabsf(alpha[0] - alpha[1]) > 1e-6f * fmaxf(alpha[0], alpha[1]))
+        pbrt_warn_at(p, at, "anisotropic roughness is oriented around the normal arbitrarily, not along the "
+                            "mesh's u direction");
+    return true;
+}
+
 /* Smooth-enough conductors become mirrors: a Phong lobe this narrow is a
  * mirror to every practical purpose and cheaper to sample. */
 #define MIRROR_ALPHA 0.02
@@ -75,26 +96,25 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
         if (!pbrt_param_color(p, "reflectance", half, m->diffuse, NULL))
             return false;
         clamp_albedo(p, at, m->diffuse, "reflectance");
+        m->diffuse_texture = pbrt_param_texture(p, "reflectance");
         m->type = SG_MATERIAL_DIFFUSE;
         return true;
     }
     if (pbrt_string_is(type, "coateddiffuse")) {
-        double exponent, alpha, eta;
-        float reflectance[3];
-        if (!pbrt_param_color(p, "reflectance", half, reflectance, NULL) ||
-            !roughness_exponent(p, &exponent, &alpha) || !pbrt_param_scalar(p, "eta", 1.5, &eta))
+        double eta, thickness, albedo;
+        if (!pbrt_param_color(p, "reflectance", half, m->diffuse, NULL) || !ggx_alphas(p, at, 0, false, m->roughness) ||
+            !pbrt_param_scalar(p, "eta", 1.5, &eta) || !pbrt_param_scalar(p, "albedo", 0, &albedo) ||
+            !pbrt_param_scalar(p, "thickness", 0.01, &thickness))
             return false;
-        clamp_albedo(p, at, reflectance, "reflectance");
-        if (!(eta >= 1))
+        clamp_albedo(p, at, m->diffuse, "reflectance");
+        m->diffuse_texture = pbrt_param_texture(p, "reflectance");
+        if (albedo > 0)
+            pbrt_warn_at(p, at, "coateddiffuse: a medium between coat and base (\"albedo\") is ignored");
+        if (!(eta > 1))
             eta = 1.5;
-        /* The coat reflects its normal-incidence Fresnel; the base gets the rest. */
-        double f0 = (eta - 1) * (eta - 1) / ((eta + 1) * (eta + 1));
-        m->type = SG_MATERIAL_GLOSSY;
-        for (int a = 0; a < 3; a++) {
-            m->diffuse[a] = (float)(reflectance[a] * (1 - f0));
-            m->specular[a] = (float)f0;
-        }
-        m->exponent = (float)exponent;
+        /* the closed form of a GGX coat over a Lambertian base (render/bsdf.c) */
+        m->type = SG_MATERIAL_COATED_DIFFUSE;
+        m->ior = (float)eta;
         return true;
     }
     if (pbrt_string_is(type, "conductor") || pbrt_string_is(type, "coatedconductor") ||
@@ -109,17 +129,25 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
             !pbrt_param_color(p, coated ? "conductor.k" : "k", cu->k, k, NULL) ||
             !pbrt_param_color(p, "reflectance", half, reflectance, &has_reflectance))
             return false;
+        /* GGX with the complex Fresnel of eta + i k; a reflectance in
+         * their place is pbrt's eta 1 and the k of that reflectance */
         for (int a = 0; a < 3; a++) {
-            double n = eta[a], kk = k[a];
-            double f0 = ((n - 1) * (n - 1) + kk * kk) / ((n + 1) * (n + 1) + kk * kk);
-            m->specular[a] = has_reflectance ? fminf(reflectance[a], 1) : (float)f0;
-            m->diffuse[a] = 0;
+            if (has_reflectance) {
+                float r = fminf(reflectance[a], 0.9999f);
+                eta[a] = 1;
+                k[a] = 2 * sqrtf(r) / sqrtf(1 - r);
+                m->diffuse[a] = reflectance[a];
+            } else {
+                m->diffuse[a] = 0;
+            }
+            m->eta[a] = eta[a];
+            m->k[a] = k[a];
         }
-        double exponent, alpha;
-        if (!roughness_exponent_of(p, v3 ? 0.01 : 0, v3, &exponent, &alpha))
+        if (has_reflectance)
+            m->diffuse_texture = pbrt_param_texture(p, "reflectance");
+        if (!ggx_alphas(p, at, v3 ? 0.01 : 0, v3, m->roughness))
             return false;
-        m->type = alpha < MIRROR_ALPHA ? SG_MATERIAL_MIRROR : SG_MATERIAL_GLOSSY;
-        m->exponent = (float)exponent;
+        m->type = SG_MATERIAL_CONDUCTOR;
         return true;
     }
     /* pbrt-v3 materials: Bitterli's collection first came in v3 syntax. */

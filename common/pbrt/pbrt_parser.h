@@ -89,6 +89,7 @@ typedef struct EmissiveMaterial {
 typedef struct Texture {
     char *name;
     float value[3]; /* average colour (float textures: all three equal) */
+    uint32_t scene_texture; /* 1 + index in the scene's textures; 0: a constant, `value` */
 } Texture;
 
 typedef struct NamedTransform {
@@ -99,6 +100,7 @@ typedef struct NamedTransform {
 /* A shape of an object definition, in world space at its definition. */
 typedef struct ObjectShape {
     double *positions;
+    float *uvs; /* 2 per vertex, or NULL */
     uint32_t vertex_count;
     uint32_t *indices;
     uint32_t triangle_count;
@@ -228,6 +230,9 @@ extern const NamedMetal pbrt_named_metals[];
 bool pbrt_param_color(Parser *p, const char *name, const float fallback[3], float out[3],
                       bool *present);
 bool pbrt_param_scalar(Parser *p, const char *name, double fallback, double *out);
+/* The scene texture a "texture NAME" parameter names (1 + index; 0: the
+ * parameter is absent, a constant, or a texture that does not vary). */
+uint32_t pbrt_param_texture(Parser *p, const char *name);
 
 /* ---- the statements, by file -------------------------------------------- */
 

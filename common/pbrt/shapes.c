@@ -33,7 +33,7 @@ static bool shape_transform(Parser *p, const Token *at, SgTransform *xf)
  * transform. */
 static bool emit_mesh(Parser *p, const Token *at, const char *what, const double *positions,
                       uint32_t vertex_count, uint32_t *indices, uint32_t triangle_count,
-                      const double *normals)
+                      const double *normals, const float *uvs)
 {
     if (p->materials[p->state.material].invisible) {
         pbrt_warn_at(p, at, "shapes with the \"interface\" material are left out (media are not "
@@ -86,11 +86,15 @@ static bool emit_mesh(Parser *p, const Token *at, const char *what, const double
         memset(s, 0, sizeof *s);
         s->positions = malloc((vertex_count ? vertex_count : 1) * 3 * sizeof(double));
         s->indices = malloc((triangle_count ? triangle_count : 1) * 3 * sizeof(uint32_t));
-        if (!s->positions || !s->indices) {
+        s->uvs = uvs ? malloc((vertex_count ? vertex_count : 1) * 2 * sizeof(float)) : NULL;
+        if (!s->positions || !s->indices || (uvs && !s->uvs)) {
             free(s->positions);
             free(s->indices);
+            free(s->uvs);
             return sg_fail(p->err, "%s: out of memory", p->core.path);
         }
+        if (uvs)
+            memcpy(s->uvs, uvs, vertex_count * 2 * sizeof(float));
         o->shape_count++;
         for (uint32_t v = 0; v < vertex_count; v++) {
             if (!sg_builder_check_point(&p->core, what, positions + 3 * (size_t)v, p->err))
@@ -103,8 +107,10 @@ static bool emit_mesh(Parser *p, const Token *at, const char *what, const double
         s->scene_material = material;
         return true;
     }
+    uint32_t first = p->core.scene->vertex_count;
     return sg_builder_append_mesh(&p->core, what, positions, vertex_count, indices,
-                                  triangle_count, &xf, material, p->err);
+                                  triangle_count, &xf, material, p->err) &&
+           (!uvs || sg_builder_set_uvs(&p->core, first, vertex_count, uvs, p->err));
 }
 
 
@@ -123,7 +129,7 @@ static bool plymesh(Parser *p, const Token *statement)
     if (!sg_ply_mesh_read(&mesh, path, &local))
         return pbrt_fail_at(p, statement, "%s", local.message);
     bool ok = emit_mesh(p, statement, path, mesh.positions, mesh.vertex_count, mesh.indices,
-                        mesh.triangle_count, mesh.normals);
+                        mesh.triangle_count, mesh.normals, mesh.uvs);
     sg_ply_mesh_release(&mesh);
     return ok;
 }
@@ -193,8 +199,24 @@ static bool inline_mesh(Parser *p, const Token *statement, const Token *type)
         pbrt_warn_at(p, statement, "alpha cut-outs are ignored (the shapes are opaque)");
     char what[4300];
     snprintf(what, sizeof what, "%s:%d", statement->source->path, statement->line);
+    /* texture coordinates: pbrt-v4's "point2 uv" (pbrt-v3 also wrote "float uv" or "st") */
+    const Param *UV = pbrt_find_param(p, "uv");
+    if (!UV)
+        UV = pbrt_find_param(p, "st");
+    float *uvs = NULL;
+    if (UV && UV->kind == PARAM_NUMBERS && UV->count == 2 * vertex_count) {
+        if (!(uvs = malloc(2 * vertex_count * sizeof(float)))) {
+            free(indices);
+            return sg_fail(p->err, "%s: out of memory", p->core.path);
+        }
+        for (size_t i = 0; i < 2 * vertex_count; i++)
+            uvs[i] = (float)p->numbers[UV->first + i];
+    } else if (UV) {
+        pbrt_warn_at(p, statement, "texture coordinates that are not 2 numbers per vertex are ignored");
+    }
     bool ok = emit_mesh(p, statement, what, p->numbers + P->first, (uint32_t)vertex_count,
-                        indices, (uint32_t)triangle_count, normals);
+                        indices, (uint32_t)triangle_count, normals, uvs);
+    free(uvs);
     free(indices);
     return ok;
 }
@@ -276,9 +298,11 @@ bool pbrt_object_instance(Parser *p, const Token *statement)
         return false;
     for (size_t i = 0; i < o->shape_count; i++) {
         const ObjectShape *s = &o->shapes[i];
+        uint32_t first = p->core.scene->vertex_count;
         if (!sg_builder_append_mesh(&p->core, o->name, s->positions, s->vertex_count,
                                     s->indices, s->triangle_count, &xf, s->scene_material,
-                                    p->err))
+                                    p->err) ||
+            (s->uvs && !sg_builder_set_uvs(&p->core, first, s->vertex_count, s->uvs, p->err)))
             return false;
     }
     return true;

@@ -61,6 +61,34 @@ static bool image_average(Parser *p, const char *path, double gamma, float out[3
     return readable;
 }
 
+/* A texture's operand: another texture (by reference) or a constant. */
+static bool texture_input(Parser *p, const char *name, const float fallback[3], SgTextureInput *in, float mean[3])
+{
+    if (!pbrt_param_color(p, name, fallback, mean, NULL))
+        return false;
+    in->texture = pbrt_param_texture(p, name);
+    memcpy(in->value, mean, sizeof in->value);
+    return true;
+}
+
+/* The (u, v) mapping every 2D texture has: pbrt-v4's "uv" with its scale
+ * and offset; the others are taken as "uv". */
+static bool texture_mapping(Parser *p, const Token *statement, SgTexture *t)
+{
+    double su, sv, du, dv;
+    if (!pbrt_param_float(p, "uscale", 1, &su) || !pbrt_param_float(p, "vscale", 1, &sv) ||
+        !pbrt_param_float(p, "udelta", 0, &du) || !pbrt_param_float(p, "vdelta", 0, &dv))
+        return false;
+    const Token *mapping = pbrt_param_string(p, "mapping");
+    if (mapping && !pbrt_string_is(mapping, "uv"))
+        pbrt_warn_at(p, statement, "texture mappings other than \"uv\" are taken as \"uv\"");
+    t->uscale = (float)su;
+    t->vscale = (float)sv;
+    t->udelta = (float)du;
+    t->vdelta = (float)dv;
+    return true;
+}
+
 bool pbrt_texture_statement(Parser *p, const Token *statement)
 {
     Token name, type, klass;
@@ -71,36 +99,48 @@ bool pbrt_texture_statement(Parser *p, const Token *statement)
         !pbrt_string_is(&type, "color"))
         return pbrt_fail_at(p, &type, "Texture \"%.*s\": type must be \"spectrum\" or \"float\"",
                             (int)name.len, name.s);
-    static const float grey[3] = {0.5f, 0.5f, 0.5f}, one[3] = {1, 1, 1};
+    static const float grey[3] = {0.5f, 0.5f, 0.5f}, one[3] = {1, 1, 1}, zero[3] = {0, 0, 0};
     float value[3];
     memcpy(value, grey, sizeof value);
+    /* what varies over the surface becomes a scene texture; a constant stays a value */
+    SgTexture st = {0};
+    bool varies = false;
+    if (!texture_mapping(p, statement, &st))
+        return false;
     if (pbrt_string_is(&klass, "constant")) {
         if (!pbrt_param_color(p, "value", one, value, NULL))
             return false;
     } else if (pbrt_string_is(&klass, "scale")) {
         float tex[3], scale[3];
-        if (!pbrt_param_color(p, "tex", one, tex, NULL) ||
-            !pbrt_param_color(p, "scale", one, scale, NULL))
+        if (!texture_input(p, "tex", one, &st.input[0], tex) ||
+            !texture_input(p, "scale", one, &st.input[1], scale))
             return false;
         for (int a = 0; a < 3; a++)
             value[a] = tex[a] * scale[a];
+        st.kind = SG_TEXTURE_SCALE;
+        varies = st.input[0].texture || st.input[1].texture;
     } else if (pbrt_string_is(&klass, "mix") || pbrt_string_is(&klass, "checkerboard")) {
-        static const float zero[3] = {0, 0, 0};
-        float a[3], b[3];
-        double amount = 0.5;
-        if (!pbrt_param_color(p, "tex1", one, a, NULL) ||
-            !pbrt_param_color(p, "tex2", zero, b, NULL) ||
-            (pbrt_string_is(&klass, "mix") && !pbrt_param_scalar(p, "amount", 0.5, &amount)))
+        float a[3], b[3], amount[3] = {0.5f, 0.5f, 0.5f};
+        bool mix = pbrt_string_is(&klass, "mix");
+        if (!texture_input(p, "tex1", one, &st.input[0], a) || !texture_input(p, "tex2", zero, &st.input[1], b) ||
+            (mix && !texture_input(p, "amount", amount, &st.input[2], amount)))
             return false;
         for (int c = 0; c < 3; c++)
-            value[c] = (float)((1 - amount) * a[c] + amount * b[c]);
+            value[c] = (1 - amount[0]) * a[c] + amount[0] * b[c];
+        double dimension;
+        if (!mix && (!pbrt_param_float(p, "dimension", 2, &dimension)))
+            return false;
+        if (!mix && dimension != 2)
+            pbrt_warn_at(p, statement, "3D checkerboards are taken as their mean colour");
+        st.kind = mix ? SG_TEXTURE_MIX : SG_TEXTURE_CHECKERBOARD;
+        varies = mix ? st.input[0].texture || st.input[1].texture || st.input[2].texture : dimension == 2;
     } else if (pbrt_string_is(&klass, "imagemap")) {
         const Token *file = pbrt_param_string(p, "filename");
         const Token *encoding = pbrt_param_string(p, "encoding");
-        float scale[3];
+        const Token *wrap = pbrt_param_string(p, "wrap");
+        double scale;
         bool invert;
-        if (!pbrt_param_color(p, "scale", one, scale, NULL) ||
-            !pbrt_param_bool(p, "invert", false, &invert))
+        if (!pbrt_param_float(p, "scale", 1, &scale) || !pbrt_param_bool(p, "invert", false, &invert))
             return false;
         if (!file)
             return pbrt_fail_at(p, statement, "imagemap texture without \"string filename\"");
@@ -123,16 +163,31 @@ bool pbrt_texture_statement(Parser *p, const Token *statement)
             gamma = atof(number) > 0 ? atof(number) : -1;
         }
         float average[3];
-        if (!image_average(p, path, gamma, average)) {
+        bool readable = image_average(p, path, gamma, average);
+        if (!readable) {
             memcpy(average, grey, sizeof average);
             pbrt_warn_at(p, statement, "image textures that cannot be read (missing files) are "
                                   "taken as grey 0.5");
         }
         for (int c = 0; c < 3; c++) {
-            value[c] = average[c] * scale[c];
+            value[c] = average[c] * (float)scale;
             if (invert)
                 value[c] = value[c] < 1 ? 1 - value[c] : 0;
         }
+        st.kind = SG_TEXTURE_IMAGE;
+        st.path = readable ? path : NULL;
+        st.gamma = (float)gamma;
+        st.scale = (float)scale;
+        st.invert = invert;
+        st.wrap = !wrap || pbrt_string_is(wrap, "repeat") ? SG_WRAP_REPEAT
+                  : pbrt_string_is(wrap, "clamp")         ? SG_WRAP_CLAMP
+                                                          : SG_WRAP_BLACK;
+        if (wrap && !pbrt_string_is(wrap, "repeat") && !pbrt_string_is(wrap, "clamp") &&
+            !pbrt_string_is(wrap, "black"))
+            pbrt_warn_at(p, statement, "texture wrap \"%.*s\" is taken as \"black\"", (int)wrap->len, wrap->s);
+        /* a missing image is its grey mean everywhere: it still counts as
+         * a texture, so that a comparison can tell it from a colour */
+        varies = true;
     } else {
         pbrt_warn_at(p, statement, "Texture \"%.*s\" is not supported: taken as grey 0.5",
                      (int)klass.len, klass.s);
@@ -140,6 +195,14 @@ bool pbrt_texture_statement(Parser *p, const Token *statement)
     if (!RESERVE(p, p->textures, p->texture_count, p->texture_capacity, 1))
         return false;
     Texture *t = &p->textures[p->texture_count];
+    t->scene_texture = 0;
+    if (varies) {
+        memcpy(st.mean, value, sizeof st.mean);
+        uint32_t id;
+        if (!sg_builder_add_texture(&p->core, &st, &id, p->err))
+            return false;
+        t->scene_texture = id + 1;
+    }
     if (!(t->name = pbrt_token_dup(&name)))
         return sg_fail(p->err, "%s: out of memory", p->core.path);
     memcpy(t->value, value, sizeof value);
