@@ -12,6 +12,7 @@
 
 #include "color.h"
 #include "image_io.h"
+#include "render/renderer.h"
 #include "scene.h"
 #include "support_files.h"
 
@@ -864,4 +865,51 @@ Test(pbrt_render, staircase_mean_brightness, .timeout = 120)
         cr_expect(fabs(got[c] - want[c]) <= tolerance * want[c],
                   "channel %d: mean %g, reference %g (tolerance %g%%)", c, got[c], want[c],
                   100 * tolerance);
+}
+
+/* ---- render: a texture seen through its uv ------------------------------- */
+
+/* A quad with a 2 x 1 checkerboard of red and blue over its uv, lit from
+ * behind the camera: its two halves render in its two colours. */
+Test(pbrt_render, checkerboard_texture_follows_the_uv)
+{
+    SgScene *s = load_ok(
+        HEADER "Texture \"check\" \"spectrum\" \"checkerboard\" \"float uscale\" 2\n"
+               "    \"rgb tex1\" [ 0.8 0 0 ] \"rgb tex2\" [ 0 0 0.8 ]\n"
+               "Material \"diffuse\" \"texture reflectance\" \"check\"\n"
+               "Shape \"trianglemesh\" \"point3 P\" [ -4 -4 5 4 -4 5 4 4 5 -4 4 5 ]\n"
+               "    \"point2 uv\" [ 0 0 1 0 1 1 0 1 ] \"integer indices\" [ 0 1 2 0 2 3 ]\n"
+               "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [ 5 5 5 ]\n"
+               "Shape \"trianglemesh\" \"point3 P\" [ -20 -20 -1 20 -20 -1 20 20 -1 ]\n"
+               "    \"integer indices\" [ 0 1 2 ]\nAttributeEnd\n");
+    cr_assert_not_null(s->uvs, "the quad's uv");
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.threads = 2;
+    SgError err = {0};
+    SgRenderer *r = sg_renderer_create(s, &o, &err);
+    cr_assert(r, "%s", err.message);
+    for (int i = 0; i < 4; i++)
+        sg_renderer_pass(r);
+    float *rgb = malloc(sizeof(float) * 3 * o.width * o.height);
+    sg_renderer_image(r, rgb);
+    /* per column: which colour wins; the columns must split in two runs */
+    int red_left = 0, red_right = 0, blue_left = 0, blue_right = 0;
+    for (int y = 0; y < o.height; y++)
+        for (int x = 0; x < o.width; x++) {
+            const float *p = rgb + 3 * ((size_t)y * o.width + x);
+            bool left = x < o.width / 2;
+            if (p[0] > 4 * p[2] + 1e-3f)
+                *(left ? &red_left : &red_right) += 1;
+            if (p[2] > 4 * p[0] + 1e-3f)
+                *(left ? &blue_left : &blue_right) += 1;
+            cr_assert(p[1] < 1e-6f, "no green anywhere (%d, %d): %g", x, y, p[1]);
+        }
+    int half = o.width * o.height / 2;
+    cr_expect((red_left > half * 9 / 10 && blue_right > half * 9 / 10) ||
+                  (blue_left > half * 9 / 10 && red_right > half * 9 / 10),
+              "red %d | %d, blue %d | %d of %d pixels a side", red_left, red_right, blue_left, blue_right, half);
+    free(rgb);
+    sg_renderer_free(r);
+    sg_scene_free(s);
 }
