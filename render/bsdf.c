@@ -14,7 +14,7 @@
  * the same light through a stochastic layer walk; this closed form leaves
  * out the rough coat's own spread of what crosses it (the crossings use
  * the smooth interface's Fresnel), measured against pbrt where it can be
- * (docs/render.md, "Materials"). */
+ * (README.md, "pbrt-v4 scenes"). */
 
 /* The tangent frame around the normal, made again where needed rather
  * than kept: a vertex's BSDF is copied along the path, small is fast. */
