@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../render/bsdf.h"
 #include "../render/openpgl_guide.h"
 #include "../render/renderer.h"
 #include "support_render.h"
@@ -380,6 +381,85 @@ static void glossy_case(SgSampling mode, double theta_deg)
               "glossy floor %s at %g degrees: %.5f, expected %.5f +- %.5f", sg_sampling_name(mode), theta_deg,
               st.mean[0], expected, 4 * st.std_error);
     sgt_scene_free(s);
+}
+
+/* The directional albedo of the BSDF of material m seen at theta_o (from
+ * +z, wo in the xz plane), channel 0, by the midpoint rule over the upper
+ * hemisphere of bsdf_eval: independent of every sampler. */
+static double bsdf_albedo_quadrature(const SgMaterial *sm, double theta_o)
+{
+    Material m;
+    material_init(&m, sm);
+    Bsdf b;
+    bsdf_init(&b, &m, v3(0, 0, 1), v3((float)sin(theta_o), 0.0f, (float)cos(theta_o)), m.kd);
+    const int nt = 1500, np = 1500;
+    double sum = 0.0;
+    for (int i = 0; i < nt; i++) {
+        double t = (i + 0.5) * (M_PI / 2) / nt;
+        for (int j = 0; j < np; j++) {
+            double ph = (j + 0.5) * 2 * M_PI / np;
+            Vec3 wi = v3((float)(sin(t) * cos(ph)), (float)(sin(t) * sin(ph)), (float)cos(t));
+            sum += bsdf_eval(&b, wi).x * cos(t) * sin(t);
+        }
+    }
+    return sum * (M_PI / 2 / nt) * (2 * M_PI / np);
+}
+
+/* A rough conductor or a coated diffuse floor in a glowing box: the floor
+ * reflects Le times the BSDF's directional albedo, whichever sampler draws
+ * the bounces (the guided mixture with the skeleton lobe: unbiased with
+ * the microfacet BSDFs' pdfs in its MIS). */
+static void microfacet_floor_case(SgSampling mode, SgMaterialType type, double theta_deg)
+{
+    const float le = 1.0f;
+    SgScene *s = sgt_scene_new();
+    const float black[3] = {0, 0, 0}, glow[3] = {le, le, le}, base[3] = {0.5f, 0.5f, 0.5f};
+    uint32_t wall = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, glow);
+    uint32_t floor_m = sgt_add_material(s, type, base, NULL);
+    SgMaterial *fm = sgt_material(s, floor_m);
+    fm->roughness[0] = fm->roughness[1] = 0.3f;
+    const float eta[3] = {0.2f, 0.92f, 1.1f}, k[3] = {3.91f, 2.45f, 2.14f}; /* copper */
+    memcpy(fm->eta, eta, sizeof eta);
+    memcpy(fm->k, k, sizeof k);
+    const double lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1};
+    sgt_add_box_inside(s, lo, hi, wall);
+    set_face_material(s, 1, 0.0, floor_m);
+    double th = theta_deg * M_PI / 180.0;
+    const double pos[3] = {0.5 * sin(th), 0.5 * cos(th), 0}, at[3] = {0, 0, 0};
+    const double up_z[3] = {0, 0, 1}, up_y[3] = {0, 1, 0};
+    sgt_set_camera(s, pos, at, theta_deg == 0 ? up_z : up_y, 1.0, 16, 16);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.sampling = mode;
+    o.alpha = 0.5f;
+    o.seed = 23;
+    SgtFixedPoint fp = {{0.4, 1.2, -0.3}};
+    o.guide.importance_point = sgt_fixed_point_guide;
+    o.guide.ctx = &fp;
+    SgError err = {0};
+    SgRenderer *r = sg_renderer_create(s, &o, &err);
+    cr_assert_not_null(r, "%s", err.message);
+    Stats st = render_stats(r, &o, 1024, 0, 0, o.width, o.height);
+    sg_renderer_free(r);
+    double expected = le * bsdf_albedo_quadrature(fm, th);
+    cr_log_info("%s floor %s at %g degrees: %.5f +- %.5f, expected %.5f", type == SG_MATERIAL_CONDUCTOR ? "conductor" : "coated",
+                sg_sampling_name(mode), theta_deg, st.mean[0], st.std_error, expected);
+    cr_assert_eq(st.nonfinite, 0);
+    cr_assert(fabs(st.mean[0] - expected) < 4.0 * st.std_error + 2e-3 * expected,
+              "%s: %.5f, expected %.5f +- %.5f", sg_sampling_name(mode), st.mean[0], expected, 4 * st.std_error);
+    sgt_scene_free(s);
+}
+
+Test(render_integrator, rough_conductor_floor_bsdf) { microfacet_floor_case(SG_SAMPLING_BSDF, SG_MATERIAL_CONDUCTOR, 40.0); }
+Test(render_integrator, rough_conductor_floor_guided)
+{
+    microfacet_floor_case(SG_SAMPLING_GUIDED, SG_MATERIAL_CONDUCTOR, 40.0);
+}
+Test(render_integrator, coated_diffuse_floor_bsdf) { microfacet_floor_case(SG_SAMPLING_BSDF, SG_MATERIAL_COATED_DIFFUSE, 0.0); }
+Test(render_integrator, coated_diffuse_floor_guided)
+{
+    microfacet_floor_case(SG_SAMPLING_GUIDED, SG_MATERIAL_COATED_DIFFUSE, 60.0);
 }
 
 Test(render_integrator, glossy_floor_normal_incidence_bsdf) { glossy_case(SG_SAMPLING_BSDF, 0.0); }
