@@ -105,6 +105,7 @@ bool pbrt_texture_statement(Parser *p, const Token *statement)
     /* what varies over the surface becomes a scene texture; a constant stays a value */
     SgTexture st = {0};
     bool varies = false;
+    char path[8192]; /* an image's file: st.path points here until the texture is added */
     if (!texture_mapping(p, statement, &st))
         return false;
     if (pbrt_string_is(&klass, "constant")) {
@@ -144,7 +145,6 @@ bool pbrt_texture_statement(Parser *p, const Token *statement)
             return false;
         if (!file)
             return pbrt_fail_at(p, statement, "imagemap texture without \"string filename\"");
-        char path[8192];
         if (!pbrt_resolve_path(p, statement, file, path, sizeof path))
             return false;
         /* pbrt's default: 8-bit images hold sRGB, float formats linear values */
