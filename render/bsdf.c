@@ -48,16 +48,8 @@ void bsdf_init_microfacet(Bsdf *b, const Material *m, Vec3 n, Vec3 wo, Vec3 albe
     b->ay = m->ay;
     if (b->kind == BSDF_CONDUCTOR) {
         b->lobe.diffuse_weight = 0.0f;
-        if (m->texture) { /* pbrt: a reflectance in place of eta and k */
-            b->ks = v3(1, 1, 1);
-            b->k = v3(sg_conductor_k_of_reflectance(albedo.x), sg_conductor_k_of_reflectance(albedo.y),
-                      sg_conductor_k_of_reflectance(albedo.z));
-            b->albedo = albedo;
-        } else {
-            b->ks = m->eta;
-            b->k = m->k;
-            b->albedo = m->ks;
-        }
+        bsdf_conductor_index(m, albedo, &b->ks, &b->k);
+        b->albedo = m->texture ? albedo : m->ks;
         return;
     }
     b->kd = albedo;

@@ -51,6 +51,21 @@ static inline float bsdf_pdf(const Bsdf *b, Vec3 wi);
 /* A direction from u0 (which lobe), u1, u2. */
 static inline Vec3 bsdf_sample(const Bsdf *b, float u0, float u1, float u2);
 
+/* A conductor's complex index at a point: the material's eta and k, or
+ * where a texture gives its reflectance, pbrt's eta 1 and the k that
+ * reflects the texture's value (albedo) at normal incidence. */
+static inline void bsdf_conductor_index(const Material *m, Vec3 albedo, Vec3 *eta, Vec3 *k)
+{
+    if (!m->texture) {
+        *eta = m->eta;
+        *k = m->k;
+        return;
+    }
+    *eta = v3(1, 1, 1);
+    *k = v3(sg_conductor_k_of_reflectance(albedo.x), sg_conductor_k_of_reflectance(albedo.y),
+            sg_conductor_k_of_reflectance(albedo.z));
+}
+
 /* The microfacet kinds' halves of the above (render/bsdf.c); the Phong kind
  * is the common one and stays inline. */
 void bsdf_init_microfacet(Bsdf *b, const Material *m, Vec3 n, Vec3 wo, Vec3 albedo);
@@ -100,6 +115,26 @@ static inline float bsdf_pdf(const Bsdf *b, Vec3 wi)
 static inline Vec3 bsdf_sample(const Bsdf *b, float u0, float u1, float u2)
 {
     return b->kind == BSDF_PHONG ? sg_sample_glossy(&b->lobe, u0, u1, u2) : bsdf_sample_microfacet(b, u0, u1, u2);
+}
+
+/* One-sample mixture (defensive importance sampling), the guided bounce:
+ * the BSDF's sampler with probability alpha, a cosine-power lobe folded
+ * onto the hemisphere of lobe.n (sampling.h's SgFoldedLobe) otherwise.
+ * The pdf, alpha p_bsdf + (1 - alpha) p_lobe, takes wn = w.n and also
+ * gives p_bsdf and w's cosines with the lobe's axis and its mirror image. */
+static inline Vec3 bsdf_mixture_sample(const Bsdf *b, const SgFoldedLobe *lobe, float alpha, float u0, float u1,
+                                       float u2)
+{
+    if (u0 < alpha)
+        return bsdf_sample(b, u0 / alpha, u1, u2);
+    return sg_sample_folded_lobe(lobe->axis, b->lobe.n, lobe->exponent, u1, u2);
+}
+
+static inline float bsdf_mixture_pdf(const Bsdf *b, const SgFoldedLobe *lobe, float alpha, Vec3 w, float wn,
+                                     float *pdf_bsdf, float *c1, float *c2)
+{
+    *pdf_bsdf = bsdf_pdf(b, w);
+    return alpha * *pdf_bsdf + (1.0f - alpha) * sg_pdf_folded_lobe_at(lobe, w, wn, c1, c2);
 }
 
 #endif

@@ -127,22 +127,13 @@ static void mixture_vertex_end(PathGuide *g, const GuideHit *h, bool lit, SgRng 
     }
 }
 
-/* alpha p_bsdf + (1 - alpha) p_lobe; also gives p_bsdf and w's cosines
- * with the lobe's axis and its mirror image (sampling.h's SgFoldedLobe). */
-static inline float mixture_pdf_at(const GuideVertex *v, const SgFoldedLobe *lobe, float alpha, Vec3 w, float wn,
-                                   float *pdf_bsdf, float *c1, float *c2)
-{
-    *pdf_bsdf = bsdf_pdf(&v->bsdf, w);
-    return alpha * *pdf_bsdf + (1.0f - alpha) * sg_pdf_folded_lobe_at(lobe, w, wn, c1, c2);
-}
-
 static float mixture_pdf(const GuideVertex *v, Vec3 w, float cos_n)
 {
     const MixtureVertex *mv = mixture_vertex_c(v);
     if (!mv->mixture)
         return guide_bsdf_pdf(v, w, cos_n);
     float pdf_bsdf, c1, c2;
-    return mixture_pdf_at(v, &mv->lobe, mv->mix.alpha, w, cos_n, &pdf_bsdf, &c1, &c2);
+    return bsdf_mixture_pdf(&v->bsdf, &mv->lobe, mv->mix.alpha, w, cos_n, &pdf_bsdf, &c1, &c2);
 }
 
 static Vec3 mixture_sample(GuideVertex *v, const float u[3], float *pdf)
@@ -152,11 +143,10 @@ static Vec3 mixture_sample(GuideVertex *v, const float u[3], float *pdf)
         return guide_bsdf_sample(v, u, pdf);
     float alpha = mv->mix.alpha;
     v->by_guide = !(u[0] < alpha);
-    Vec3 w = v->by_guide ? sg_sample_folded_lobe(mv->lobe.axis, v->bsdf.lobe.n, mv->lobe.exponent, u[1], u[2])
-                         : bsdf_sample(&v->bsdf, u[0] / alpha, u[1], u[2]);
+    Vec3 w = bsdf_mixture_sample(&v->bsdf, &mv->lobe, alpha, u[0], u[1], u[2]);
     /* with the BSDF's part and the cosines the learner needs */
-    mv->pdf = *pdf = mixture_pdf_at(v, &mv->lobe, alpha, w, v3_dot(w, v->bsdf.lobe.n), &mv->pdf_bsdf,
-                                    &mv->cos_axis, &mv->cos_mirror);
+    mv->pdf = *pdf = bsdf_mixture_pdf(&v->bsdf, &mv->lobe, alpha, w, v3_dot(w, v->bsdf.lobe.n), &mv->pdf_bsdf,
+                                      &mv->cos_axis, &mv->cos_mirror);
     return w;
 }
 

@@ -41,7 +41,6 @@ void material_init(Material *m, const SgMaterial *src)
         m->ay = fmaxf(m->ay, SG_GGX_SMOOTH_ALPHA);
         m->ks = sg_fresnel_conductor3(1.0f, m->eta, m->k);
         m->kd = v3(0, 0, 0);
-        m->diffuse_weight = 0.0f;
         m->roughness = sqrtf(m->ax * m->ay);
     } else if (m->type == SG_MATERIAL_COATED_DIFFUSE) {
         m->kd = v3(fminf(m->kd.x, 1), fminf(m->kd.y, 1), fminf(m->kd.z, 1));
@@ -51,8 +50,7 @@ void material_init(Material *m, const SgMaterial *src)
         m->fdr = sg_fresnel_diffuse_internal(m->ior);
         float f0 = sg_fresnel_dielectric(1.0f, m->ior);
         m->ks = v3(f0, f0, f0);
-        m->roughness = 1.0f;
-        m->diffuse_weight = 0.5f; /* per vertex, from its albedo (render/bsdf.c) */
+        m->roughness = 1.0f; /* its diffuse_weight is the vertex's (render/bsdf.c) */
     } else if (m->type == SG_MATERIAL_MIRROR) {
         if (v3_max_component(m->ks) <= 0.0f)
             m->ks = v3(1, 1, 1); /* a mirror given without Ks reflects fully */

@@ -18,7 +18,8 @@ typedef struct Material {
     SgMaterialType type;
     Vec3 kd, ks, emission; /* conductor: ks its reflectance at normal incidence */
     float exponent, ior;
-    float diffuse_weight; /* probability of sampling the diffuse part */
+    float diffuse_weight; /* diffuse, glossy: probability of sampling the diffuse part
+                           * (the microfacet kinds': their vertex's, render/bsdf.c) */
     float roughness;      /* for Open PGL: 1 diffuse, sqrt(2 / (p + 2)) a Phong lobe alone, GGX alpha */
     bool emissive;
     bool black;           /* no scattering at all */

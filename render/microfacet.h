@@ -15,13 +15,6 @@
 /* Below this alpha pbrt-v4 treats a surface as smooth (a delta lobe). */
 #define SG_GGX_SMOOTH_ALPHA 1e-3f
 
-/* pbrt-v4's roughness-to-alpha: sqrt(roughness) when remapped. */
-static inline float sg_ggx_alpha(float roughness, int remap)
-{
-    roughness = roughness > 0.0f ? roughness : 0.0f;
-    return remap ? sqrtf(roughness) : roughness;
-}
-
 /* D(h) for h.z > 0 (0 otherwise). */
 static inline float sg_ggx_d(Vec3 h, float ax, float ay)
 {

@@ -412,15 +412,9 @@ static void specular_bounce(const SgRenderer *r, const Material *m, const Hit *h
     if (m->type == SG_MATERIAL_MIRROR || m->type == SG_MATERIAL_CONDUCTOR) {
         Vec3 tint = m->ks;
         if (m->type == SG_MATERIAL_CONDUCTOR) { /* its Fresnel at this angle */
-            float cos_i = v3_dot(wo, n);
-            if (m->texture) {
-                Vec3 a = surface_albedo(r, m, h, thread);
-                Vec3 k = v3(sg_conductor_k_of_reflectance(a.x), sg_conductor_k_of_reflectance(a.y),
-                            sg_conductor_k_of_reflectance(a.z));
-                tint = sg_fresnel_conductor3(cos_i, v3(1, 1, 1), k);
-            } else {
-                tint = sg_fresnel_conductor3(cos_i, m->eta, m->k);
-            }
+            Vec3 eta, k;
+            bsdf_conductor_index(m, surface_albedo(r, m, h, thread), &eta, &k);
+            tint = sg_fresnel_conductor3(v3_dot(wo, n), eta, k);
         }
         ps->d = v3_normalize(sg_reflect(wo, n));
         ps->beta = v3_mul(ps->beta, tint);

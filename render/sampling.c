@@ -58,17 +58,3 @@ Vec3 sg_sample_glossy(const SgGlossyLobe *lobe, float u0, float u1, float u2)
         return sg_sample_cosine_hemisphere(lobe->n, u1, u2);
     return sg_sample_cosine_power(lobe->r, lobe->exponent, u1, u2);
 }
-
-Vec3 sg_sample_mixture_at(const SgGlossyLobe *bsdf, const SgFoldedLobe *lobe, float alpha, float u0, float u1,
-                          float u2)
-{
-    if (u0 < alpha)
-        return sg_sample_glossy(bsdf, u0 / alpha, u1, u2);
-    return sg_sample_folded_lobe(lobe->axis, bsdf->n, lobe->exponent, u1, u2);
-}
-
-Vec3 sg_sample_mixture(const SgMixture *m, float u0, float u1, float u2)
-{
-    SgFoldedLobe lobe = sg_folded_lobe(m->axis, m->bsdf.n, m->lobe_exponent);
-    return sg_sample_mixture_at(&m->bsdf, &lobe, m->alpha, u0, u1, u2);
-}

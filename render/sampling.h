@@ -72,29 +72,6 @@ SgGlossyLobe sg_glossy_lobe(Vec3 n, Vec3 wo, float exponent, float diffuse_weigh
 Vec3 sg_sample_glossy(const SgGlossyLobe *lobe, float u0, float u1, float u2);
 static inline float sg_pdf_glossy(const SgGlossyLobe *lobe, Vec3 w);
 
-/* One-sample mixture (defensive importance sampling): the glossy BSDF
- * sampler with probability alpha, the cosine-power lobe around `axis`
- * folded onto the hemisphere of bsdf.n otherwise;
- * pdf = alpha p_bsdf + (1 - alpha) p_folded_lobe. */
-typedef struct SgMixture {
-    SgGlossyLobe bsdf;
-    Vec3 axis;
-    float lobe_exponent;
-    float alpha;
-} SgMixture;
-
-Vec3 sg_sample_mixture(const SgMixture *m, float u0, float u1, float u2);
-static inline float sg_pdf_mixture(const SgMixture *m, Vec3 w);
-
-/* The same mixture as a renderer holds it at a vertex: the material's lobe
- * by pointer, the guide's lobe prepared (sg_folded_lobe around bsdf->n).
- * The pdf takes wn = w.n and also gives its BSDF part and w's cosines
- * with the axis and the mirrored axis. */
-Vec3 sg_sample_mixture_at(const SgGlossyLobe *bsdf, const SgFoldedLobe *lobe, float alpha, float u0,
-                          float u1, float u2);
-static inline float sg_pdf_mixture_at(const SgGlossyLobe *bsdf, const SgFoldedLobe *lobe, float alpha,
-                                      Vec3 w, float wn, float *pdf_bsdf, float *c1, float *c2);
-
 /* k when p = 2^k with 0 <= k <= 6 (c^p is then k squarings), else -1. */
 static inline int sg_exponent_squarings(float p)
 {
@@ -186,20 +163,6 @@ static inline float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w)
     SgFoldedLobe l = sg_folded_lobe(a, n, p);
     float c1, c2;
     return sg_pdf_folded_lobe_at(&l, w, v3_dot(w, n), &c1, &c2);
-}
-
-static inline float sg_pdf_mixture_at(const SgGlossyLobe *bsdf, const SgFoldedLobe *lobe, float alpha, Vec3 w,
-                                      float wn, float *pdf_bsdf, float *c1, float *c2)
-{
-    *pdf_bsdf = sg_pdf_glossy(bsdf, w);
-    return alpha * *pdf_bsdf + (1.0f - alpha) * sg_pdf_folded_lobe_at(lobe, w, wn, c1, c2);
-}
-
-static inline float sg_pdf_mixture(const SgMixture *m, Vec3 w)
-{
-    SgFoldedLobe lobe = sg_folded_lobe(m->axis, m->bsdf.n, m->lobe_exponent);
-    float pdf_bsdf, c1, c2;
-    return sg_pdf_mixture_at(&m->bsdf, &lobe, m->alpha, w, v3_dot(w, m->bsdf.n), &pdf_bsdf, &c1, &c2);
 }
 
 #ifdef __cplusplus

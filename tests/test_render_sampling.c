@@ -237,11 +237,31 @@ static Vec3 glossy_sample(const void *c, float u0, float u1, float u2)
     return sg_sample_glossy(c, u0, u1, u2);
 }
 static float glossy_pdf(const void *c, Vec3 w) { return sg_pdf_glossy(c, w); }
+/* The guided bounce's mixture (render/bsdf.h): a BSDF and a folded lobe. */
+typedef struct MixtureCtx {
+    Bsdf bsdf;
+    SgFoldedLobe lobe;
+    float alpha;
+} MixtureCtx;
+
+static MixtureCtx mixture_of(Bsdf bsdf, Vec3 axis, float exponent, float alpha)
+{
+    return (MixtureCtx){bsdf, sg_folded_lobe(axis, bsdf.lobe.n, exponent), alpha};
+}
+/* the Phong BSDF of a glossy lobe (its sampler and pdf need nothing else) */
+static Bsdf phong(SgGlossyLobe lobe) { return (Bsdf){.lobe = lobe, .kind = BSDF_PHONG}; }
+
 static Vec3 mixture_sample(const void *c, float u0, float u1, float u2)
 {
-    return sg_sample_mixture(c, u0, u1, u2);
+    const MixtureCtx *m = c;
+    return bsdf_mixture_sample(&m->bsdf, &m->lobe, m->alpha, u0, u1, u2);
 }
-static float mixture_pdf(const void *c, Vec3 w) { return sg_pdf_mixture(c, w); }
+static float mixture_pdf(const void *c, Vec3 w)
+{
+    const MixtureCtx *m = c;
+    float pdf_bsdf, c1, c2;
+    return bsdf_mixture_pdf(&m->bsdf, &m->lobe, m->alpha, w, v3_dot(w, m->bsdf.lobe.n), &pdf_bsdf, &c1, &c2);
+}
 
 static Vec3 tilted(float x, float y, float z) { return v3_normalize(v3(x, y, z)); }
 
@@ -340,16 +360,16 @@ static void glossy_pure_phong_200_case(void)
 static void mixture_half_case(void)
 {
     Vec3 n = tilted(0.0f, -0.3f, 1.0f);
-    SgMixture m = {sg_glossy_lobe(n, tilted(0.3f, 0.3f, 0.9f), 0.0f, 1.0f),
-                   tilted(0.7f, 0.1f, 0.2f), 30.0f, 0.5f};
+    MixtureCtx m = mixture_of(phong(sg_glossy_lobe(n, tilted(0.3f, 0.3f, 0.9f), 0.0f, 1.0f)),
+                              tilted(0.7f, 0.1f, 0.2f), 30.0f, 0.5f);
     assert_chi2("mixture 0.5 diffuse + lobe 30", mixture_sample, mixture_pdf, &m, 11, 8);
 }
 
 static void mixture_glossy_small_alpha_case(void)
 {
     Vec3 n = v3(0, 1, 0);
-    SgMixture m = {sg_glossy_lobe(n, tilted(0.5f, 0.5f, 0.1f), 50.0f, 0.3f),
-                   tilted(-0.6f, 0.3f, -0.5f), 4.0f, 0.1f};
+    MixtureCtx m = mixture_of(phong(sg_glossy_lobe(n, tilted(0.5f, 0.5f, 0.1f), 50.0f, 0.3f)),
+                              tilted(-0.6f, 0.3f, -0.5f), 4.0f, 0.1f);
     assert_chi2("mixture 0.1 glossy + lobe 4", mixture_sample, mixture_pdf, &m, 12, 8);
 }
 
@@ -358,8 +378,8 @@ static void mixture_lobe_axis_below_surface_keeps_support_case(void)
     /* The lobe points into the surface: the mixture still samples the
      * whole upper hemisphere through its BSDF part. */
     Vec3 n = v3(1, 0, 0);
-    SgMixture m = {sg_glossy_lobe(n, tilted(1, 1, 0), 0.0f, 1.0f), tilted(-1, 0.2f, 0.1f),
-                   10.0f, 0.5f};
+    MixtureCtx m = mixture_of(phong(sg_glossy_lobe(n, tilted(1, 1, 0), 0.0f, 1.0f)), tilted(-1, 0.2f, 0.1f),
+                              10.0f, 0.5f);
     assert_chi2("mixture lobe below", mixture_sample, mixture_pdf, &m, 13, 8);
 }
 
@@ -403,6 +423,15 @@ static void coated_case(float alpha, Vec3 n, Vec3 wo, uint64_t seed, int sub)
     assert_chi2(name, bsdf_sample_fn, bsdf_pdf_fn, &b, seed, sub);
 }
 
+static void mixture_conductor_case(void)
+{
+    /* the guide's lobe beside a rough conductor's GGX lobe */
+    Vec3 n = tilted(0.2f, 0.0f, 1.0f);
+    MixtureCtx m = mixture_of(microfacet_bsdf(SG_MATERIAL_CONDUCTOR, 0.2f, 0.2f, n, tilted(-0.5f, 0.4f, 0.7f)),
+                              tilted(0.6f, -0.2f, 0.5f), 16.0f, 0.5f);
+    assert_chi2("mixture 0.5 conductor 0.2 + lobe 16", mixture_sample, mixture_pdf, &m, 22, 16);
+}
+
 /* ---- the chi-square tests: one list declares them and counts them ------ */
 
 #define CHI2_CASES(X) \
@@ -426,6 +455,7 @@ static void coated_case(float alpha, Vec3 n, Vec3 wo, uint64_t seed, int sub)
       conductor_case(0.08f, 0.4f, v3(0, 1, 0), tilted(0.3f, 0.15f, -0.9f), 18, 16)) \
     X(conductor_ggx_0_05_narrow, conductor_case(0.05f, 0.05f, v3(0, 0, 1), tilted(-0.3f, 0.2f, 0.9f), 19, 32)) \
     X(coated_diffuse_ggx_0_2, coated_case(0.2f, tilted(-0.2f, 0.1f, 1.0f), tilted(0.5f, 0.5f, 0.6f), 20, 16)) \
+    X(mixture_conductor, mixture_conductor_case()) \
     X(coated_diffuse_ggx_0_1_grazing, coated_case(0.1f, v3(0, 0, 1), tilted(0.97f, 0.1f, 0.08f), 21, 16))
 
 #define CHI2_TEST(name, call) \
