@@ -139,11 +139,6 @@ static bool apply_material_json(const char *path, const cJSON *obj, const char *
                            "%s: %s.type must be diffuse, glossy, mirror, dielectric, conductor or coateddiffuse",
                            path, owner);
     }
-    if (m->type == SG_MATERIAL_CONDUCTOR && !cJSON_GetObjectItemCaseSensitive(obj, "eta")) {
-        const float copper_eta[3] = {0.200f, 0.924f, 1.10f}, copper_k[3] = {3.91f, 2.45f, 2.14f}; /* pbrt's default */
-        memcpy(m->eta, copper_eta, sizeof copper_eta);
-        memcpy(m->k, copper_k, sizeof copper_k);
-    }
     double exponent = m->exponent, ior = m->ior, roughness = m->roughness[0];
     if (!member_color(path, obj, owner, "albedo", m->diffuse, err) ||
         !member_color(path, obj, owner, "specular", m->specular, err) ||

@@ -101,6 +101,10 @@ void sg_material_default(SgMaterial *m, const char *name)
     m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0.5f;
     m->exponent = 1;
     m->ior = 1.5f;
+    /* a conductor's index unless told: copper's, pbrt's default */
+    const float copper_eta[3] = {0.200f, 0.924f, 1.10f}, copper_k[3] = {3.91f, 2.45f, 2.14f};
+    memcpy(m->eta, copper_eta, sizeof copper_eta);
+    memcpy(m->k, copper_k, sizeof copper_k);
 }
 
 bool sg_builder_add_material(SgSceneBuilder *b, const SgMaterial *m, uint32_t *id, SgError *err)

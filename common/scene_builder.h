@@ -26,7 +26,7 @@ bool sg_builder_begin(SgSceneBuilder *b, const char *path, SgError *err);
 /* Adds a scene file's text to the scene's source_hash. */
 void sg_builder_add_source(SgSceneBuilder *b, const char *text, size_t size);
 
-/* Diffuse grey 0.5, ior 1.5, no emission. */
+/* Diffuse grey 0.5, ior 1.5, no emission; as a conductor, copper. */
 void sg_material_default(SgMaterial *m, const char *name);
 bool sg_builder_add_material(SgSceneBuilder *b, const SgMaterial *m, uint32_t *id, SgError *err);
 

@@ -71,10 +71,6 @@ static bool ggx_alphas(Parser *p, const Token *at, double fallback, bool v3, flo
     return true;
 }
 
-/* Smooth-enough conductors become mirrors: a Phong lobe this narrow is a
- * mirror to every practical purpose and cheaper to sample. */
-#define MIRROR_ALPHA 0.02
-
 static bool make_material(Parser *p, const Token *at, const Token *type, const char *label,
                           PbrtMaterial *out)
 {
@@ -123,10 +119,10 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
             pbrt_warn_at(p, at, "Material \"coatedconductor\" is approximated by its conductor");
         float eta[3], k[3], reflectance[3];
         bool has_reflectance;
-        const NamedMetal *cu = &pbrt_named_metals[3];
         bool coated = pbrt_string_is(type, "coatedconductor"), v3 = pbrt_string_is(type, "metal");
-        if (!pbrt_param_color(p, coated ? "conductor.eta" : "eta", cu->eta, eta, NULL) ||
-            !pbrt_param_color(p, coated ? "conductor.k" : "k", cu->k, k, NULL) ||
+        /* unless told, copper: sg_material_default's, pbrt's default */
+        if (!pbrt_param_color(p, coated ? "conductor.eta" : "eta", m->eta, eta, NULL) ||
+            !pbrt_param_color(p, coated ? "conductor.k" : "k", m->k, k, NULL) ||
             !pbrt_param_color(p, "reflectance", half, reflectance, &has_reflectance))
             return false;
         /* GGX with the complex Fresnel of eta + i k; a reflectance in
