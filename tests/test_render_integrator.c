@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "../render/bsdf.h"
+#include "scene_builder.h"
 #include "../render/openpgl_guide.h"
 #include "../render/renderer.h"
 #include "support_render.h"
@@ -300,17 +301,6 @@ static void set_face_material(SgScene *s, int axis, double value, uint32_t m)
     }
 }
 
-static uint32_t add_glossy(SgScene *s, float kd, float ks, float exponent)
-{
-    const float d[3] = {kd, kd, kd};
-    uint32_t m = sgt_add_material(s, SG_MATERIAL_GLOSSY, d, NULL);
-    SgMaterial *mat = sgt_material(s, m);
-    for (int i = 0; i < 3; i++)
-        mat->specular[i] = ks;
-    mat->exponent = exponent;
-    return m;
-}
-
 /* The directional albedo of the normalized Phong lobe, seen at theta_o
  * from the normal: the integral over the upper hemisphere of
  * (p + 2) / (2 pi) max(0, wi.r)^p cos(theta_i), r the mirror direction,
@@ -332,17 +322,19 @@ static double phong_albedo(double p, double theta_o)
     return sum * (M_PI / 2 / nt) * (2 * M_PI / np) * (p + 2) / (2 * M_PI);
 }
 
-/* A glossy floor in a box whose other walls glow (radiance Le, black): the
- * floor reflects Le (kd + ks A(theta_o)), A the Phong lobe's directional
- * albedo. At normal incidence A = 1: energy exactly conserved. Away from it
- * part of the lobe is below the floor and lost: A < 1, as computed. */
-static void glossy_case(SgSampling mode, double theta_deg)
+/* A floor of material `floor` in a box whose other walls glow (radiance 1,
+ * black), its centre seen from theta_deg off its normal (guided: with a
+ * fixed alpha 0.5 and the lobe toward a point under the ceiling): the
+ * render's statistics over spp passes, and the share of bounces the lobe
+ * drew. What the floor reflects is its directional albedo. */
+static Stats floor_in_glowing_box(SgSampling mode, const SgMaterial *floor, double theta_deg, uint64_t seed, int spp,
+                                  double *lobe_share)
 {
-    const float kd = 0.3f, ks = 0.6f, p = 20.0f, le = 1.0f;
     SgScene *s = sgt_scene_new();
-    const float black[3] = {0, 0, 0}, glow[3] = {le, le, le};
+    const float black[3] = {0, 0, 0}, glow[3] = {1, 1, 1};
     uint32_t wall = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, glow);
-    uint32_t floor_m = add_glossy(s, kd, ks, p);
+    uint32_t floor_m = sgt_add_material(s, floor->type, floor->diffuse, NULL);
+    *sgt_material(s, floor_m) = *floor;
     const double lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1};
     sgt_add_box_inside(s, lo, hi, wall);
     set_face_material(s, 1, 0.0, floor_m);
@@ -355,16 +347,37 @@ static void glossy_case(SgSampling mode, double theta_deg)
     sg_render_options_default(&o, s);
     o.sampling = mode;
     o.alpha = 0.5f;
-    o.seed = 21;
+    o.seed = seed;
     SgtFixedPoint fp = {{0.4, 1.2, -0.3}};
     o.guide.importance_point = sgt_fixed_point_guide;
     o.guide.ctx = &fp;
     SgError err = {0};
     SgRenderer *r = sg_renderer_create(s, &o, &err);
     cr_assert_not_null(r, "%s", err.message);
-    Stats st = render_stats(r, &o, 1024, 0, 0, o.width, o.height);
-    double lobe = sg_renderer_lobe_share(r);
+    Stats st = render_stats(r, &o, spp, 0, 0, o.width, o.height);
+    *lobe_share = sg_renderer_lobe_share(r);
     sg_renderer_free(r);
+    sgt_scene_free(s);
+    return st;
+}
+
+/* A glossy floor in the glowing box reflects Le (kd + ks A(theta_o)), A
+ * the Phong lobe's directional albedo. At normal incidence A = 1: energy
+ * exactly conserved. Away from it part of the lobe is below the floor and
+ * lost: A < 1, as computed. */
+static void glossy_case(SgSampling mode, double theta_deg)
+{
+    const float kd = 0.3f, ks = 0.6f, p = 20.0f, le = 1.0f;
+    SgMaterial floor;
+    sg_material_default(&floor, "floor");
+    floor.type = SG_MATERIAL_GLOSSY;
+    for (int i = 0; i < 3; i++) {
+        floor.diffuse[i] = kd;
+        floor.specular[i] = ks;
+    }
+    floor.exponent = p;
+    double th = theta_deg * M_PI / 180.0, lobe;
+    Stats st = floor_in_glowing_box(mode, &floor, theta_deg, 21, 1024, &lobe);
     double albedo = phong_albedo(p, th);
     double expected = le * (kd + ks * albedo);
     cr_log_info("glossy floor %s at %g degrees: %.5f +- %.5f, expected %.5f (Phong albedo %.5f), lobe drew %.3f",
@@ -380,7 +393,6 @@ static void glossy_case(SgSampling mode, double theta_deg)
     cr_assert(fabs(st.mean[0] - expected) < 4.0 * st.std_error + 1e-3 * expected,
               "glossy floor %s at %g degrees: %.5f, expected %.5f +- %.5f", sg_sampling_name(mode), theta_deg,
               st.mean[0], expected, 4 * st.std_error);
-    sgt_scene_free(s);
 }
 
 /* The directional albedo of the BSDF of material m seen at theta_o (from
@@ -411,44 +423,21 @@ static double bsdf_albedo_quadrature(const SgMaterial *sm, double theta_o)
  * the microfacet BSDFs' pdfs in its MIS). */
 static void microfacet_floor_case(SgSampling mode, SgMaterialType type, double theta_deg)
 {
-    const float le = 1.0f;
-    SgScene *s = sgt_scene_new();
-    const float black[3] = {0, 0, 0}, glow[3] = {le, le, le}, base[3] = {0.5f, 0.5f, 0.5f};
-    uint32_t wall = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, glow);
-    uint32_t floor_m = sgt_add_material(s, type, base, NULL);
-    SgMaterial *fm = sgt_material(s, floor_m);
-    fm->roughness[0] = fm->roughness[1] = 0.3f;
+    SgMaterial floor;
+    sg_material_default(&floor, "floor");
+    floor.type = type;
+    floor.roughness[0] = floor.roughness[1] = 0.3f;
     const float eta[3] = {0.2f, 0.92f, 1.1f}, k[3] = {3.91f, 2.45f, 2.14f}; /* copper */
-    memcpy(fm->eta, eta, sizeof eta);
-    memcpy(fm->k, k, sizeof k);
-    const double lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1};
-    sgt_add_box_inside(s, lo, hi, wall);
-    set_face_material(s, 1, 0.0, floor_m);
-    double th = theta_deg * M_PI / 180.0;
-    const double pos[3] = {0.5 * sin(th), 0.5 * cos(th), 0}, at[3] = {0, 0, 0};
-    const double up_z[3] = {0, 0, 1}, up_y[3] = {0, 1, 0};
-    sgt_set_camera(s, pos, at, theta_deg == 0 ? up_z : up_y, 1.0, 16, 16);
-    sgt_finish(s);
-    SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.sampling = mode;
-    o.alpha = 0.5f;
-    o.seed = 23;
-    SgtFixedPoint fp = {{0.4, 1.2, -0.3}};
-    o.guide.importance_point = sgt_fixed_point_guide;
-    o.guide.ctx = &fp;
-    SgError err = {0};
-    SgRenderer *r = sg_renderer_create(s, &o, &err);
-    cr_assert_not_null(r, "%s", err.message);
-    Stats st = render_stats(r, &o, 1024, 0, 0, o.width, o.height);
-    sg_renderer_free(r);
-    double expected = le * bsdf_albedo_quadrature(fm, th);
+    memcpy(floor.eta, eta, sizeof eta);
+    memcpy(floor.k, k, sizeof k);
+    double lobe;
+    Stats st = floor_in_glowing_box(mode, &floor, theta_deg, 23, 1024, &lobe);
+    double expected = bsdf_albedo_quadrature(&floor, theta_deg * M_PI / 180.0);
     cr_log_info("%s floor %s at %g degrees: %.5f +- %.5f, expected %.5f", type == SG_MATERIAL_CONDUCTOR ? "conductor" : "coated",
                 sg_sampling_name(mode), theta_deg, st.mean[0], st.std_error, expected);
     cr_assert_eq(st.nonfinite, 0);
     cr_assert(fabs(st.mean[0] - expected) < 4.0 * st.std_error + 2e-3 * expected,
               "%s: %.5f, expected %.5f +- %.5f", sg_sampling_name(mode), st.mean[0], expected, 4 * st.std_error);
-    sgt_scene_free(s);
 }
 
 Test(render_integrator, rough_conductor_floor_bsdf) { microfacet_floor_case(SG_SAMPLING_BSDF, SG_MATERIAL_CONDUCTOR, 40.0); }
