@@ -22,7 +22,7 @@ typedef enum SgMaterialType {
     SG_MATERIAL_DIFFUSE,    /* Lambert, albedo = diffuse */
     SG_MATERIAL_GLOSSY,     /* diffuse + normalized Phong lobe (specular, exponent) */
     SG_MATERIAL_MIRROR,     /* perfect reflection tinted by specular */
-    SG_MATERIAL_DIELECTRIC, /* smooth glass with index ior */
+    SG_MATERIAL_DIELECTRIC, /* glass with index ior; GGX-rough where roughness > 0 */
     SG_MATERIAL_CONDUCTOR,  /* metal: GGX microfacets (roughness), complex
                              * Fresnel of eta + i k; a mirror below alpha 1e-3 */
     SG_MATERIAL_COATED_DIFFUSE, /* a diffuse base (diffuse) under a GGX
@@ -68,7 +68,7 @@ typedef struct SgMaterial {
     float exponent;    /* Ns: Phong exponent */
     float ior;         /* Ni */
     float emission[3]; /* Ke: emitted radiance; non-zero makes its triangles lights */
-    float roughness[2]; /* conductor, coated diffuse: GGX alpha along the tangent and bitangent */
+    float roughness[2]; /* conductor, coated diffuse, dielectric: GGX alpha along the tangent and bitangent */
     float eta[3], k[3]; /* conductor: complex index of refraction per channel */
     /* 1 + index in scene->textures of what varies `diffuse` over the
      * surface (diffuse, glossy and coated diffuse: the albedo; conductor:

@@ -51,11 +51,19 @@ void material_init(Material *m, const SgMaterial *src)
         float f0 = sg_fresnel_dielectric(1.0f, m->ior);
         m->ks = v3(f0, f0, f0);
         m->roughness = 1.0f; /* its diffuse_weight is the vertex's (render/bsdf.c) */
+    } else if (m->type == SG_MATERIAL_DIELECTRIC) {
+        /* smooth below pbrt's threshold: the exact refraction (a delta) */
+        m->ax = fmaxf(src->roughness[0], 0);
+        m->ay = fmaxf(src->roughness[1], 0);
+        m->delta = fmaxf(m->ax, m->ay) < SG_GGX_SMOOTH_ALPHA;
+        m->ax = fmaxf(m->ax, SG_GGX_SMOOTH_ALPHA);
+        m->ay = fmaxf(m->ay, SG_GGX_SMOOTH_ALPHA);
+        m->roughness = sqrtf(m->ax * m->ay);
     } else if (m->type == SG_MATERIAL_MIRROR) {
         if (v3_max_component(m->ks) <= 0.0f)
             m->ks = v3(1, 1, 1); /* a mirror given without Ks reflects fully */
         m->ks = v3(fminf(m->ks.x, 1), fminf(m->ks.y, 1), fminf(m->ks.z, 1));
     }
-    m->delta = m->delta || m->type == SG_MATERIAL_MIRROR || m->type == SG_MATERIAL_DIELECTRIC;
+    m->delta = m->delta || m->type == SG_MATERIAL_MIRROR;
     m->texture = src->diffuse_texture;
 }

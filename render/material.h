@@ -1,7 +1,8 @@
 /* The renderer's materials, made from the scene's SgMaterial with energy
  * conservation enforced: diffuse, glossy (diffuse plus a normalized Phong
- * lobe), mirror and dielectric (smooth), conductor (GGX, or a mirror with
- * its Fresnel when smooth) and coated diffuse. render/bsdf.h turns one into
+ * lobe), mirror, dielectric (GGX, or the exact refraction when smooth),
+ * conductor (GGX, or a mirror with its Fresnel when smooth) and coated
+ * diffuse. render/bsdf.h turns one into
  * the BSDF at a vertex. */
 #ifndef SG_RENDER_MATERIAL_H
 #define SG_RENDER_MATERIAL_H
@@ -23,9 +24,9 @@ typedef struct Material {
     float roughness;      /* for Open PGL: 1 diffuse, sqrt(2 / (p + 2)) a Phong lobe alone, GGX alpha */
     bool emissive;
     bool black;           /* no scattering at all */
-    bool delta;           /* a specular bounce: mirror, glass, smooth conductor */
+    bool delta;           /* a specular bounce: mirror, smooth glass, smooth conductor */
     Vec3 eta, k;          /* conductor: complex index of refraction */
-    float ax, ay;         /* conductor, coated diffuse: GGX alpha */
+    float ax, ay;         /* conductor, coated diffuse, dielectric: GGX alpha */
     float fdr;            /* coated diffuse: the coat's diffuse reflectance from inside */
     uint32_t texture;     /* 1 + index of the texture that varies kd (SgMaterial.diffuse_texture); 0: none */
 } Material;

@@ -28,3 +28,82 @@ float sg_fresnel_diffuse_internal(float eta)
     }
     return (float)(2.0 * sum / n);
 }
+
+/* The microfacet normal that takes wo to wi (the generalized half vector:
+ * wo + wi in reflection, wo + eta wi in transmission), turned to z > 0;
+ * false where none does (wi in the plane, or a microfacet seen from behind
+ * by wo or wi). */
+static bool dielectric_half(Vec3 wo, Vec3 wi, float eta, Vec3 *h)
+{
+    if (wi.z == 0.0f)
+        return false;
+    Vec3 m = wi.z > 0.0f ? v3_add(wo, wi) : v3_add(wo, v3_scale(wi, eta));
+    float l = v3_length(m);
+    if (!(l > 0.0f))
+        return false;
+    m = v3_scale(m, (m.z < 0.0f ? -1.0f : 1.0f) / l);
+    if (!(v3_dot(m, wo) > 0.0f) || v3_dot(m, wi) * wi.z <= 0.0f)
+        return false;
+    *h = m;
+    return true;
+}
+
+float sg_ggx_dielectric_f(Vec3 wo, Vec3 wi, float eta, float ax, float ay)
+{
+    Vec3 h;
+    if (!dielectric_half(wo, wi, eta, &h))
+        return 0.0f;
+    float cos_oh = v3_dot(wo, h), cos_ih = v3_dot(wi, h);
+    float f = sg_fresnel_dielectric(cos_oh, eta);
+    float dg = sg_ggx_d(h, ax, ay) * sg_ggx_g(wo, wi, ax, ay);
+    if (wi.z > 0.0f)
+        return dg * f / (4.0f * wo.z * wi.z);
+    float denom = cos_ih + cos_oh / eta;
+    return dg * (1.0f - f) * fabsf(cos_ih * cos_oh / (wi.z * wo.z * denom * denom)) / (eta * eta);
+}
+
+float sg_ggx_dielectric_pdf(Vec3 wo, Vec3 wi, float eta, float ax, float ay)
+{
+    Vec3 h;
+    if (!dielectric_half(wo, wi, eta, &h))
+        return 0.0f;
+    float cos_oh = v3_dot(wo, h), cos_ih = v3_dot(wi, h);
+    float f = sg_fresnel_dielectric(cos_oh, eta);
+    float visible = sg_ggx_g1(wo, ax, ay) * sg_ggx_d(h, ax, ay) * cos_oh / wo.z; /* density of h */
+    if (wi.z > 0.0f)
+        return visible / (4.0f * cos_oh) * f;
+    float denom = cos_ih + cos_oh / eta;
+    return visible * fabsf(cos_ih) / (denom * denom) * (1.0f - f);
+}
+
+bool sg_ggx_dielectric_sample(Vec3 wo, float eta, float ax, float ay, float uc, float u1, float u2, Vec3 *wi,
+                              float *weight, float *pdf)
+{
+    Vec3 h = sg_ggx_sample_visible(wo, ax, ay, u1, u2);
+    float cos_oh = v3_dot(wo, h);
+    float f = sg_fresnel_dielectric(cos_oh, eta);
+    Vec3 w;
+    float scale = 1.0f;
+    if (uc < f) {
+        w = v3_sub(v3_scale(h, 2.0f * cos_oh), wo);
+        if (!(w.z > 0.0f))
+            return false;
+    } else {
+        float sin2_t = (1.0f - cos_oh * cos_oh) / (eta * eta);
+        if (!(sin2_t < 1.0f))
+            return false; /* total internal reflection: f = 1, not reached */
+        float cos_t = sqrtf(1.0f - sin2_t);
+        w = v3_add(v3_scale(wo, -1.0f / eta), v3_scale(h, cos_oh / eta - cos_t));
+        if (!(w.z < 0.0f))
+            return false;
+        scale = 1.0f / (eta * eta);
+    }
+    w = v3_normalize(w);
+    float p = sg_ggx_dielectric_pdf(wo, w, eta, ax, ay);
+    if (!(p > 0.0f))
+        return false; /* at the edge of the support, in float */
+    *wi = w;
+    *pdf = p;
+    *weight = scale * sg_ggx_g(wo, w, ax, ay) / sg_ggx_g1(wo, ax, ay);
+    return true;
+}

@@ -8,6 +8,7 @@
 
 #include <complex.h>
 #include <math.h>
+#include <stdbool.h>
 
 #include "sampling.h"
 #include "vecmath.h"
@@ -105,6 +106,23 @@ static inline float sg_conductor_k_of_reflectance(float r)
     r = sg_minf(sg_maxf(r, 0.0f), 0.9999f);
     return 2.0f * sqrtf(r) / sqrtf(1.0f - r);
 }
+
+/* A rough dielectric interface (pbrt-v4's DielectricBxDF with alpha > 0),
+ * in the frame of the normal on wo's side (wo.z > 0); eta is the index
+ * beyond the surface over the index on wo's side. It reflects F(wo.h) and
+ * transmits the rest through the microfacet h (the generalized half vector
+ * of wo and wi); transmitted radiance is scaled by 1 / eta^2 (it is
+ * compressed entering a denser medium). f and pdf cover the whole sphere. */
+float sg_ggx_dielectric_f(Vec3 wo, Vec3 wi, float eta, float ax, float ay);
+float sg_ggx_dielectric_pdf(Vec3 wo, Vec3 wi, float eta, float ax, float ay);
+/* Draws wi from the density above: a visible microfacet from u1, u2, then
+ * reflection with probability F, refraction otherwise (uc). Returns false
+ * where the drawn microfacet sends wi to the wrong side (the path ends:
+ * that mass is what the pdf misses from 1). *weight = f |wi.z| / pdf, which
+ * for this sampler is G(wo, wi) / G1(wo), over eta^2 when transmitted;
+ * *pdf its density (for a guide's record). */
+bool sg_ggx_dielectric_sample(Vec3 wo, float eta, float ax, float ay, float uc, float u1, float u2, Vec3 *wi,
+                              float *weight, float *pdf);
 
 /* Cosine-weighted hemispherical average of the dielectric Fresnel
  * reflectance seen from inside a medium of index eta (light leaving a

@@ -449,6 +449,37 @@ static void specular_bounce(const SgRenderer *r, const Material *m, const Hit *h
         r->guide->ops->record_bounce(seg, ps->d, 1.0f, weight, true, refracted ? 1.0f / eta : 1.0f, 0.0f);
 }
 
+/* A rough dielectric's bounce: drawn from its BSDF alone, reflected or
+ * transmitted (render/microfacet.h). Like smooth glass it samples no light
+ * (a light is rarely reached through glass by a shadow ray) and asks no
+ * guide, so the emission the bounce finds counts fully (specular_bounce:
+ * no other strategy could have found it). False where the path ends. */
+static bool rough_dielectric_bounce(const SgRenderer *r, const Material *m, const Hit *h, Vec3 wo, Vec3 n,
+                                    bool entering, PathState *ps, SgRng *rng, GuideSegment *seg)
+{
+    float eta = entering ? m->ior : 1.0f / m->ior; /* beyond the surface over wo's side */
+    Vec3 t, b;
+    v3_basis(n, &t, &b);
+    Vec3 wo_l = v3(v3_dot(wo, t), v3_dot(wo, b), sg_maxf(v3_dot(wo, n), 1e-6f));
+    float uc = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
+    Vec3 wi_l;
+    float weight, pdf;
+    if (!sg_ggx_dielectric_sample(wo_l, eta, m->ax, m->ay, uc, u1, u2, &wi_l, &weight, &pdf))
+        return false;
+    Vec3 wi = v3_normalize(v3_add(v3_add(v3_scale(t, wi_l.x), v3_scale(b, wi_l.y)), v3_scale(n, wi_l.z)));
+    bool refracted = wi_l.z < 0.0f;
+    ps->d = wi;
+    ps->o = offset_origin(&r->geo, h->p, refracted ? v3_scale(n, -1.0f) : n);
+    ps->beta = v3_scale(ps->beta, weight);
+    /* the roulette follows what is lost, not the compression of radiance */
+    ps->rr_beta = v3_scale(ps->rr_beta, refracted ? weight * eta * eta : weight);
+    ps->specular_bounce = true;
+    if (seg)
+        r->guide->ops->record_bounce(seg, wi, pdf, v3(weight, weight, weight), false, refracted ? eta : 1.0f,
+                                     m->roughness);
+    return true;
+}
+
 /* Next-event estimation at a diffuse or glossy vertex: one point on the
  * lights, its shadow ray, and what it brings (before the MIS weight). */
 typedef struct LightSample {
@@ -558,6 +589,9 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, const PathCtx *pc, Vec3 *s
 
             if (m->delta) {
                 specular_bounce(r, m, &h, wo, n, cos_o < 0.0f, &ps, rng, seg, pc->thread);
+            } else if (m->type == SG_MATERIAL_DIELECTRIC) {
+                if (!rough_dielectric_bounce(r, m, &h, wo, n, cos_o < 0.0f, &ps, rng, seg))
+                    break;
             } else {
                 if (m->black)
                     break;

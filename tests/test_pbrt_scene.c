@@ -274,7 +274,7 @@ Test(pbrt_materials, mapped_to_ours)
         "    \"spectrum eta\" \"metal-Au-eta\" \"spectrum k\" \"metal-Au-k\"\n"
         "MakeNamedMaterial \"brushed\" \"string type\" \"conductor\" \"bool remaproughness\" false\n"
         "    \"float uroughness\" 0.3 \"float vroughness\" 0.3 \"rgb reflectance\" [ 0.9 0.8 0.7 ]\n"
-        "MakeNamedMaterial \"water\" \"string type\" \"dielectric\" \"float eta\" 1.33\n"
+        "MakeNamedMaterial \"water\" \"string type\" \"dielectric\" \"float eta\" 1.33 \"float roughness\" 0.2\n"
         "MakeNamedMaterial \"poster\" \"string type\" \"diffuse\" \"texture reflectance\" \"photo\"\n"
         "NamedMaterial \"wall\"\n" TRIANGLE "NamedMaterial \"floor\"\n" TRIANGLE
         "NamedMaterial \"gold\"\n" TRIANGLE "NamedMaterial \"brushed\"\n" TRIANGLE
@@ -307,9 +307,11 @@ Test(pbrt_materials, mapped_to_ours)
     cr_expect_float_eq(m->eta[1], 1.0f, 1e-6);
     cr_expect_float_eq(m->k[1], 2 * sqrtf(0.8f) / sqrtf(0.2f), 1e-4);
 
-    m = material_of(s, 4);
+    m = material_of(s, 4); /* rough water: roughness remapped by sqrt */
     cr_expect_eq(m->type, SG_MATERIAL_DIELECTRIC);
     cr_expect_float_eq(m->ior, 1.33f, 1e-6);
+    cr_expect_float_eq(m->roughness[0], sqrtf(0.2f), 1e-6);
+    cr_expect_float_eq(m->roughness[1], sqrtf(0.2f), 1e-6);
 
     m = material_of(s, 5);
     cr_expect_float_eq(m->diffuse[0], 0.5f, 1e-6, "image textures: grey");
@@ -420,6 +422,7 @@ Test(pbrt_materials, pbrt_v3_materials)
     cr_expect(m->type == SG_MATERIAL_MIRROR && fabsf(m->specular[1] - 0.9f) < 1e-6f);
     m = material_of(s, 3);
     cr_expect(m->type == SG_MATERIAL_DIELECTRIC && fabsf(m->ior - 1.7f) < 1e-6f);
+    cr_expect_float_eq(m->roughness[0], 0.0f, 1e-9, "no roughness is smooth glass, whatever the v3 remapping");
     m = material_of(s, 4); /* v3 remapping of 0.001: alpha ~ 0.05, a rough copper */
     cr_expect_eq(m->type, SG_MATERIAL_CONDUCTOR);
     cr_expect(m->roughness[0] > 0.03f && m->roughness[0] < 0.08f, "alpha %g", m->roughness[0]);

@@ -1,7 +1,7 @@
 /* The microfacet BSDFs (render/bsdf.h, render/microfacet.h) beyond their
  * samplers (chi-square: test_render_sampling.c): Fresnel values against
  * their closed forms, white furnaces (energy never above 1; how much GGX
- * conductors lose at high roughness), and the coated diffuse against a
+ * conductors and rough dielectrics lose at high roughness), and the coated diffuse against a
  * random walk through the layer it stands for (pbrt-v4's coateddiffuse
  * walks the same layer stochastically). */
 #include <criterion/criterion.h>
@@ -182,4 +182,83 @@ Test(render_bsdf, coated_diffuse_matches_the_layer_it_models)
             cr_assert_float_eq(b.albedo.y, walk, 4.0 * walk_err + 2e-3, "the roulette's albedo %g, layer %g",
                                b.albedo.y, walk);
         }
+}
+
+/* A rough dielectric (render/microfacet.h) keeps at most the energy it
+ * receives: the flux it reflects and transmits (radiance weights with the
+ * transmitted 1 / eta^2 undone) is at most 1, near 1 when smooth, and the
+ * reflected share of a nearly smooth interface is the smooth Fresnel. The
+ * sampler's mean is checked against an independent quadrature of f |cos|
+ * over the sphere. */
+static void dielectric_flux(Vec3 wo, float eta, float alpha, uint64_t seed, double *reflected, double *transmitted,
+                            double *error)
+{
+    SgRng rng;
+    sg_rng_seed(&rng, seed, 5);
+    const int n = 400000;
+    double r = 0.0, t = 0.0, sum2 = 0.0;
+    for (int i = 0; i < n; i++) {
+        Vec3 wi;
+        float weight, pdf;
+        float u0 = sg_rng_float(&rng), u1 = sg_rng_float(&rng), u2 = sg_rng_float(&rng);
+        if (!sg_ggx_dielectric_sample(wo, eta, alpha, alpha, u0, u1, u2, &wi, &weight, &pdf))
+            continue;
+        cr_assert(isfinite(weight) && weight >= 0.0f && pdf > 0.0f, "sample %d: weight %g pdf %g", i, weight, pdf);
+        double x = wi.z > 0.0f ? weight : weight * eta * eta;
+        *(wi.z > 0.0f ? &r : &t) += x;
+        sum2 += x * x;
+    }
+    *reflected = r / n;
+    *transmitted = t / n;
+    double mean = (r + t) / n;
+    *error = sqrt(fmax(sum2 / n - mean * mean, 0.0) / n);
+}
+
+static double dielectric_flux_quadrature(Vec3 wo, float eta, float alpha)
+{
+    const int nt = 800, np = 400;
+    double sum = 0.0;
+    for (int i = 0; i < nt; i++) {
+        double theta = M_PI * (i + 0.5) / nt;
+        for (int j = 0; j < np; j++) {
+            double phi = 2.0 * M_PI * (j + 0.5) / np;
+            Vec3 wi = v3((float)(sin(theta) * cos(phi)), (float)(sin(theta) * sin(phi)), (float)cos(theta));
+            double f = sg_ggx_dielectric_f(wo, wi, eta, alpha, alpha);
+            if (wi.z < 0.0f)
+                f *= eta * eta;
+            sum += f * fabs(wi.z) * sin(theta);
+        }
+    }
+    return sum * (M_PI / nt) * (2.0 * M_PI / np);
+}
+
+Test(render_bsdf, white_furnace_rough_dielectric_keeps_at_most_its_energy)
+{
+    const float alphas[] = {0.01f, 0.1f, 0.3f, 0.6f};
+    const float etas[] = {1.5f, 1.0f / 1.5f};
+    const float cosines[] = {1.0f, 0.5f, 0.15f};
+    for (int e = 0; e < 2; e++)
+        for (int c = 0; c < 3; c++)
+            for (int a = 0; a < 4; a++) {
+                Vec3 wo = v3(sqrtf(1.0f - cosines[c] * cosines[c]), 0.0f, cosines[c]);
+                double r, t, err;
+                dielectric_flux(wo, etas[e], alphas[a], 300 + 12 * e + 4 * c + a, &r, &t, &err);
+                double total = r + t;
+                cr_log_info("dielectric eta %.3f alpha %.2f cos_o %.2f: reflects %.4f, transmits %.4f, total %.4f +- "
+                            "%.4f",
+                            etas[e], alphas[a], cosines[c], r, t, total, err);
+                cr_assert(total <= 1.0 + 4.0 * err + 1e-4, "eta %g alpha %g cos %g: flux %g above 1", etas[e],
+                          alphas[a], cosines[c], total);
+                if (alphas[a] <= 0.01f) { /* nearly smooth: Fresnel's split, all energy kept */
+                    double f = sg_fresnel_dielectric(cosines[c], etas[e]);
+                    cr_assert(fabs(r - f) < 4.0 * err + 5e-3, "eta %g cos %g: reflects %g, Fresnel %g", etas[e],
+                              cosines[c], r, f);
+                    cr_assert(total > 0.99, "eta %g cos %g: smooth flux %g", etas[e], cosines[c], total);
+                }
+                if (a == 2 && c < 2) {
+                    double q = dielectric_flux_quadrature(wo, etas[e], alphas[a]);
+                    cr_assert(fabs(total - q) < 4.0 * err + 3e-3, "eta %g alpha %g cos %g: sampled %g, quadrature %g",
+                              etas[e], alphas[a], cosines[c], total, q);
+                }
+            }
 }

@@ -327,8 +327,19 @@ static double phong_albedo(double p, double theta_o)
  * fixed alpha 0.5 and the lobe toward a point under the ceiling): the
  * render's statistics over spp passes, and the share of bounces the lobe
  * drew. What the floor reflects is its directional albedo. */
+static Stats floor_in_glowing_box_lit(SgSampling mode, const SgMaterial *floor, double theta_deg, uint64_t seed,
+                                      int spp, double *lobe_share, bool glow_below);
+
 static Stats floor_in_glowing_box(SgSampling mode, const SgMaterial *floor, double theta_deg, uint64_t seed, int spp,
                                   double *lobe_share)
+{
+    return floor_in_glowing_box_lit(mode, floor, theta_deg, seed, spp, lobe_share, false);
+}
+
+/* glow_below: a wide plane under the floor glows upward too (radiance 1),
+ * for what a dielectric floor lets through. */
+static Stats floor_in_glowing_box_lit(SgSampling mode, const SgMaterial *floor, double theta_deg, uint64_t seed,
+                                      int spp, double *lobe_share, bool glow_below)
 {
     SgScene *s = sgt_scene_new();
     const float black[3] = {0, 0, 0}, glow[3] = {1, 1, 1};
@@ -338,6 +349,10 @@ static Stats floor_in_glowing_box(SgSampling mode, const SgMaterial *floor, doub
     const double lo[3] = {-1, 0, -1}, hi[3] = {1, 2, 1};
     sgt_add_box_inside(s, lo, hi, wall);
     set_face_material(s, 1, 0.0, floor_m);
+    if (glow_below) {
+        const double below[4][3] = {{-100, -1, -100}, {-100, -1, 100}, {100, -1, 100}, {100, -1, -100}};
+        sgt_add_quad(s, below, wall);
+    }
     double th = theta_deg * M_PI / 180.0;
     const double pos[3] = {0.5 * sin(th), 0.5 * cos(th), 0}, at[3] = {0, 0, 0};
     const double up_z[3] = {0, 0, 1}, up_y[3] = {0, 1, 0};
@@ -438,6 +453,53 @@ static void microfacet_floor_case(SgSampling mode, SgMaterialType type, double t
     cr_assert_eq(st.nonfinite, 0);
     cr_assert(fabs(st.mean[0] - expected) < 4.0 * st.std_error + 2e-3 * expected,
               "%s: %.5f, expected %.5f +- %.5f", sg_sampling_name(mode), st.mean[0], expected, 4 * st.std_error);
+}
+
+/* A rough glass floor (index 1.5, GGX alpha 0.3) between the glowing box
+ * and a glowing plane below: it returns Le times the integral over the
+ * whole sphere of f |cos| (render/microfacet.h; what it transmits carries
+ * 1 / eta^2: the light below is seen from inside the glass), by
+ * quadrature. */
+static void rough_dielectric_floor_case(SgSampling mode, double theta_deg)
+{
+    SgMaterial floor;
+    sg_material_default(&floor, "floor");
+    floor.type = SG_MATERIAL_DIELECTRIC;
+    floor.ior = 1.5f;
+    floor.roughness[0] = floor.roughness[1] = 0.3f;
+    double lobe;
+    Stats st = floor_in_glowing_box_lit(mode, &floor, theta_deg, 29, 1024, &lobe, true);
+    double th = theta_deg * M_PI / 180.0;
+    Vec3 wo = v3((float)sin(th), 0.0f, (float)cos(th));
+    const int nt = 1500, np = 1500;
+    double expected = 0.0, reflected = 0.0;
+    for (int i = 0; i < nt; i++) {
+        double t = (i + 0.5) * M_PI / nt;
+        for (int j = 0; j < np; j++) {
+            double ph = (j + 0.5) * 2 * M_PI / np;
+            Vec3 wi = v3((float)(sin(t) * cos(ph)), (float)(sin(t) * sin(ph)), (float)cos(t));
+            double x = sg_ggx_dielectric_f(wo, wi, 1.5f, 0.3f, 0.3f) * fabs(cos(t)) * sin(t);
+            expected += x;
+            reflected += t < M_PI / 2 ? x : 0.0;
+        }
+    }
+    expected *= (M_PI / nt) * (2 * M_PI / np);
+    reflected *= (M_PI / nt) * (2 * M_PI / np);
+    cr_log_info("rough glass floor %s at %g degrees: %.5f +- %.5f, expected %.5f (of it reflected %.5f)",
+                sg_sampling_name(mode), theta_deg, st.mean[0], st.std_error, expected, reflected);
+    cr_assert_eq(st.nonfinite, 0);
+    /* the plane below counts: without it only the reflected part would come back */
+    cr_assert_gt(expected - reflected, 0.2);
+    cr_assert(fabs(st.mean[0] - expected) < 4.0 * st.std_error + 2e-3 * expected, "%s: %.5f, expected %.5f +- %.5f",
+              sg_sampling_name(mode), st.mean[0], expected, 4 * st.std_error);
+}
+
+Test(render_integrator, rough_dielectric_floor_bsdf) { rough_dielectric_floor_case(SG_SAMPLING_BSDF, 40.0); }
+Test(render_integrator, rough_dielectric_floor_guided) { rough_dielectric_floor_case(SG_SAMPLING_GUIDED, 70.0); }
+Test(render_integrator, rough_dielectric_floor_openpgl) /* its bounces recorded for training, with their pdfs */
+{
+    skip_without_openpgl();
+    rough_dielectric_floor_case(SG_SAMPLING_OPENPGL, 40.0);
 }
 
 Test(render_integrator, rough_conductor_floor_bsdf) { microfacet_floor_case(SG_SAMPLING_BSDF, SG_MATERIAL_CONDUCTOR, 40.0); }

@@ -124,16 +124,24 @@ static int compare_expected(const void *a, const void *b)
     return (x[0] > y[0]) - (x[0] < y[0]);
 }
 
-static Chi2Result chi2_test(SampleFn sample, PdfFn pdf, const void *ctx, uint64_t seed, int sub)
+/* may_absorb: the sampler may return no direction (the zero vector; a
+ * rough dielectric's microfacet that sends wi to the wrong side), and the
+ * pdf then integrates to less than 1: the missing mass is one more cell. */
+static Chi2Result chi2_test(SampleFn sample, PdfFn pdf, const void *ctx, uint64_t seed, int sub, bool may_absorb)
 {
     Chi2Result res = {0};
     const int bins = THETA_BINS * PHI_BINS;
     double *observed = calloc(bins, sizeof *observed);
+    long absorbed = 0;
     SgRng rng;
     sg_rng_seed(&rng, seed, 7);
     for (long s = 0; s < SAMPLES; s++) {
         float u0 = sg_rng_float(&rng), u1 = sg_rng_float(&rng), u2 = sg_rng_float(&rng);
         Vec3 w = sample(ctx, u0, u1, u2);
+        if (may_absorb && w.x == 0.0f && w.y == 0.0f && w.z == 0.0f) {
+            absorbed++;
+            continue;
+        }
         if (!isfinite(w.x) || !isfinite(w.y) || !isfinite(w.z) ||
             fabsf(v3_length(w) - 1.0f) > 1e-4f) {
             res.nonfinite_samples++;
@@ -151,7 +159,7 @@ static Chi2Result chi2_test(SampleFn sample, PdfFn pdf, const void *ctx, uint64_
         observed[ti * PHI_BINS + pi] += 1.0;
     }
     /* pairs (expected, observed), sorted by expected to pool the small ones */
-    double *pairs = malloc(2 * sizeof(double) * bins);
+    double *pairs = malloc(2 * sizeof(double) * (bins + 1));
     for (int ti = 0; ti < THETA_BINS; ti++)
         for (int pi = 0; pi < PHI_BINS; pi++) {
             double e = integrate_bin(pdf, ctx, M_PI * ti / THETA_BINS, M_PI * (ti + 1) / THETA_BINS,
@@ -160,10 +168,16 @@ static Chi2Result chi2_test(SampleFn sample, PdfFn pdf, const void *ctx, uint64_
             pairs[2 * (ti * PHI_BINS + pi)] = e * SAMPLES;
             pairs[2 * (ti * PHI_BINS + pi) + 1] = observed[ti * PHI_BINS + pi];
         }
-    qsort(pairs, bins, 2 * sizeof(double), compare_expected);
+    int cells_in = bins;
+    if (may_absorb) {
+        pairs[2 * bins] = fmax(0.0, 1.0 - res.pdf_integral) * SAMPLES;
+        pairs[2 * bins + 1] = (double)absorbed;
+        cells_in++;
+    }
+    qsort(pairs, cells_in, 2 * sizeof(double), compare_expected);
     double chi2 = 0.0, pool_e = 0.0, pool_o = 0.0;
     int cells = 0;
-    for (int i = 0; i < bins; i++) {
+    for (int i = 0; i < cells_in; i++) {
         double e = pairs[2 * i], o = pairs[2 * i + 1];
         if (e < 5.0 || (pool_e > 0.0 && pool_e < 5.0)) {
             pool_e += e;
@@ -188,10 +202,10 @@ static Chi2Result chi2_test(SampleFn sample, PdfFn pdf, const void *ctx, uint64_
     return res;
 }
 
-static void assert_chi2(const char *name, SampleFn sample, PdfFn pdf, const void *ctx,
-                        uint64_t seed, int sub)
+static void assert_chi2_of(const char *name, SampleFn sample, PdfFn pdf, const void *ctx, uint64_t seed, int sub,
+                           bool may_absorb)
 {
-    Chi2Result r = chi2_test(sample, pdf, ctx, seed, sub);
+    Chi2Result r = chi2_test(sample, pdf, ctx, seed, sub, may_absorb);
     double alpha = 1.0 - pow(1.0 - 0.01, 1.0 / chi2_test_count()); /* Sidak */
     cr_log_info("%s: p = %.4f (dof %d), pdf integral %.6f", name, r.p_value, r.dof,
                 r.pdf_integral);
@@ -199,10 +213,18 @@ static void assert_chi2(const char *name, SampleFn sample, PdfFn pdf, const void
                  r.nonfinite_samples);
     cr_assert_eq(r.zero_pdf_samples, 0, "%s: %ld samples where the pdf is zero", name,
                  r.zero_pdf_samples);
-    cr_assert(fabs(r.pdf_integral - 1.0) < 2e-3, "%s: pdf integrates to %.6f", name,
-              r.pdf_integral);
+    if (may_absorb) /* what the pdf misses, the sampler must have absorbed: the extra cell checks it */
+        cr_assert(r.pdf_integral < 1.0 + 2e-3 && r.pdf_integral > 0.5, "%s: pdf integrates to %.6f", name,
+                  r.pdf_integral);
+    else
+        cr_assert(fabs(r.pdf_integral - 1.0) < 2e-3, "%s: pdf integrates to %.6f", name, r.pdf_integral);
     cr_assert(r.p_value >= alpha, "%s: chi-square p = %.3g < %.3g (dof %d)", name, r.p_value,
               alpha, r.dof);
+}
+
+static void assert_chi2(const char *name, SampleFn sample, PdfFn pdf, const void *ctx, uint64_t seed, int sub)
+{
+    assert_chi2_of(name, sample, pdf, ctx, seed, sub, false);
 }
 
 /* ---- the routines under test -------------------------------------------- */
@@ -432,6 +454,41 @@ static void mixture_conductor_case(void)
     assert_chi2("mixture 0.5 conductor 0.2 + lobe 16", mixture_sample, mixture_pdf, &m, 22, 16);
 }
 
+/* A rough dielectric (render/microfacet.h) in its own frame: wo above,
+ * eta > 1 entering glass, < 1 leaving it (total internal reflection). */
+typedef struct DielectricCtx {
+    Vec3 wo;
+    float eta, ax, ay;
+} DielectricCtx;
+
+static Vec3 dielectric_sample(const void *c, float u0, float u1, float u2)
+{
+    const DielectricCtx *d = c;
+    Vec3 wi;
+    float weight, pdf;
+    if (!sg_ggx_dielectric_sample(d->wo, d->eta, d->ax, d->ay, u0, u1, u2, &wi, &weight, &pdf))
+        return v3(0, 0, 0);
+    /* the weight the renderer multiplies by is f |cos| / pdf */
+    float expected = sg_ggx_dielectric_f(d->wo, wi, d->eta, d->ax, d->ay) * fabsf(wi.z) / pdf;
+    cr_expect(fabsf(weight - expected) <= 1e-3f * fmaxf(1.0f, expected), "weight %g, f cos / pdf %g", weight,
+              expected);
+    return wi;
+}
+
+static float dielectric_pdf(const void *c, Vec3 w)
+{
+    const DielectricCtx *d = c;
+    return sg_ggx_dielectric_pdf(d->wo, w, d->eta, d->ax, d->ay);
+}
+
+static void dielectric_case(float eta, float ax, float ay, Vec3 wo, uint64_t seed, int sub)
+{
+    char name[64];
+    snprintf(name, sizeof name, "dielectric %g GGX %g x %g", eta, ax, ay);
+    DielectricCtx d = {wo, eta, ax, ay};
+    assert_chi2_of(name, dielectric_sample, dielectric_pdf, &d, seed, sub, true);
+}
+
 /* ---- the chi-square tests: one list declares them and counts them ------ */
 
 #define CHI2_CASES(X) \
@@ -456,7 +513,12 @@ static void mixture_conductor_case(void)
     X(conductor_ggx_0_05_narrow, conductor_case(0.05f, 0.05f, v3(0, 0, 1), tilted(-0.3f, 0.2f, 0.9f), 19, 32)) \
     X(coated_diffuse_ggx_0_2, coated_case(0.2f, tilted(-0.2f, 0.1f, 1.0f), tilted(0.5f, 0.5f, 0.6f), 20, 16)) \
     X(mixture_conductor, mixture_conductor_case()) \
-    X(coated_diffuse_ggx_0_1_grazing, coated_case(0.1f, v3(0, 0, 1), tilted(0.97f, 0.1f, 0.08f), 21, 16))
+    X(coated_diffuse_ggx_0_1_grazing, coated_case(0.1f, v3(0, 0, 1), tilted(0.97f, 0.1f, 0.08f), 21, 16)) \
+    X(dielectric_entering_ggx_0_3, dielectric_case(1.5f, 0.3f, 0.3f, tilted(0.4f, 0.3f, 0.8f), 23, 8)) \
+    X(dielectric_leaving_ggx_0_2_total_reflection, \
+      dielectric_case(1.0f / 1.5f, 0.2f, 0.2f, tilted(0.8f, -0.1f, 0.5f), 24, 16)) \
+    X(dielectric_entering_ggx_0_6_grazing, dielectric_case(1.33f, 0.6f, 0.6f, tilted(0.95f, 0.1f, 0.12f), 25, 32)) \
+    X(dielectric_anisotropic_ggx, dielectric_case(1.5f, 0.05f, 0.3f, tilted(-0.3f, 0.5f, 0.8f), 26, 32))
 
 #define CHI2_TEST(name, call) \
     Test(render_sampling, name) { call; }

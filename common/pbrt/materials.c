@@ -45,11 +45,6 @@ static bool roughness_exponent_of(Parser *p, double fallback, bool v3, double *e
     return true;
 }
 
-static bool roughness_exponent(Parser *p, double *exponent, double *alpha_out)
-{
-    return roughness_exponent_of(p, 0, false, exponent, alpha_out);
-}
-
 /* pbrt-v4's GGX alphas along u and v: "uroughness" and "vroughness",
  * each defaulting to "roughness", remapped by sqrt unless remaproughness
  * is false (v3: pbrt-v3's fit). A roughness texture counts as its mean. */
@@ -62,8 +57,9 @@ static bool ggx_alphas(Parser *p, const Token *at, double fallback, bool v3, flo
         !pbrt_param_bool(p, "remaproughness", true, &remap))
         return false;
     for (int i = 0; i < 2; i++) {
-        double r = uv[i] >= 0 ? uv[i] : 0;
-        alpha[i] = (float)(!remap ? r : v3 ? v3_roughness_to_alpha(r) : sqrt(r));
+        /* 0 stays smooth (pbrt-v3's fit would give 0.04: its glass tests for 0 first) */
+        double r = uv[i] > 0 ? uv[i] : 0;
+        alpha[i] = (float)(!remap || r == 0 ? r : v3 ? v3_roughness_to_alpha(r) : sqrt(r));
     }
     if (fabsf(alpha[0] - alpha[1]) > 1e-6f * fmaxf(alpha[0], alpha[1]))
         pbrt_warn_at(p, at, "anisotropic roughness is oriented around the normal arbitrarily, not along the "
@@ -198,6 +194,8 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
             ior = 1 / ior;
         if (!(ior >= 1 && ior <= 10))
             return pbrt_fail_at(p, at, "glass index %g is out of range", ior);
+        if (!ggx_alphas(p, at, 0, true, m->roughness))
+            return false;
         m->type = SG_MATERIAL_DIELECTRIC;
         m->ior = (float)ior;
         m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
@@ -214,11 +212,9 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
             ior = 1 / ior;
         if (!(ior >= 1 && ior <= 10))
             return pbrt_fail_at(p, at, "dielectric eta %g is out of range", (double)eta[1]);
-        double exponent, alpha;
-        if (!roughness_exponent(p, &exponent, &alpha))
+        /* GGX-rough where alpha > 0 (render/microfacet.h), smooth below pbrt's 1e-3 */
+        if (!ggx_alphas(p, at, 0, false, m->roughness))
             return false;
-        if (alpha > 0)
-            pbrt_warn_at(p, at, "rough dielectrics are taken as smooth");
         m->type = SG_MATERIAL_DIELECTRIC;
         m->ior = (float)ior;
         m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
