@@ -37,12 +37,16 @@ report_dir=${SG_REPORT_DIR:-bench/out/report-$setting}
 report_link=${SG_REPORT_LINK:-$report_dir}
 mkdir -p "$report_dir"
 
+# name|scene|voxel resolution (empty: the scene's own). The staircase and
+# the bathroom are their pbrt-v4 files, with their textures and microfacet
+# materials; a pbrt file names no voxel size, so the bench gives the one
+# their JSON stand-ins in data/external/ use.
 scenes=(
-  "corridor|data/corridor/corridor.json"
-  "cornell-box|data/cornell-box/cornell-box.json"
-  "sponza|data/sponza/sponza-bench.json"
-  "staircase|data/external/staircase.json"
-  "bathroom|data/external/bathroom.json"
+  "corridor|data/corridor/corridor.json|"
+  "cornell-box|data/cornell-box/cornell-box.json|"
+  "sponza|data/sponza/sponza-bench.json|"
+  "staircase|../shared/scenes/staircase/staircase.pbrt|256"
+  "bathroom|../shared/scenes/bathroom/bathroom.pbrt|384"
 )
 modes=(bsdf skeleton guided openpgl)
 
@@ -66,12 +70,14 @@ fi
 rm -f "$tables/probe.exr"
 mode_list=$(IFS=,; echo "${modes[*]}")
 
-# precompute NAME SCENE DIR: the three steps into DIR, only when the
-# geometry key changed, an output is missing or a step's program is newer.
+# precompute NAME SCENE DIR [RESOLUTION]: the three steps into DIR, only
+# when the geometry key changed, an output is missing or a step's program
+# is newer.
 precompute() {
-  local name=$1 scene=$2 dir=$3 key
+  local name=$1 scene=$2 dir=$3 key res=()
+  [ -n "${4:-}" ] && res=(--resolution "$4")
   mkdir -p "$dir"
-  key=$("$bin/voxelize" "$scene" --key 2>&1) || { notes+=("$name: voxelize --key failed: $key"); return 1; }
+  key=$("$bin/voxelize" "$scene" "${res[@]}" --key 2>&1) || { notes+=("$name: voxelize --key failed: $key"); return 1; }
   local stale=0
   [ "$key" = "$(cat "$dir/geometry.key" 2>/dev/null)" ] || stale=1
   for f in medium.vdb skeleton.ply importance.cache; do [ -e "$dir/$f" ] || stale=1; done
@@ -79,7 +85,7 @@ precompute() {
   [ $stale = 0 ] && return 0
   note "$name: precompute"
   rm -f "$dir/geometry.key"
-  "$bin/voxelize" "$scene" -o "$dir/medium.vdb" >"$dir/precompute.log" 2>&1 &&
+  "$bin/voxelize" "$scene" "${res[@]}" -o "$dir/medium.vdb" >"$dir/precompute.log" 2>&1 &&
   "$bin/skeletonize" "$dir/medium.vdb" -o "$dir/skeleton.ply" >>"$dir/precompute.log" 2>&1 &&
   "$bin/importance" "$dir/medium.vdb" "$dir/skeleton.ply" -o "$dir/importance.cache" >>"$dir/precompute.log" 2>&1 ||
     { notes+=("$name: precompute failed: $(tail -1 "$dir/precompute.log")"); return 1; }
@@ -177,14 +183,14 @@ have_gnuplot=1
 command -v gnuplot >/dev/null || have_gnuplot=0
 figures=()
 for entry in "${scenes[@]}"; do
-  IFS='|' read -r name scene <<<"$entry"
+  IFS='|' read -r name scene resolution <<<"$entry"
   if [ -n "${SG_CONV_SCENES:-}" ] && [[ " $SG_CONV_SCENES " != *" $name "* ]]; then continue; fi
   if [ ! -e "$scene" ] || ! "$bin/voxelize" "$scene" --key >/dev/null 2>&1; then
     notes+=("$name: skipped, its scene or meshes are not present ($scene; third-party scenes live in ../shared/scenes)")
     continue
   fi
   dir=bench/out/$name
-  precompute "$name" "$scene" "$dir" || continue
+  precompute "$name" "$scene" "$dir" "$resolution" || continue
   read -r size exposure < <("$tool" size "$scene" "$pixels") || { notes+=("$name: cannot read the scene"); continue; }
   refdir=$dir/ref-$setting
   reference "$name" "$scene" "$refdir" "$size" "$exposure" || continue
