@@ -674,7 +674,14 @@ Test(render_integrator, a_lights_edge_converges_faster_than_independent_jitter)
 
 /* A two-room scene: the light is in room A, the camera looks at a wall of
  * room B that only indirect light reaches, through a door. */
-static SgScene *two_rooms(void)
+static SgScene *two_rooms_with(bool dressed);
+static SgScene *two_rooms(void) { return two_rooms_with(false); }
+
+/* dressed: room B's floor a rough conductor (copper, alpha 0.3), the
+ * partition's side the camera sees a coated diffuse whose albedo is a
+ * checkerboard along its uv, and a rough glass pane (alpha 0.2) across
+ * the door. */
+static SgScene *two_rooms_with(bool dressed)
 {
     SgScene *s = sgt_scene_new();
     const float white[3] = {0.7f, 0.7f, 0.7f}, red[3] = {0.7f, 0.2f, 0.2f}, em[3] = {20, 20, 20};
@@ -687,13 +694,47 @@ static SgScene *two_rooms(void)
     /* partition at x = 2 with a door from z = 1.4 to 2 (both sides) */
     const double p1[4][3] = {{2, 0, 0}, {2, 2, 0}, {2, 2, 1.4}, {2, 0, 1.4}};
     const double p2[4][3] = {{2, 0, 0}, {2, 0, 1.4}, {2, 2, 1.4}, {2, 2, 0}};
-    sgt_add_quad(s, p1, rm);
+    uint32_t partition_b = rm;
+    if (dressed) {
+        uint32_t copper = sgt_add_material(s, SG_MATERIAL_CONDUCTOR, black, NULL);
+        SgMaterial *c = sgt_material(s, copper);
+        const float eta[3] = {0.2f, 0.92f, 1.1f}, k[3] = {3.91f, 2.45f, 2.14f};
+        memcpy(c->eta, eta, sizeof eta);
+        memcpy(c->k, k, sizeof k);
+        c->roughness[0] = c->roughness[1] = 0.3f;
+        for (uint32_t t = 0; t < s->triangle_count; t++) /* room B's floor: y = 0, x > 2 */
+            if (s->positions[3 * s->indices[3 * t] + 1] == 0.0 && s->positions[3 * s->indices[3 * t + 1] + 1] == 0.0 &&
+                s->positions[3 * s->indices[3 * t + 2] + 1] == 0.0)
+                s->triangle_material[t] = copper; /* the whole floor: both rooms */
+        partition_b = sgt_add_material(s, SG_MATERIAL_COATED_DIFFUSE, red, NULL);
+        sgt_material(s, partition_b)->roughness[0] = sgt_material(s, partition_b)->roughness[1] = 0.1f;
+        sgt_material(s, partition_b)->diffuse_texture = 1;
+        s->textures = calloc(1, sizeof *s->textures);
+        s->texture_count = 1;
+        s->textures[0] = (SgTexture){.kind = SG_TEXTURE_CHECKERBOARD, .uscale = 4, .vscale = 4, .scale = 1,
+                                     .input = {{0, {0.8f, 0.8f, 0.8f}}, {0, {0.1f, 0.3f, 0.6f}}},
+                                     .mean = {0.45f, 0.55f, 0.7f}};
+    }
+    sgt_add_quad(s, p1, partition_b);
     sgt_add_quad(s, p2, w);
+    if (dressed) { /* a rough glass pane across the door */
+        uint32_t glass = sgt_add_material(s, SG_MATERIAL_DIELECTRIC, black, NULL);
+        sgt_material(s, glass)->roughness[0] = sgt_material(s, glass)->roughness[1] = 0.2f;
+        const double pane[4][3] = {{2, 0, 1.4}, {2, 2, 1.4}, {2, 2, 2}, {2, 0, 2}};
+        sgt_add_quad(s, pane, glass);
+    }
     /* small light on room A's ceiling, facing down */
     const double l[4][3] = {{0.8, 1.99, 0.8}, {1.2, 1.99, 0.8}, {1.2, 1.99, 1.2}, {0.8, 1.99, 1.2}};
     sgt_add_quad(s, l, lm);
     const double pos[3] = {3.8, 1.0, 1.0}, at[3] = {2, 1, 0.7}, up[3] = {0, 1, 0};
     sgt_set_camera(s, pos, at, up, 70, 40, 30);
+    if (dressed) { /* uv: (z, y), where the partition's checkerboard varies */
+        s->uvs = malloc(2 * s->vertex_count * sizeof *s->uvs);
+        for (uint32_t v = 0; v < s->vertex_count; v++) {
+            s->uvs[2 * v] = (float)s->positions[3 * v + 2];
+            s->uvs[2 * v + 1] = (float)s->positions[3 * v + 1];
+        }
+    }
     sgt_finish(s);
     return s;
 }
@@ -721,6 +762,41 @@ Test(render_integrator, guided_agrees_with_bsdf_in_dark_room)
               b.mean[0], g.mean[0], 3 * se);
     cr_assert_eq(b.nonfinite + g.nonfinite, 0);
     sgt_scene_free(s);
+}
+
+/* The same with a rough conductor floor, a textured coated diffuse and
+ * rough glass in the door: the guides stay unbiased with the microfacet
+ * BSDFs' pdfs in their MIS and textured albedos in their roulettes. */
+static void dressed_rooms_agree(SgSampling mode)
+{
+    SgScene *s = two_rooms_with(true);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    SgtFixedPoint door = {{2.0, 1.0, 1.7}};
+    o.guide.importance_point = sgt_fixed_point_guide;
+    o.guide.ctx = &door;
+    o.max_depth = 8;
+    o.seed = 1;
+    o.lobe_exponent = 10;
+    Stats b = render_scene_stats(s, &o, 512, 0, 0, o.width, o.height);
+    o.sampling = mode;
+    o.seed = 2;
+    Stats g = render_scene_stats(s, &o, 512, 0, 0, o.width, o.height);
+    double se = sqrt(b.std_error * b.std_error + g.std_error * g.std_error);
+    cr_log_info("dressed rooms: bsdf %.5f +- %.5f, %s %.5f +- %.5f", b.mean[0], b.std_error, sg_sampling_name(mode),
+                g.mean[0], g.std_error);
+    cr_assert(b.mean[0] > 0.0);
+    cr_assert(fabs(b.mean[0] - g.mean[0]) < 3.0 * se, "bsdf %.5f vs %s %.5f, 3 se = %.5f", b.mean[0],
+              sg_sampling_name(mode), g.mean[0], 3 * se);
+    cr_assert_eq(b.nonfinite + g.nonfinite, 0);
+    sgt_scene_free(s);
+}
+
+Test(render_integrator, guided_agrees_with_bsdf_in_dressed_rooms) { dressed_rooms_agree(SG_SAMPLING_GUIDED); }
+Test(render_integrator, openpgl_agrees_with_bsdf_in_dressed_rooms)
+{
+    skip_without_openpgl();
+    dressed_rooms_agree(SG_SAMPLING_OPENPGL);
 }
 
 Test(render_integrator, openpgl_agrees_with_bsdf_in_dark_room)
