@@ -31,7 +31,7 @@ typedef struct Bsdf {
     Vec3 kd;          /* PHONG: diffuse albedo; COATED: the base's albedo */
     Vec3 ks;          /* PHONG: the Phong lobe's albedo; CONDUCTOR: eta */
     Vec3 k;           /* CONDUCTOR: the absorption part of the index */
-    Vec3 albedo;      /* about what the surface reflects: the albedo roulette's factor */
+    Vec3 albedo;      /* microfacet kinds: about what the surface reflects (bsdf_albedo) */
     /* microfacet kinds */
     Vec3 wo;          /* in the frame (t, b, lobe.n) of v3_basis(lobe.n) */
     float ax, ay;     /* GGX alpha along t and b */
@@ -75,7 +75,7 @@ Vec3 bsdf_sample_microfacet(const Bsdf *b, float u0, float u1, float u2);
 
 static inline void bsdf_init(Bsdf *b, const Material *m, Vec3 n, Vec3 wo, Vec3 albedo)
 {
-    if (m->type == SG_MATERIAL_CONDUCTOR || m->type == SG_MATERIAL_COATED_DIFFUSE) {
+    if (m->microfacet) {
         bsdf_init_microfacet(b, m, n, wo, albedo);
         return;
     }
@@ -88,8 +88,12 @@ static inline void bsdf_init(Bsdf *b, const Material *m, Vec3 n, Vec3 wo, Vec3 a
         weight = ld + ls > 0.0f ? ld / (ld + ls) : 1.0f;
     }
     b->lobe = sg_glossy_lobe(n, wo, m->type == SG_MATERIAL_GLOSSY ? m->exponent : 0.0f, weight);
-    b->albedo = v3_add(b->kd, b->ks);
 }
+
+/* About what the surface reflects: the albedo roulette's factor (the
+ * Phong kind's is kd + ks, made where needed: every vertex sets up its
+ * BSDF, few reach the roulette). */
+static inline Vec3 bsdf_albedo(const Bsdf *b) { return b->kind == BSDF_PHONG ? v3_add(b->kd, b->ks) : b->albedo; }
 
 static inline Vec3 bsdf_eval(const Bsdf *b, Vec3 wi)
 {

@@ -65,5 +65,6 @@ void material_init(Material *m, const SgMaterial *src)
         m->ks = v3(fminf(m->ks.x, 1), fminf(m->ks.y, 1), fminf(m->ks.z, 1));
     }
     m->delta = m->delta || m->type == SG_MATERIAL_MIRROR;
+    m->microfacet = !m->delta && (m->type == SG_MATERIAL_CONDUCTOR || m->type == SG_MATERIAL_COATED_DIFFUSE);
     m->texture = src->diffuse_texture;
 }

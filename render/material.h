@@ -25,6 +25,7 @@ typedef struct Material {
     bool emissive;
     bool black;           /* no scattering at all */
     bool delta;           /* a specular bounce: mirror, smooth glass, smooth conductor */
+    bool microfacet;      /* a rough conductor or a coated diffuse: render/bsdf.c's BSDFs */
     Vec3 eta, k;          /* conductor: complex index of refraction */
     float ax, ay;         /* conductor, coated diffuse, dielectric: GGX alpha */
     float fdr;            /* coated diffuse: the coat's diffuse reflectance from inside */

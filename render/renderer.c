@@ -391,15 +391,20 @@ static bool take_bounce(const PathGuide *guide, BounceVertex *v, PathState *ps, 
     return true;
 }
 
-/* The material's albedo at a hit: its texture's value there, or kd. */
-static Vec3 surface_albedo(const SgRenderer *r, const Material *m, const Hit *h, int thread)
+/* A textured material's albedo at a hit, its texture's value there. */
+static Vec3 textured_albedo(const SgRenderer *r, const Material *m, const Hit *h, int thread)
 {
-    if (!m->texture)
-        return m->kd;
     Vec3 c = texture_set_eval_at(r->textures, m->texture, h->tri, h->b1, h->b2, thread);
     Vec3 top = m->type == SG_MATERIAL_GLOSSY ? v3_sub(v3(1, 1, 1), m->ks) : v3(1, 1, 1); /* kd + ks <= 1 */
     return v3(sg_minf(sg_maxf(c.x, 0.0f), top.x), sg_minf(sg_maxf(c.y, 0.0f), top.y),
               sg_minf(sg_maxf(c.z, 0.0f), top.z));
+}
+
+/* The material's albedo at a hit: kd, or its texture's value there (the
+ * untextured case inline: it is every vertex of most scenes). */
+static inline Vec3 surface_albedo(const SgRenderer *r, const Material *m, const Hit *h, int thread)
+{
+    return m->texture ? textured_albedo(r, m, h, thread) : m->kd;
 }
 
 /* A mirror's, smooth conductor's or glass's bounce (a delta distribution:
@@ -595,7 +600,14 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, const PathCtx *pc, Vec3 *s
             } else {
                 if (m->black)
                     break;
-                BounceVertex v = {.m = m, .p = h.p, .seg = seg};
+                /* field by field: zeroing the whole vertex (its BSDF's
+                 * microfacet fields, unused by most) costs per bounce; the
+                 * guide's state starts zeroed as guides expect */
+                BounceVertex v;
+                v.m = m;
+                v.p = h.p;
+                v.seg = seg;
+                memset(v.g.state, 0, sizeof v.g.state);
                 bsdf_init(&v.g.bsdf, m, n, wo, surface_albedo(r, m, &h, pc->thread));
                 v.g.learn = false;
                 v.g.rms = -1.0f;
@@ -630,7 +642,7 @@ static Vec3 trace_path(SgRenderer *r, Vec3 o, Vec3 d, const PathCtx *pc, Vec3 *s
                  * drawn: it decides on the bounce alone, and a path cut here
                  * keeps its direct light and pays for no direction, pdf or
                  * guide lobe it would not follow. */
-                ps.rr_beta = v3_mul(ps.rr_beta, v.g.bsdf.albedo);
+                ps.rr_beta = v3_mul(ps.rr_beta, bsdf_albedo(&v.g.bsdf));
                 if (pc->pixel_deviation > 0.0f && v.g.rms >= 0.0f) {
                     /* learned: by what the bounce brings back, against the pixel's noise */
                     float worth = luminance(ps.beta) * v.g.rms / pc->pixel_deviation;

@@ -179,8 +179,8 @@ Test(render_bsdf, coated_diffuse_matches_the_layer_it_models)
             double walk_err = sqrt(walk * (1.0 - walk) / 400000.0);
             cr_assert(fabs(e - walk) < 4.0 * (err + walk_err) + 2e-3, "r %g cos %g: albedo %g, layer %g", r,
                       cosines[c], e, walk);
-            cr_assert_float_eq(b.albedo.y, walk, 4.0 * walk_err + 2e-3, "the roulette's albedo %g, layer %g",
-                               b.albedo.y, walk);
+            cr_assert_float_eq(bsdf_albedo(&b).y, walk, 4.0 * walk_err + 2e-3, "the roulette's albedo %g, layer %g",
+                               bsdf_albedo(&b).y, walk);
         }
 }
 
