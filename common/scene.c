@@ -17,6 +17,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "image_average.h"
 #include "input_file.h"
 #include "pbrt_scene.h"
 #include "ply_mesh.h"
@@ -29,7 +30,14 @@ typedef struct Builder {
     const char *json_path;  /* core.path */
     char base_dir[4096];
     const cJSON *material_overrides; /* the "materials" object, or NULL */
+    SgImageAverages images;          /* texture files read, by path */
 } Builder;
+
+static bool has_extension(const char *file, const char *ext)
+{
+    size_t n = strlen(file), e = strlen(ext);
+    return n > e && !strcasecmp(file + n - e, ext);
+}
 
 /* ---- JSON helpers ------------------------------------------------------- */
 
@@ -190,10 +198,103 @@ static void read_color(const struct aiMaterial *mat, const char *key, unsigned t
     }
 }
 
+/* The diffuse map of an Assimp material: MTL map_Kd, glTF base colour. */
+static bool diffuse_map_path(const struct aiMaterial *mat, struct aiString *path,
+                             enum aiTextureMapMode *mode)
+{
+    static const enum aiTextureType types[] = {aiTextureType_DIFFUSE, aiTextureType_BASE_COLOR};
+    for (size_t i = 0; i < sizeof types / sizeof *types; i++) {
+        enum aiTextureMapMode modes[2] = {aiTextureMapMode_Wrap, aiTextureMapMode_Wrap};
+        if (aiGetMaterialTexture(mat, types[i], 0, path, NULL, NULL, NULL, NULL, modes, NULL) ==
+                AI_SUCCESS &&
+            path->length) {
+            *mode = modes[0];
+            return true;
+        }
+    }
+    return false;
+}
+
+/* A material's diffuse map as a scene texture: *texture its 1 + index (0:
+ * none); mean holds the material's Kd (glTF: base colour) and becomes the
+ * texture's mean when there is one.
+ *
+ * Semantics: an MTL map_Kd replaces Kd, as in pbrt and Blender, not Kd x
+ * map as the MTL specification says: exporters such as 3ds Max's (the
+ * Dabrovic Sponza's MTL) write beside each map a Kd near the map's own
+ * mean (0.53 to 0.83 there), so the product would darken such scenes a
+ * second time. glTF's base colour factor multiplies its texture, as its
+ * specification says (a scale texture when the factor is not white).
+ *
+ * A file that cannot be read is a grey 0.5 texture without a path, as in
+ * the pbrt loader: a comparison can tell it, the render is grey there.
+ * Embedded textures (glTF "*N") are not supported: the colour stays. */
+static bool diffuse_texture(Builder *b, const struct aiMaterial *mat, const char *file,
+                            const char *label, bool *warned_embedded, uint32_t *texture,
+                            float mean[3], SgError *err)
+{
+    *texture = 0;
+    struct aiString name;
+    enum aiTextureMapMode mode;
+    if (!diffuse_map_path(mat, &name, &mode))
+        return true;
+    if (name.data[0] == '*') {
+        if (!*warned_embedded)
+            sg_scene_add_warning(b->scene, "%s: embedded textures are not supported: its materials "
+                                           "keep their colour", file);
+        *warned_embedded = true;
+        return true;
+    }
+    char path[8192];
+    const char *slash = strrchr(file, '/');
+    if (name.data[0] == '/')
+        snprintf(path, sizeof path, "%s", name.data);
+    else
+        snprintf(path, sizeof path, "%.*s%s", slash ? (int)(slash - file + 1) : 0, file, name.data);
+    /* Windows exporters write "textures\wall.png" */
+    for (char *c = path; *c; c++)
+        if (*c == '\\')
+            *c = '/';
+    bool gltf = has_extension(file, ".gltf") || has_extension(file, ".glb");
+    float factor[3];
+    memcpy(factor, mean, sizeof factor); /* glTF: the base colour read as Kd */
+    SgTexture t = {.kind = SG_TEXTURE_IMAGE, .uscale = 1, .vscale = 1, .scale = 1};
+    t.gamma = (float)sg_image_default_gamma(path);
+    t.wrap = mode == aiTextureMapMode_Clamp ? SG_WRAP_CLAMP
+             : mode == aiTextureMapMode_Decal ? SG_WRAP_BLACK
+                                              : SG_WRAP_REPEAT;
+    bool first;
+    if (sg_image_average(&b->images, path, t.gamma, t.mean, &first)) {
+        t.path = path;
+    } else {
+        t.mean[0] = t.mean[1] = t.mean[2] = 0.5f;
+        if (first)
+            sg_scene_add_warning(b->scene, "%s: material \"%s\": texture \"%s\" cannot be read: "
+                                           "taken as grey 0.5", file, label, path);
+    }
+    uint32_t id;
+    if (!sg_builder_add_texture(&b->core, &t, &id, err))
+        return false;
+    *texture = id + 1;
+    memcpy(mean, t.mean, 3 * sizeof(float));
+    if (gltf && (factor[0] != 1 || factor[1] != 1 || factor[2] != 1)) {
+        SgTexture scale = {.kind = SG_TEXTURE_SCALE, .uscale = 1, .vscale = 1};
+        scale.input[0].texture = *texture;
+        memcpy(scale.input[1].value, factor, sizeof factor);
+        for (int c = 0; c < 3; c++)
+            mean[c] = scale.mean[c] = t.mean[c] * factor[c];
+        if (!sg_builder_add_texture(&b->core, &scale, &id, err))
+            return false;
+        *texture = id + 1;
+    }
+    return true;
+}
+
 /* Maps an Assimp (mostly MTL) material to ours; JSON "materials" entries of
  * the same name override it. */
 static bool convert_material(Builder *b, const struct aiMaterial *mat, const char *file,
-                             uint32_t mesh_index, SgMaterial *m, SgError *err)
+                             uint32_t mesh_index, bool *warned_embedded, SgMaterial *m,
+                             SgError *err)
 {
     struct aiString name;
     char label[64];
@@ -206,6 +307,10 @@ static bool convert_material(Builder *b, const struct aiMaterial *mat, const cha
     read_color(mat, AI_MATKEY_COLOR_DIFFUSE, m->diffuse);
     read_color(mat, AI_MATKEY_COLOR_SPECULAR, m->specular);
     read_color(mat, AI_MATKEY_COLOR_EMISSIVE, m->emission);
+    /* the map's mean stands for Kd in what follows (the type, the energy) */
+    uint32_t texture;
+    if (!diffuse_texture(b, mat, file, label, warned_embedded, &texture, m->diffuse, err))
+        return false;
     float shininess = 0, ior = 1.5f, opacity = 1;
     int illum = 2;
     unsigned one = 1;
@@ -243,12 +348,19 @@ static bool convert_material(Builder *b, const struct aiMaterial *mat, const cha
             m->specular[a] *= k;
         }
     }
-    (void)file;
+    /* a texture varies the albedo of diffuse and glossy materials only */
+    if (m->type == SG_MATERIAL_DIFFUSE || m->type == SG_MATERIAL_GLOSSY)
+        m->diffuse_texture = texture;
     const cJSON *override = b->material_overrides
                                 ? cJSON_GetObjectItemCaseSensitive(b->material_overrides, label)
                                 : NULL;
     if (override && !apply_material_json(b->json_path, override, label, m, err))
         return false;
+    /* an override's own albedo, or a type the texture does not suit, wins */
+    if (override && (cJSON_GetObjectItemCaseSensitive(override, "albedo") ||
+                     (m->type != SG_MATERIAL_DIFFUSE && m->type != SG_MATERIAL_GLOSSY &&
+                      m->type != SG_MATERIAL_COATED_DIFFUSE)))
+        m->diffuse_texture = 0;
     return true;
 }
 
@@ -330,12 +442,6 @@ static bool parse_transform(const char *path, const cJSON *obj, const char *owne
 }
 
 /* ---- geometry ----------------------------------------------------------- */
-
-static bool has_extension(const char *file, const char *ext)
-{
-    size_t n = strlen(file), e = strlen(ext);
-    return n > e && !strcasecmp(file + n - e, ext);
-}
 
 /* The material of a mesh with none of its own: the override if given. */
 static bool plain_material(Builder *b, const char *file, const char *material_name,
@@ -426,26 +532,32 @@ static bool load_mesh_file(Builder *b, const char *file, const SgTransform *xf,
     uint32_t *material_ids = calloc(as->mNumMaterials ? as->mNumMaterials : 1, sizeof(uint32_t));
     if (ok && !material_ids)
         ok = sg_fail(err, "%s: out of memory", file);
+    bool warned_embedded = false;
     for (unsigned m = 0; ok && m < as->mNumMaterials && override_id == UINT32_MAX; m++) {
         SgMaterial mat;
-        ok = convert_material(b, as->mMaterials[m], file, m, &mat, err);
+        ok = convert_material(b, as->mMaterials[m], file, m, &warned_embedded, &mat, err);
         if (ok && emission)
             memcpy(mat.emission, emission, sizeof mat.emission);
         ok = ok && sg_builder_add_material(&b->core, &mat, &material_ids[m], err);
     }
     double *positions = NULL;
     uint32_t *indices = NULL;
+    float *uvs = NULL;
     for (unsigned mi = 0; ok && mi < as->mNumMeshes; mi++) {
         const struct aiMesh *mesh = as->mMeshes[mi];
         if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE))
             continue;
         double *p = realloc(positions, (mesh->mNumVertices + 1) * 3 * sizeof(double));
         uint32_t *ix = realloc(indices, (mesh->mNumFaces + 1) * 3 * sizeof(uint32_t));
+        const struct aiVector3D *tc = mesh->mTextureCoords[0];
+        float *uv = tc ? realloc(uvs, (mesh->mNumVertices + 1) * 2 * sizeof(float)) : uvs;
         if (p)
             positions = p;
         if (ix)
             indices = ix;
-        if (!p || !ix) {
+        if (uv)
+            uvs = uv;
+        if (!p || !ix || (tc && !uv)) {
             ok = sg_fail(err, "%s: out of memory", file);
             break;
         }
@@ -465,11 +577,21 @@ static bool load_mesh_file(Builder *b, const char *file, const SgTransform *xf,
                             : mesh->mMaterialIndex < as->mNumMaterials
                                 ? material_ids[mesh->mMaterialIndex]
                                 : material_ids[0];
+        /* Assimp gives every format's uv with v up from the image's
+         * bottom row (it flips glTF's), as pbrt's and so the renderer's
+         * lookups expect: no flip here */
+        for (unsigned v = 0; tc && v < mesh->mNumVertices; v++) {
+            uvs[2 * v + 0] = tc[v].x;
+            uvs[2 * v + 1] = tc[v].y;
+        }
+        uint32_t first = b->scene->vertex_count;
         ok = sg_builder_append_mesh(&b->core, file, positions, mesh->mNumVertices, indices,
-                                    triangles, xf, material, err);
+                                    triangles, xf, material, err) &&
+             (!tc || sg_builder_set_uvs(&b->core, first, mesh->mNumVertices, uvs, err));
     }
     free(positions);
     free(indices);
+    free(uvs);
     free(material_ids);
     aiReleaseImport(as);
     return ok;
@@ -804,6 +926,7 @@ static SgScene *load_json_scene(const char *path, SgError *err)
         ok = sg_fail(err, "%s: the scene has no triangles%s", path,
                      b.core.dropped_degenerate ? " (all were degenerate)" : "");
     ok = ok && sg_builder_finish(&b.core, err);
+    sg_image_averages_free(&b.images);
     cJSON_Delete(root);
     free(text);
     if (!ok) {

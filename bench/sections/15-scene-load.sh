@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Scene loading: the pbrt-v4 files of the staircase and bathroom against
-# their hand-made JSON versions (same PLY meshes). Target: under 1 s each,
+# their hand-made JSON versions (same PLY meshes), and Sponza's OBJ read by
+# Assimp (with its uv). Target: under 1 s each,
 # so that loading never dominates a step.
 set -uo pipefail
 bench=${SG_BENCH_BIN:-build/release/bench}
@@ -26,5 +27,6 @@ row "staircase.pbrt (774 PLY)" ../shared/scenes/staircase/staircase.pbrt
 row "staircase.json (same PLY)" data/external/staircase.json
 row "bathroom.pbrt (855 PLY)" ../shared/scenes/bathroom/bathroom.pbrt
 row "bathroom.json (same PLY)" data/external/bathroom.json
+row "sponza.json (OBJ through Assimp)" data/external/sponza.json
 echo
 echo "(best of $runs loads, warm file cache; build/release/bench/scene_load SCENE RUNS)"

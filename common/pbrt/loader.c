@@ -453,9 +453,7 @@ static void parser_release(Parser *p)
     }
     free(p->objects);
     free(p->warnings);
-    for (size_t i = 0; i < p->image_count; i++)
-        free(p->images[i].path);
-    free(p->images);
+    sg_image_averages_free(&p->images);
 }
 
 SgScene *sg_pbrt_scene_load(const char *path, SgError *err)

@@ -21,6 +21,7 @@
 #include <stdint.h>
 
 #include "error.h"
+#include "image_average.h"
 #include "scene_builder.h"
 #include "transform.h"
 
@@ -113,13 +114,6 @@ typedef struct Object {
     size_t shape_count, shape_capacity;
 } Object;
 
-typedef struct ImageAverage {
-    char *path;
-    bool linear; /* the encoding it was averaged with */
-    float value[3];
-    bool readable;
-} ImageAverage;
-
 typedef struct Warning {
     char kind[160];   /* what could not be honoured */
     char where[4200]; /* file:line of the first occurrence */
@@ -175,8 +169,7 @@ typedef struct Parser {
     Warning *warnings;
     size_t warning_count, warning_capacity;
 
-    ImageAverage *images; /* image files read for textures, by path */
-    size_t image_count, image_capacity;
+    SgImageAverages images; /* image files read for textures, by path */
 } Parser;
 
 /* ---- tokens.c: errors, warnings, files and the lexer -------------------- */

@@ -6,60 +6,8 @@
 #include <string.h>
 
 #include "color.h"
-#include "image_io.h"
+#include "image_average.h"
 #include "pbrt_parser.h"
-
-static bool has_suffix(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), k = strlen(suffix);
-    if (n < k)
-        return false;
-    for (size_t i = 0; i < k; i++) {
-        char a = s[n - k + i], b = suffix[i];
-        if ((a >= 'A' && a <= 'Z' ? a + 32 : a) != b)
-            return false;
-    }
-    return true;
-}
-
-/* The mean linear colour of an image file (cached by path). gamma: 0 for
- * linear data, -1 for sRGB, else the exponent. False if it cannot be read. */
-static bool image_average(Parser *p, const char *path, double gamma, float out[3])
-{
-    for (size_t i = 0; i < p->image_count; i++)
-        if (!strcmp(p->images[i].path, path) && p->images[i].linear == (gamma == 0)) {
-            memcpy(out, p->images[i].value, 3 * sizeof(float));
-            return p->images[i].readable;
-        }
-    int w = 0, h = 0;
-    float *rgb = NULL;
-    SgError ignored = {0};
-    bool readable = sg_image_read(path, &w, &h, &rgb, &ignored);
-    double sum[3] = {0, 0, 0};
-    if (readable) {
-        /* A few hundred thousand pixels give the mean well enough. */
-        size_t step = 1 + (size_t)w * (size_t)h / 262144, n = 0;
-        for (size_t i = 0; i < (size_t)w * (size_t)h; i += step, n++)
-            for (int c = 0; c < 3; c++) {
-                double v = rgb[3 * i + c];
-                v = !isfinite(v) || v < 0 ? 0 : v;
-                sum[c] += gamma == 0 ? v : gamma < 0 ? sg_srgb_to_linear(v) : pow(v, gamma);
-            }
-        for (int c = 0; c < 3; c++)
-            out[c] = (float)(sum[c] / (double)(n ? n : 1));
-    }
-    free(rgb);
-    if (RESERVE(p, p->images, p->image_count, p->image_capacity, 1)) {
-        ImageAverage *a = &p->images[p->image_count];
-        if ((a->path = strdup(path))) {
-            a->linear = gamma == 0;
-            a->readable = readable;
-            memcpy(a->value, readable ? out : (const float[3]){0, 0, 0}, sizeof a->value);
-            p->image_count++;
-        }
-    }
-    return readable;
-}
 
 /* A texture's operand: another texture (by reference) or a constant. */
 static bool texture_input(Parser *p, const char *name, const float fallback[3], SgTextureInput *in, float mean[3])
@@ -147,11 +95,7 @@ bool pbrt_texture_statement(Parser *p, const Token *statement)
             return pbrt_fail_at(p, statement, "imagemap texture without \"string filename\"");
         if (!pbrt_resolve_path(p, statement, file, path, sizeof path))
             return false;
-        /* pbrt's default: 8-bit images hold sRGB, float formats linear values */
-        double gamma = has_suffix(path, ".exr") || has_suffix(path, ".pfm") ||
-                               has_suffix(path, ".hdr")
-                           ? 0
-                           : -1;
+        double gamma = sg_image_default_gamma(path);
         if (encoding && pbrt_string_is(encoding, "linear"))
             gamma = 0;
         else if (encoding && pbrt_string_is(encoding, "sRGB"))
@@ -163,7 +107,7 @@ bool pbrt_texture_statement(Parser *p, const Token *statement)
             gamma = atof(number) > 0 ? atof(number) : -1;
         }
         float average[3];
-        bool readable = image_average(p, path, gamma, average);
+        bool readable = sg_image_average(&p->images, path, gamma, average, NULL);
         if (!readable) {
             memcpy(average, grey, sizeof average);
             pbrt_warn_at(p, statement, "image textures that cannot be read (missing files) are "
