@@ -49,6 +49,14 @@ row() { # name scene size
 }
 row staircase ../shared/scenes/staircase/staircase.pbrt 180x320
 row bathroom ../shared/scenes/bathroom/bathroom.pbrt 256x256
+if [ -n "$report_dir" ] && [ -e "$report_dir/reference-staircase-ours.png" ]; then
+  link=${SG_REPORT_LINK:-$report_dir}
+  echo
+  for name in staircase bathroom; do
+    [ -e "$report_dir/reference-$name-ours.png" ] &&
+      echo "**$name**, ours (left) and Tungsten's: ![ours]($link/reference-$name-ours.png) ![Tungsten]($link/reference-$name-tungsten.png)"
+  done
+fi
 echo
 echo "($seconds s of bsdf sampling per scene, all cores, path length 32; masked: the camera ray's first"
 echo "surface has every texture it names; build/release/bench/reference_compare SCENE OURS.exr TUNGSTEN.exr)"
