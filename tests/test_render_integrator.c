@@ -739,9 +739,12 @@ static SgScene *two_rooms_with(bool dressed)
     return s;
 }
 
-Test(render_integrator, guided_agrees_with_bsdf_in_dark_room)
+/* The two rooms (dressed or not) rendered spp passes by bsdf and by `mode`
+ * (the guided ones with a fixed point in the door): the means agree within
+ * three standard errors. */
+static void rooms_agree(bool dressed, SgSampling mode, int spp)
 {
-    SgScene *s = two_rooms();
+    SgScene *s = two_rooms_with(dressed);
     SgRenderOptions o;
     sg_render_options_default(&o, s);
     SgtFixedPoint door = {{2.0, 1.0, 1.7}};
@@ -750,53 +753,31 @@ Test(render_integrator, guided_agrees_with_bsdf_in_dark_room)
     o.max_depth = 8;
     o.seed = 1;
     o.lobe_exponent = 10;
-    Stats b = render_scene_stats(s, &o, 48, 0, 0, o.width, o.height);
-    o.sampling = SG_SAMPLING_GUIDED;
-    o.seed = 2;
-    Stats g = render_scene_stats(s, &o, 48, 0, 0, o.width, o.height);
-    double se = sqrt(b.std_error * b.std_error + g.std_error * g.std_error);
-    cr_log_info("two rooms: bsdf %.5f +- %.5f, guided %.5f +- %.5f", b.mean[0], b.std_error,
-                g.mean[0], g.std_error);
-    cr_assert(b.mean[0] > 0.0);
-    cr_assert(fabs(b.mean[0] - g.mean[0]) < 3.0 * se, "bsdf %.5f vs guided %.5f, 3 se = %.5f",
-              b.mean[0], g.mean[0], 3 * se);
-    cr_assert_eq(b.nonfinite + g.nonfinite, 0);
-    sgt_scene_free(s);
-}
-
-/* The same with a rough conductor floor, a textured coated diffuse and
- * rough glass in the door: the guides stay unbiased with the microfacet
- * BSDFs' pdfs in their MIS and textured albedos in their roulettes. */
-static void dressed_rooms_agree(SgSampling mode)
-{
-    SgScene *s = two_rooms_with(true);
-    SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    SgtFixedPoint door = {{2.0, 1.0, 1.7}};
-    o.guide.importance_point = sgt_fixed_point_guide;
-    o.guide.ctx = &door;
-    o.max_depth = 8;
-    o.seed = 1;
-    o.lobe_exponent = 10;
-    Stats b = render_scene_stats(s, &o, 512, 0, 0, o.width, o.height);
+    Stats b = render_scene_stats(s, &o, spp, 0, 0, o.width, o.height);
     o.sampling = mode;
     o.seed = 2;
-    Stats g = render_scene_stats(s, &o, 512, 0, 0, o.width, o.height);
+    Stats g = render_scene_stats(s, &o, spp, 0, 0, o.width, o.height);
     double se = sqrt(b.std_error * b.std_error + g.std_error * g.std_error);
-    cr_log_info("dressed rooms: bsdf %.5f +- %.5f, %s %.5f +- %.5f", b.mean[0], b.std_error, sg_sampling_name(mode),
+    const char *name = dressed ? "dressed rooms" : "two rooms";
+    cr_log_info("%s: bsdf %.5f +- %.5f, %s %.5f +- %.5f", name, b.mean[0], b.std_error, sg_sampling_name(mode),
                 g.mean[0], g.std_error);
     cr_assert(b.mean[0] > 0.0);
-    cr_assert(fabs(b.mean[0] - g.mean[0]) < 3.0 * se, "bsdf %.5f vs %s %.5f, 3 se = %.5f", b.mean[0],
+    cr_assert(fabs(b.mean[0] - g.mean[0]) < 3.0 * se, "%s: bsdf %.5f vs %s %.5f, 3 se = %.5f", name, b.mean[0],
               sg_sampling_name(mode), g.mean[0], 3 * se);
     cr_assert_eq(b.nonfinite + g.nonfinite, 0);
     sgt_scene_free(s);
 }
 
-Test(render_integrator, guided_agrees_with_bsdf_in_dressed_rooms) { dressed_rooms_agree(SG_SAMPLING_GUIDED); }
+Test(render_integrator, guided_agrees_with_bsdf_in_dark_room) { rooms_agree(false, SG_SAMPLING_GUIDED, 48); }
+
+/* The same with a rough conductor floor, a textured coated diffuse and
+ * rough glass in the door: the guides stay unbiased with the microfacet
+ * BSDFs' pdfs in their MIS and textured albedos in their roulettes. */
+Test(render_integrator, guided_agrees_with_bsdf_in_dressed_rooms) { rooms_agree(true, SG_SAMPLING_GUIDED, 512); }
 Test(render_integrator, openpgl_agrees_with_bsdf_in_dressed_rooms)
 {
     skip_without_openpgl();
-    dressed_rooms_agree(SG_SAMPLING_OPENPGL);
+    rooms_agree(true, SG_SAMPLING_OPENPGL, 512);
 }
 
 Test(render_integrator, openpgl_agrees_with_bsdf_in_dark_room)
