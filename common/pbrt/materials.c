@@ -67,6 +67,22 @@ static bool ggx_alphas(Parser *p, const Token *at, double fallback, bool v3, flo
     return true;
 }
 
+/* An index given as outside over inside (below 1) read the other way. */
+static double index_above_1(double ior) { return ior > 0 && ior < 1 ? 1 / ior : ior; }
+
+/* What glass and dielectric end with: index ior, GGX-rough where alpha > 0
+ * (render/microfacet.h), smooth below pbrt's 1e-3 (v3: pbrt-v3's
+ * roughness remapping). */
+static bool dielectric(Parser *p, const Token *at, double ior, bool v3, SgMaterial *m)
+{
+    if (!ggx_alphas(p, at, 0, v3, m->roughness))
+        return false;
+    m->type = SG_MATERIAL_DIELECTRIC;
+    m->ior = (float)ior;
+    m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
+    return true;
+}
+
 static bool make_material(Parser *p, const Token *at, const Token *type, const char *label,
                           PbrtMaterial *out)
 {
@@ -190,16 +206,10 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
         if (!pbrt_param_scalar(p, "index", 1.5, &ior) ||
             (pbrt_find_param(p, "eta") && !pbrt_param_scalar(p, "eta", 1.5, &ior)))
             return false;
-        if (ior > 0 && ior < 1)
-            ior = 1 / ior;
+        ior = index_above_1(ior);
         if (!(ior >= 1 && ior <= 10))
             return pbrt_fail_at(p, at, "glass index %g is out of range", ior);
-        if (!ggx_alphas(p, at, 0, true, m->roughness))
-            return false;
-        m->type = SG_MATERIAL_DIELECTRIC;
-        m->ior = (float)ior;
-        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
-        return true;
+        return dielectric(p, at, ior, true, m);
     }
     if (pbrt_string_is(type, "dielectric") || pbrt_string_is(type, "thindielectric")) {
         if (pbrt_string_is(type, "thindielectric"))
@@ -207,18 +217,10 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
         float eta[3];
         if (!pbrt_param_color(p, "eta", (const float[3]){1.5f, 1.5f, 1.5f}, eta, NULL))
             return false;
-        double ior = eta[1];
-        if (ior > 0 && ior < 1)
-            ior = 1 / ior;
+        double ior = index_above_1(eta[1]);
         if (!(ior >= 1 && ior <= 10))
             return pbrt_fail_at(p, at, "dielectric eta %g is out of range", (double)eta[1]);
-        /* GGX-rough where alpha > 0 (render/microfacet.h), smooth below pbrt's 1e-3 */
-        if (!ggx_alphas(p, at, 0, false, m->roughness))
-            return false;
-        m->type = SG_MATERIAL_DIELECTRIC;
-        m->ior = (float)ior;
-        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
-        return true;
+        return dielectric(p, at, ior, false, m);
     }
     if (pbrt_string_is(type, "interface") || pbrt_string_is(type, "") ||
         pbrt_string_is(type, "none")) {
