@@ -29,11 +29,18 @@ float sg_fresnel_diffuse_internal(float eta)
     return (float)(2.0 * sum / n);
 }
 
-/* The microfacet normal that takes wo to wi (the generalized half vector:
- * wo + wi in reflection, wo + eta wi in transmission), turned to z > 0;
- * false where none does (wi in the plane, or a microfacet seen from behind
- * by wo or wi). */
-static bool dielectric_half(Vec3 wo, Vec3 wi, float eta, Vec3 *h)
+/* The microfacet that takes wo to wi, as f and pdf both need it: its
+ * normal h (the generalized half vector: wo + wi in reflection, wo + eta wi
+ * in transmission, turned to z > 0), wo.h, wi.h, the Fresnel reflectance
+ * at wo.h and, in transmission, the square of wi.h + wo.h / eta (the
+ * change of variables from h to wi). False where none does (wi in the
+ * plane, or a microfacet seen from behind by wo or wi). */
+typedef struct DielectricHalf {
+    Vec3 h;
+    float cos_oh, cos_ih, fresnel, denom2;
+} DielectricHalf;
+
+static bool dielectric_half(Vec3 wo, Vec3 wi, float eta, DielectricHalf *d)
 {
     if (wi.z == 0.0f)
         return false;
@@ -44,36 +51,35 @@ static bool dielectric_half(Vec3 wo, Vec3 wi, float eta, Vec3 *h)
     m = v3_scale(m, (m.z < 0.0f ? -1.0f : 1.0f) / l);
     if (!(v3_dot(m, wo) > 0.0f) || v3_dot(m, wi) * wi.z <= 0.0f)
         return false;
-    *h = m;
+    d->h = m;
+    d->cos_oh = v3_dot(wo, m);
+    d->cos_ih = v3_dot(wi, m);
+    d->fresnel = sg_fresnel_dielectric(d->cos_oh, eta);
+    float denom = d->cos_ih + d->cos_oh / eta;
+    d->denom2 = denom * denom;
     return true;
 }
 
 float sg_ggx_dielectric_f(Vec3 wo, Vec3 wi, float eta, float ax, float ay)
 {
-    Vec3 h;
-    if (!dielectric_half(wo, wi, eta, &h))
+    DielectricHalf d;
+    if (!dielectric_half(wo, wi, eta, &d))
         return 0.0f;
-    float cos_oh = v3_dot(wo, h), cos_ih = v3_dot(wi, h);
-    float f = sg_fresnel_dielectric(cos_oh, eta);
-    float dg = sg_ggx_d(h, ax, ay) * sg_ggx_g(wo, wi, ax, ay);
+    float dg = sg_ggx_d(d.h, ax, ay) * sg_ggx_g(wo, wi, ax, ay);
     if (wi.z > 0.0f)
-        return dg * f / (4.0f * wo.z * wi.z);
-    float denom = cos_ih + cos_oh / eta;
-    return dg * (1.0f - f) * fabsf(cos_ih * cos_oh / (wi.z * wo.z * denom * denom)) / (eta * eta);
+        return dg * d.fresnel / (4.0f * wo.z * wi.z);
+    return dg * (1.0f - d.fresnel) * fabsf(d.cos_ih * d.cos_oh / (wi.z * wo.z * d.denom2)) / (eta * eta);
 }
 
 float sg_ggx_dielectric_pdf(Vec3 wo, Vec3 wi, float eta, float ax, float ay)
 {
-    Vec3 h;
-    if (!dielectric_half(wo, wi, eta, &h))
+    DielectricHalf d;
+    if (!dielectric_half(wo, wi, eta, &d))
         return 0.0f;
-    float cos_oh = v3_dot(wo, h), cos_ih = v3_dot(wi, h);
-    float f = sg_fresnel_dielectric(cos_oh, eta);
-    float visible = sg_ggx_g1(wo, ax, ay) * sg_ggx_d(h, ax, ay) * cos_oh / wo.z; /* density of h */
+    float visible = sg_ggx_g1(wo, ax, ay) * sg_ggx_d(d.h, ax, ay) * d.cos_oh / wo.z; /* density of h */
     if (wi.z > 0.0f)
-        return visible / (4.0f * cos_oh) * f;
-    float denom = cos_ih + cos_oh / eta;
-    return visible * fabsf(cos_ih) / (denom * denom) * (1.0f - f);
+        return visible / (4.0f * d.cos_oh) * d.fresnel;
+    return visible * fabsf(d.cos_ih) / d.denom2 * (1.0f - d.fresnel);
 }
 
 bool sg_ggx_dielectric_sample(Vec3 wo, float eta, float ax, float ay, float uc, float u1, float u2, Vec3 *wi,
