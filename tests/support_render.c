@@ -180,3 +180,19 @@ SgScene *sgt_furnace_scene(void)
     sgt_finish(s);
     return s;
 }
+
+float *sgt_render_image(const SgScene *s, const SgRenderOptions *o, int passes, SgError *err)
+{
+    SgRenderer *r = sg_renderer_create(s, o, err);
+    if (!r)
+        return NULL;
+    for (int i = 0; i < passes; i++)
+        sg_renderer_pass(r);
+    float *rgb = malloc(sizeof(float) * 3 * o->width * o->height);
+    if (rgb)
+        sg_renderer_image(r, rgb);
+    else
+        sg_fail(err, "out of memory for a %dx%d image", o->width, o->height);
+    sg_renderer_free(r);
+    return rgb;
+}

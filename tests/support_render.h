@@ -4,6 +4,7 @@
 
 #include <stdbool.h>
 
+#include "render/renderer.h"
 #include "scene.h"
 
 SgScene *sgt_scene_new(void);
@@ -34,5 +35,9 @@ typedef struct SgtFixedPoint {
     double point[3];
 } SgtFixedPoint;
 bool sgt_fixed_point_guide(void *ctx, const double p[3], uint32_t light, double q[3]);
+
+/* s rendered `passes` passes under o: its image, 3 floats a pixel (the
+ * caller frees it), or NULL with err set. */
+float *sgt_render_image(const SgScene *s, const SgRenderOptions *o, int passes, SgError *err);
 
 #endif

@@ -15,6 +15,7 @@
 #include "render/renderer.h"
 #include "scene.h"
 #include "support_files.h"
+#include "support_render.h"
 
 #define STAIRCASE "../shared/scenes/staircase/staircase.pbrt"
 #define BATHROOM "../shared/scenes/bathroom/bathroom.pbrt"
@@ -890,12 +891,8 @@ Test(pbrt_render, checkerboard_texture_follows_the_uv)
     sg_render_options_default(&o, s);
     o.threads = 2;
     SgError err = {0};
-    SgRenderer *r = sg_renderer_create(s, &o, &err);
-    cr_assert(r, "%s", err.message);
-    for (int i = 0; i < 4; i++)
-        sg_renderer_pass(r);
-    float *rgb = malloc(sizeof(float) * 3 * o.width * o.height);
-    sg_renderer_image(r, rgb);
+    float *rgb = sgt_render_image(s, &o, 4, &err);
+    cr_assert(rgb, "%s", err.message);
     /* per column: which colour wins; the columns must split in two runs */
     int red_left = 0, red_right = 0, blue_left = 0, blue_right = 0;
     for (int y = 0; y < o.height; y++)
@@ -913,6 +910,5 @@ Test(pbrt_render, checkerboard_texture_follows_the_uv)
                   (blue_left > half * 9 / 10 && red_right > half * 9 / 10),
               "red %d | %d, blue %d | %d of %d pixels a side", red_left, red_right, blue_left, blue_right, half);
     free(rgb);
-    sg_renderer_free(r);
     sg_scene_free(s);
 }

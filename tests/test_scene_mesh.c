@@ -12,6 +12,7 @@
 #include "render/renderer.h"
 #include "scene.h"
 #include "support_files.h"
+#include "support_render.h"
 
 /* A quad in the z = 0 plane facing +z, its vt the image's corners. */
 #define QUAD_OBJ(mtl, material)                                                                   \
@@ -336,13 +337,8 @@ Test(mesh_render, obj_texture_the_right_way_up, .timeout = 60)
     sg_render_options_default(&o, s);
     o.threads = 2;
     SgError err = {0};
-    SgRenderer *r = sg_renderer_create(s, &o, &err);
-    cr_assert(r, "%s", err.message);
-    for (int i = 0; i < 4; i++)
-        sg_renderer_pass(r);
-    float *rgb = malloc(sizeof(float) * 3 * o.width * o.height);
-    cr_assert(rgb);
-    sg_renderer_image(r, rgb);
+    float *rgb = sgt_render_image(s, &o, 4, &err);
+    cr_assert(rgb, "%s", err.message);
     /* the mean of each quarter, away from the seams (bilinear lookups) */
     for (int qy = 0; qy < 2; qy++)
         for (int qx = 0; qx < 2; qx++) {
@@ -363,6 +359,5 @@ Test(mesh_render, obj_texture_the_right_way_up, .timeout = 60)
             }
         }
     free(rgb);
-    sg_renderer_free(r);
     sg_scene_free(s);
 }
