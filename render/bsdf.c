@@ -16,22 +16,6 @@
  * the smooth interface's Fresnel), measured against pbrt where it can be
  * (README.md, "pbrt-v4 scenes"). */
 
-/* The tangent frame around the normal, made again where needed rather
- * than kept: a vertex's BSDF is copied along the path, small is fast. */
-static Vec3 to_local(const Bsdf *b, Vec3 w)
-{
-    Vec3 t, bt;
-    v3_basis(b->lobe.n, &t, &bt);
-    return v3(v3_dot(w, t), v3_dot(w, bt), v3_dot(w, b->lobe.n));
-}
-
-static Vec3 to_world(const Bsdf *b, Vec3 l)
-{
-    Vec3 t, bt;
-    v3_basis(b->lobe.n, &t, &bt);
-    return v3_add(v3_add(v3_scale(t, l.x), v3_scale(bt, l.y)), v3_scale(b->lobe.n, l.z));
-}
-
 /* What the base gives back, per unit of what the coat lets through to it
  * and out again: R, and R fdr R, ... */
 static inline float coated_base(float r, float fdr) { return r / (1.0f - r * fdr); }
@@ -42,7 +26,7 @@ void bsdf_init_microfacet(Bsdf *b, const Material *m, Vec3 n, Vec3 wo, Vec3 albe
     b->lobe.n = n;
     b->lobe.r = n;
     b->lobe.exponent = 0.0f;
-    b->wo = to_local(b, wo);
+    b->wo = sg_to_local(wo, b->lobe.n); /* the frame is made again where needed: small BSDFs copy fast */
     b->wo.z = sg_maxf(b->wo.z, 1e-6f); /* wo faces n; keep it above at grazing angles */
     b->ax = m->ax;
     b->ay = m->ay;
@@ -77,7 +61,7 @@ static float microfacet_lobe(const Bsdf *b, Vec3 wi, float *cos_oh)
 
 Vec3 bsdf_eval_microfacet(const Bsdf *b, Vec3 wi)
 {
-    Vec3 l = to_local(b, wi);
+    Vec3 l = sg_to_local(wi, b->lobe.n);
     if (!(l.z > 0.0f))
         return v3(0, 0, 0);
     float cos_oh;
@@ -93,7 +77,7 @@ Vec3 bsdf_eval_microfacet(const Bsdf *b, Vec3 wi)
 
 float bsdf_pdf_microfacet(const Bsdf *b, Vec3 wi)
 {
-    Vec3 l = to_local(b, wi);
+    Vec3 l = sg_to_local(wi, b->lobe.n);
     float pdf = sg_ggx_pdf_reflect(b->wo, l, b->ax, b->ay);
     if (b->kind == BSDF_CONDUCTOR)
         return pdf;
@@ -107,5 +91,5 @@ Vec3 bsdf_sample_microfacet(const Bsdf *b, float u0, float u1, float u2)
         return sg_sample_cosine_hemisphere(b->lobe.n, u1, u2);
     Vec3 h = sg_ggx_sample_visible(b->wo, b->ax, b->ay, u1, u2);
     Vec3 wi = v3_sub(v3_scale(h, 2.0f * v3_dot(b->wo, h)), b->wo);
-    return v3_normalize(to_world(b, wi));
+    return v3_normalize(sg_to_world(wi, b->lobe.n));
 }

@@ -463,15 +463,14 @@ static bool rough_dielectric_bounce(const SgRenderer *r, const Material *m, cons
                                     bool entering, PathState *ps, SgRng *rng, GuideSegment *seg)
 {
     float eta = entering ? m->ior : 1.0f / m->ior; /* beyond the surface over wo's side */
-    Vec3 t, b;
-    v3_basis(n, &t, &b);
-    Vec3 wo_l = v3(v3_dot(wo, t), v3_dot(wo, b), sg_maxf(v3_dot(wo, n), 1e-6f));
+    Vec3 wo_l = sg_to_local(wo, n);
+    wo_l.z = sg_maxf(wo_l.z, 1e-6f); /* wo faces n; keep it above at grazing angles */
     float uc = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
     Vec3 wi_l;
     float weight, pdf;
     if (!sg_ggx_dielectric_sample(wo_l, eta, m->ax, m->ay, uc, u1, u2, &wi_l, &weight, &pdf))
         return false;
-    Vec3 wi = v3_normalize(v3_add(v3_add(v3_scale(t, wi_l.x), v3_scale(b, wi_l.y)), v3_scale(n, wi_l.z)));
+    Vec3 wi = v3_normalize(sg_to_world(wi_l, n));
     bool refracted = wi_l.z < 0.0f;
     ps->d = wi;
     ps->o = offset_origin(&r->geo, h->p, refracted ? v3_scale(n, -1.0f) : n);

@@ -9,6 +9,13 @@ Vec3 sg_to_world(Vec3 local, Vec3 axis)
     return v3_add(v3_add(v3_scale(t, local.x), v3_scale(b, local.y)), v3_scale(axis, local.z));
 }
 
+Vec3 sg_to_local(Vec3 world, Vec3 axis)
+{
+    Vec3 t, b;
+    v3_basis(axis, &t, &b);
+    return v3(v3_dot(world, t), v3_dot(world, b), v3_dot(world, axis));
+}
+
 Vec3 sg_sample_cosine_hemisphere(Vec3 n, float u1, float u2)
 {
     /* Malley: uniform on the disk, projected up. */

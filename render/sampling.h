@@ -21,6 +21,8 @@ extern "C" {
 
 /* Maps a local direction (z = axis) into the frame around unit `axis`. */
 Vec3 sg_to_world(Vec3 local, Vec3 axis);
+/* The inverse: a world direction in that frame (v3_basis(axis), axis). */
+Vec3 sg_to_local(Vec3 world, Vec3 axis);
 
 /* Cosine-weighted hemisphere around unit n: pdf = max(0, w.n) / pi. */
 Vec3 sg_sample_cosine_hemisphere(Vec3 n, float u1, float u2);
