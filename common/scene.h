@@ -6,6 +6,7 @@
 #ifndef SG_SCENE_H
 #define SG_SCENE_H
 
+#include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -76,6 +77,15 @@ typedef struct SgMaterial {
      * `diffuse` then holds the texture's mean. */
     uint32_t diffuse_texture;
 } SgMaterial;
+
+/* pbrt-v4's conductor given a reflectance r instead of eta and k: eta 1 and
+ * the k whose normal-incidence Fresnel is r (the pbrt loader for a constant
+ * reflectance, the renderer for a textured one). */
+static inline float sg_conductor_k_of_reflectance(float r)
+{
+    r = fminf(fmaxf(r, 0.0f), 0.9999f);
+    return 2.0f * sqrtf(r) / sqrtf(1.0f - r);
+}
 
 /* A light is a connected set of emissive triangles of one material (a quad
  * is one light, not two). Its triangles are

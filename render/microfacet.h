@@ -99,14 +99,6 @@ static inline Vec3 sg_fresnel_conductor3(float cos_i, Vec3 eta, Vec3 k)
               sg_fresnel_conductor(cos_i, eta.z, k.z));
 }
 
-/* pbrt-v4's conductor given a reflectance r instead of eta and k: eta 1 and
- * the k whose normal-incidence Fresnel is r. */
-static inline float sg_conductor_k_of_reflectance(float r)
-{
-    r = sg_minf(sg_maxf(r, 0.0f), 0.9999f);
-    return 2.0f * sqrtf(r) / sqrtf(1.0f - r);
-}
-
 /* A rough dielectric interface (pbrt-v4's DielectricBxDF with alpha > 0),
  * in the frame of the normal on wo's side (wo.z > 0); eta is the index
  * beyond the surface over the index on wo's side. It reflects F(wo.h) and

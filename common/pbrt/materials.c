@@ -141,9 +141,8 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
          * their place is pbrt's eta 1 and the k of that reflectance */
         for (int a = 0; a < 3; a++) {
             if (has_reflectance) {
-                float r = fminf(reflectance[a], 0.9999f);
                 eta[a] = 1;
-                k[a] = 2 * sqrtf(r) / sqrtf(1 - r);
+                k[a] = sg_conductor_k_of_reflectance(reflectance[a]);
                 m->diffuse[a] = reflectance[a];
             } else {
                 m->diffuse[a] = 0;
