@@ -48,8 +48,8 @@ LDLIBS := -lembree3 -lopenvdb -ltbb -lOpenImageIO -lOpenImageIO_Util -lassimp -l
           -lcriterion -lstdc++ -lm
 
 # The Open PGL peer (render --sampling openpgl): linked where `make openpgl`
-# built it (or OPENPGL_DIR names an installed one); without it render/
-# openpgl_guide.cpp compiles to a stub that says how to get it.
+# built it (or OPENPGL_DIR names an installed one); without it
+# render/guides/openpgl_field.cpp compiles to a stub that says how to get it.
 OPENPGL_PREFIX := $(if $(OPENPGL_DIR),$(OPENPGL_DIR),build/openpgl/install)
 ifneq ($(wildcard $(OPENPGL_PREFIX)/include/openpgl/openpgl.h),)
 OPENPGL_CPPFLAGS := -DSG_HAVE_OPENPGL -isystem $(OPENPGL_PREFIX)/include
@@ -66,8 +66,9 @@ COMMON_C := $(wildcard common/*.c common/*/*.c)
 COMMON_CXX := $(wildcard common/*.cpp)
 COMMON_OBJ := $(COMMON_C:%.c=$(BUILD)/%.o) $(COMMON_CXX:%.cpp=$(BUILD)/%.o)
 
-# Each step: its library (every .c and .cpp but main.c) and its program (main.c).
-step_lib_src = $(filter-out $(1)/main.c,$(wildcard $(1)/*.c $(1)/*.cpp))
+# Each step: its library (every .c and .cpp but main.c, in its folder and
+# the folders inside it) and its program (main.c).
+step_lib_src = $(filter-out $(1)/main.c,$(wildcard $(1)/*.c $(1)/*.cpp $(1)/*/*.c $(1)/*/*.cpp))
 step_lib_obj = $(patsubst %.cpp,$(BUILD)/%.o,$(patsubst %.c,$(BUILD)/%.o,$(call step_lib_src,$(1))))
 STEP_LIBS := $(foreach s,$(STEPS),$(BUILD)/lib$(s).a)
 
@@ -115,8 +116,8 @@ $(BUILD)/%.o: %.cpp
 
 # The shim is the one file that sees Open PGL: it is rebuilt when the peer
 # comes or goes (the stamp holds the flags, rewritten only when they change).
-$(BUILD)/render/openpgl_guide.o: CPPFLAGS += $(OPENPGL_CPPFLAGS)
-$(BUILD)/render/openpgl_guide.o: $(BUILD)/openpgl.flags
+$(BUILD)/render/guides/openpgl_field.o: CPPFLAGS += $(OPENPGL_CPPFLAGS)
+$(BUILD)/render/guides/openpgl_field.o: $(BUILD)/openpgl.flags
 $(BUILD)/openpgl.flags: FORCE
 	@mkdir -p $(@D)
 	@echo '$(OPENPGL_CPPFLAGS)' > $@.new

@@ -52,14 +52,13 @@ int sg_convergence_analyze(int argc, char **argv, SgError *err);
 
 #include "image_io.h"
 #include "output_file.h"
+#include "render/renderer.h"
 
 /* points of a mean curve, log-spaced in time */
 #define SG_ANALYZE_MEAN_POINTS 120
 
 static const char *const sg_metric_key[SG_METRIC_COUNT] = {"relmse", "mse8", "mse"};
 static const char *const sg_metric_title[SG_METRIC_COUNT] = {"relMSE", "mse8", "MSE"};
-/* the order of discovered modes; any other comes after, by name */
-static const char *const sg_known_modes[] = {"bsdf", "skeleton", "guided", "openpgl"};
 
 typedef struct SgModeResult {
     bool present;
@@ -228,12 +227,12 @@ static int sg_mode_index(char names[][64], int count, const char *name)
     return -1;
 }
 
+/* the order of discovered modes: render's sampling modes in their own
+ * order; any other (a variant such as guided-albedo) after, by name */
 static int sg_known_rank(const char *name)
 {
-    for (size_t k = 0; k < sizeof sg_known_modes / sizeof sg_known_modes[0]; k++)
-        if (!strcmp(name, sg_known_modes[k]))
-            return (int)k;
-    return (int)(sizeof sg_known_modes / sizeof sg_known_modes[0]);
+    SgSampling s;
+    return sg_sampling_parse(name, &s) ? (int)s : SG_SAMPLING_COUNT;
 }
 
 static int sg_mode_order(const void *a, const void *b)

@@ -16,7 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../render/cache_guide.h"
+#include "../render/guides/importance_file.h"
 #include "../render/renderer.h"
 #include "error.h"
 #include "progress.h"
@@ -37,7 +37,7 @@ int main(int argc, char **argv)
             threads = atoi(argv[i + 1]);
     }
     SgError err = {0};
-    SgCacheGuide guide = {0};
+    SgImportanceFile guide = {0};
     SgRenderer *r[2] = {NULL, NULL};
     int status = 1;
     SgScene *scene = sg_scene_load(scene_path, &err);
@@ -52,7 +52,7 @@ int main(int argc, char **argv)
     if (max_depth > 0)
         o.max_depth = max_depth;
     o.threads = threads;
-    if (!sg_cache_guide_open(&guide, cache_path, scene, scene_path, &o.guide, &err))
+    if (!sg_importance_file_open(&guide, cache_path, scene, scene_path, &o.importance, &err))
         goto done;
     o.sampling = SG_SAMPLING_BSDF;
     r[0] = sg_renderer_create(scene, &o, &err);
@@ -80,7 +80,7 @@ done:
         sg_error_print("render_cost", &err);
     sg_renderer_free(r[0]);
     sg_renderer_free(r[1]);
-    sg_cache_guide_close(&guide);
+    sg_importance_file_close(&guide);
     if (scene)
         sg_scene_free(scene);
     return status;

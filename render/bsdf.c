@@ -93,3 +93,57 @@ Vec3 bsdf_sample_microfacet(const Bsdf *b, float u0, float u1, float u2)
     Vec3 wi = v3_sub(v3_scale(h, 2.0f * v3_dot(b->wo, h)), b->wo);
     return v3_normalize(sg_to_world(wi, b->lobe.n));
 }
+
+void bsdf_sample_delta(const Material *m, Vec3 albedo, Vec3 wo, Vec3 n, bool entering, float u, SpecularBounce *b)
+{
+    b->pdf = 1.0f;
+    b->delta = true;
+    b->transmitted = false;
+    b->eta = 1.0f;
+    if (!bsdf_delta_chooses(m)) { /* a mirror, or a conductor with its Fresnel at this angle */
+        Vec3 tint = m->ks;
+        if (m->type == SG_MATERIAL_CONDUCTOR) {
+            Vec3 eta, k;
+            bsdf_conductor_index(m, albedo, &eta, &k);
+            tint = sg_fresnel_conductor3(v3_dot(wo, n), eta, k);
+        }
+        b->wi = v3_normalize(sg_reflect(wo, n));
+        b->weight = b->rr_weight = tint;
+        return;
+    }
+    float eta = entering ? 1.0f / m->ior : m->ior; /* eta_i / eta_t */
+    float cos_i = v3_dot(wo, n);
+    float fresnel = sg_fresnel_dielectric(cos_i, entering ? m->ior : 1.0f / m->ior);
+    b->rr_weight = v3(1, 1, 1);
+    if (u < fresnel) { /* reflected (always, past the critical angle) */
+        b->wi = v3_normalize(sg_reflect(wo, n));
+        b->weight = v3(1, 1, 1);
+        return;
+    }
+    float cos_t = sqrtf(1.0f - eta * eta * fmaxf(0.0f, 1.0f - cos_i * cos_i));
+    b->wi = v3_normalize(v3_add(v3_scale(wo, -eta), v3_scale(n, eta * cos_i - cos_t)));
+    b->weight = v3(eta * eta, eta * eta, eta * eta); /* radiance is compressed entering glass */
+    b->transmitted = true;
+    b->eta = 1.0f / eta;
+}
+
+bool bsdf_sample_rough_glass(const Material *m, Vec3 wo, Vec3 n, bool entering, float uc, float u1, float u2,
+                             SpecularBounce *b)
+{
+    float eta = entering ? m->ior : 1.0f / m->ior; /* beyond the surface over wo's side */
+    Vec3 wo_l = sg_to_local(wo, n);
+    wo_l.z = sg_maxf(wo_l.z, 1e-6f); /* wo faces n; keep it above at grazing angles */
+    Vec3 wi_l;
+    float weight, pdf;
+    if (!sg_ggx_dielectric_sample(wo_l, eta, m->ax, m->ay, uc, u1, u2, &wi_l, &weight, &pdf))
+        return false;
+    b->wi = v3_normalize(sg_to_world(wi_l, n));
+    b->transmitted = wi_l.z < 0.0f;
+    b->weight = v3(weight, weight, weight);
+    float rr = b->transmitted ? weight * eta * eta : weight;
+    b->rr_weight = v3(rr, rr, rr);
+    b->pdf = pdf;
+    b->eta = b->transmitted ? eta : 1.0f;
+    b->delta = false;
+    return true;
+}

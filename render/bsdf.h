@@ -1,8 +1,11 @@
-/* The BSDF at a diffuse, glossy or rough vertex, made from its material
+/* The BSDFs. At a diffuse, glossy or rough reflecting vertex (the Bsdf
+ * below, where lights are sampled and guides draw), made from its material
  * and (where textured) the albedo at the hit, in the frame of the shading
  * normal on wo's side. Reflection only: every kind is zero below the
  * surface, though its sampler may draw there (a valid direction with f = 0,
  * so that each pdf is a density over the whole sphere, as sampling.h's).
+ * Mirrors, smooth conductors and glass, smooth or rough, are sampled alone
+ * (SpecularBounce, at the end).
  *   PHONG      diffuse + normalized Phong lobe (sampling.h's SgGlossyLobe):
  *              the diffuse and glossy materials, bit for bit as before
  *   CONDUCTOR  GGX microfacets with a conductor's complex Fresnel
@@ -140,5 +143,35 @@ static inline float bsdf_mixture_pdf(const Bsdf *b, const SgFoldedLobe *lobe, fl
     *pdf_bsdf = bsdf_pdf(b, w);
     return alpha * *pdf_bsdf + (1.0f - alpha) * sg_pdf_folded_lobe_at(lobe, w, wn, c1, c2);
 }
+
+/* A bounce drawn from a mirror's, a smooth conductor's or a glass's BSDF
+ * alone (no light sample, no guide: a delta bounce, or rough glass, which a
+ * shadow ray rarely crosses toward a light). */
+typedef struct SpecularBounce {
+    Vec3 wi;          /* unit direction */
+    Vec3 weight;      /* f cos / pdf (a delta bounce: its Fresnel tint),
+                       * radiance's compression through glass included */
+    Vec3 rr_weight;   /* the same for the roulette: what is lost, not the compression */
+    float pdf;        /* 1 for a delta bounce */
+    float eta;        /* the relative index crossed, as Open PGL records it (1 reflected) */
+    bool transmitted; /* below the surface: the path leaves on n's other side */
+    bool delta;
+} SpecularBounce;
+
+/* A delta bounce (m->delta) at normal n facing wo; entering: wo is on the
+ * side the winding normal faces. Glass chooses reflection or refraction by
+ * its Fresnel with u; `albedo` the texture's value there (conductors). */
+void bsdf_sample_delta(const Material *m, Vec3 albedo, Vec3 wo, Vec3 n, bool entering, float u, SpecularBounce *b);
+/* Whether bsdf_sample_delta reads u (glass: it draws between two ways). */
+static inline bool bsdf_delta_chooses(const Material *m)
+{
+    return m->type != SG_MATERIAL_MIRROR && m->type != SG_MATERIAL_CONDUCTOR;
+}
+
+/* A rough dielectric's bounce (render/microfacet.h), reflected or
+ * transmitted through a visible microfacet; false: no direction (the
+ * microfacet sent it to the wrong side). */
+bool bsdf_sample_rough_glass(const Material *m, Vec3 wo, Vec3 n, bool entering, float uc, float u1, float u2,
+                             SpecularBounce *b);
 
 #endif

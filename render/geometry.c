@@ -3,7 +3,7 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "mixture_learning.h"
+#include "guides/mixture_learning.h"
 
 bool geometry_init(Geometry *g, const SgScene *s, const char *path, SgError *err)
 {

@@ -6,34 +6,32 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cache_guide.h"
+#include "guides/importance_file.h"
 #include "cli.h"
 #include "color.h"
 #include "error.h"
 #include "error_metrics.h"
 #include "hash.h"
 #include "image_io.h"
-#include "openpgl_guide.h"
 #include "output_file.h"
 #include "progress.h"
 #include "renderer.h"
 #include "scene.h"
 
-static const char *usage =
-    "usage: render SCENE [--cache importance.cache] [--sampling bsdf|skeleton|guided|openpgl]\n"
+static const char *usage_head =
+    "usage: render SCENE [--cache importance.cache] [--sampling MODE]\n"
     "              [--spp N | --time SECONDS] [--seed N] [--threads N] -o image.exr\n"
     "              [--png image.png] [--exposure STOPS] [--reference ref.exr --log curve.csv]\n"
     "              [--max-depth N] [--exponent P] [--alpha A] [--roulette learned|albedo]\n"
     "              [--size WxH] [--shard K/N] [--texture-cache MB] [--quiet]\n"
+    "              [--field FIELD | --field-out FIELD [--training-passes N]]\n"
+    "       render --describe [MODE]\n"
     "\n"
-    "Path traces SCENE.json (Embree 3) with next-event estimation and MIS.\n"
+    "Path traces SCENE (.json or pbrt-v4 .pbrt; Embree 3) with next-event estimation and MIS.\n"
     "  --cache FILE      importance cache from bin/importance for this scene's geometry\n"
-    "  --sampling MODE   bsdf: BSDF sampling (default without a cache);\n"
-    "                    guided: unbiased mixture of BSDF and a lobe toward the skeleton's\n"
-    "                            importance point (default with a cache);\n"
-    "                    skeleton: the paper's rule as written (biased; for reproduction);\n"
-    "                    openpgl: the peer, Open PGL's learned guiding as Cycles uses it\n"
-    "                            (no cache; builds with `make openpgl`)\n"
+    "  --sampling MODE   how bounces are drawn:\n";
+
+static const char *usage_tail =
     "  --spp N           samples per pixel (default: the scene's render.spp, else 16)\n"
     "  --time SECONDS    render progressive passes until this much time has passed\n"
     "  --seed N          random seed (default 0); the image depends only on the seed\n"
@@ -46,23 +44,90 @@ static const char *usage =
     "                    on the image times 2^exposure; mse8: the paper's MSE of the 8-bit\n"
     "                    PNG values at --exposure)\n"
     "  --max-depth N     maximum path length (default: the scene's render.max_depth, else 8)\n"
-    "  --exponent P      cosine-power exponent of the lobe (default 16; skeleton: 4, the paper's)\n"
+    "  --exponent P      cosine-power exponent of the lobe (default: the mode's, above)\n"
     "  --alpha A         guided: probability of BSDF sampling in the mixture, (0, 1]; default:\n"
     "                    learned per region of the scene while rendering (docs/render.md)\n"
-    "  --roulette R      how paths are cut short: learned (default; guided with a learned alpha:\n"
-    "                    by expected contribution against the pixel's, docs/render.md) or\n"
-    "                    albedo (survival = product of albedos after 2 bounces, as bsdf)\n"
+    "  --roulette R      how paths are cut short: learned (default, where the mode learns what\n"
+    "                    bounces bring back: guided with a learned alpha; by expected\n"
+    "                    contribution against the pixel's, docs/render.md) or albedo\n"
+    "                    (survival = product of albedos after 2 bounces, as bsdf)\n"
     "  --size WxH        image size (default: the scene's image size, else 320x240)\n"
     "  --shard K/N       render only shard K (0 <= K < N) of the render split into N: its\n"
     "                    passes K, K+N, K+2N... of --spp in all (with --time: for that long);\n"
     "                    bin/merge makes the whole image from the N shards' EXRs\n"
     "  --texture-cache MB  texels held in memory at most (default 256): image textures\n"
     "                    load tile by tile as paths look them up\n"
-    "  --quiet           no summary line\n";
+    "  --quiet           no summary line\n"
+    "  --field-out FIELD a mode that learns (--describe): run its training alone (its\n"
+    "                    --training-passes, random numbers of their own), write what it\n"
+    "                    learned to FIELD and the training passes' image to -o\n"
+    "  --field FIELD     render with the field FIELD holds, frozen: nothing is learned on the\n"
+    "                    clock (refused unless made for this scene, cache, size and options)\n"
+    "  --training-passes N  the training's passes (default: the mode's, --describe)\n"
+    "  --describe [MODE] what each sampling mode (or MODE) is, one JSON object per line:\n"
+    "                    uses_cache, its defaults, whether it learns, is biased, is built\n";
+
+/* --help: the modes from their own descriptions (path_guide.h). */
+static void print_usage(void)
+{
+    fputs(usage_head, stdout);
+    for (int i = 0; i < SG_SAMPLING_COUNT; i++) {
+        const SgSamplingMode *m = sg_sampling_mode((SgSampling)i);
+        printf("                    %s: ", m->name);
+        for (const char *c = m->help; *c; c++) /* continuation lines under the text */
+            *c == '\n' ? printf("\n                      ") : putchar(*c);
+        if (m->lobe_exponent > 0.0f)
+            printf(" [exponent %g]", m->lobe_exponent);
+        putchar('\n');
+    }
+    fputs(usage_tail, stdout);
+}
+
+/* --describe: what a mode is, for scripts (the farm script asks whether
+ * a mode needs the precompute). */
+static void describe_mode(const SgSamplingMode *m)
+{
+    SgError e = {0};
+    bool available = !m->available || m->available(&e);
+    printf("{\"name\": \"%s\", \"uses_cache\": %s, \"default_with_cache\": %s, \"default_without_cache\": %s, "
+           "\"lobe_exponent\": %g, \"learns\": %s, \"learned_roulette\": %s, \"biased\": %s, "
+           "\"available\": %s}\n",
+           m->name, m->uses_cache ? "true" : "false", m->default_with_cache ? "true" : "false",
+           m->default_without_cache ? "true" : "false", m->lobe_exponent, m->learns ? "true" : "false",
+           m->learned_roulette ? "true" : "false", m->biased ? "true" : "false", available ? "true" : "false");
+}
+
+static int describe(int argc, char **argv)
+{
+    if (argc > 3) {
+        fprintf(stderr, "render: --describe takes at most one mode\n");
+        return 2;
+    }
+    SgSampling only;
+    if (argc == 3 && !sg_sampling_parse(argv[2], &only)) {
+        fprintf(stderr, "render: --describe: '%s' is not a sampling mode\n", argv[2]);
+        return 2;
+    }
+    for (int i = 0; i < SG_SAMPLING_COUNT; i++)
+        if (argc < 3 || (SgSampling)i == only)
+            describe_mode(sg_sampling_mode((SgSampling)i));
+    return 0;
+}
+
+/* "a, b or c": the modes' names, for an error. */
+static void mode_names(char *buf, size_t size)
+{
+    size_t used = 0;
+    buf[0] = '\0';
+    for (int i = 0; i < SG_SAMPLING_COUNT && used < size; i++)
+        used += (size_t)snprintf(buf + used, size - used, "%s%s", i == 0 ? "" : i + 1 < SG_SAMPLING_COUNT ? ", " : " or ",
+                                 sg_sampling_name((SgSampling)i));
+}
 
 typedef struct Args {
-    const char *scene, *cache, *output, *png, *reference, *log;
-    SgSampling sampling; /* bsdf, or guided with a cache, unless --sampling says */
+    const char *scene, *cache, *output, *png, *reference, *log, *field, *field_out;
+    long training_passes;
+    SgSampling sampling; /* sg_sampling_default, unless --sampling says */
     SgRoulette roulette;
     long spp;
     double time;
@@ -95,8 +160,11 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
         if (!strcmp(s, "--cache")) { NEED_VALUE(); a->cache = v; }
         else if (!strcmp(s, "--sampling")) {
             NEED_VALUE();
-            if (!sg_sampling_parse(v, &a->sampling))
-                return sg_fail(err, "--sampling: '%s' is not bsdf, skeleton, guided or openpgl", v);
+            if (!sg_sampling_parse(v, &a->sampling)) {
+                char names[256];
+                mode_names(names, sizeof names);
+                return sg_fail(err, "--sampling: '%s' is not %s", v, names);
+            }
             has_sampling = true;
         } else if (!strcmp(s, "--roulette")) {
             NEED_VALUE();
@@ -169,6 +237,16 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
             NEED_VALUE();
             if (!sg_parse_double(v, 1, 1048576, &a->texture_cache_mb))
                 return sg_fail(err, "--texture-cache: '%s' is not a size in MB in [1, 1048576]", v);
+        } else if (!strcmp(s, "--field")) {
+            NEED_VALUE();
+            a->field = v;
+        } else if (!strcmp(s, "--field-out")) {
+            NEED_VALUE();
+            a->field_out = v;
+        } else if (!strcmp(s, "--training-passes")) {
+            NEED_VALUE();
+            if (!sg_parse_long(v, 1, 1L << 20, &a->training_passes))
+                return sg_fail(err, "--training-passes: '%s' is not a positive integer", v);
         } else if (!strcmp(s, "--quiet")) {
             a->quiet = true;
         } else if (s[0] == '-' && s[1]) {
@@ -188,10 +266,19 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
         return sg_fail(err, "--spp and --time: give one or the other");
     if (!a->reference != !a->log)
         return sg_fail(err, "--reference and --log go together");
+    if (a->field && a->field_out)
+        return sg_fail(err, "--field and --field-out: a render uses a field or trains one, not both");
+    if (a->field_out && (a->spp > 0 || a->time > 0 || a->reference || a->shard_count > 1))
+        return sg_fail(err, "--field-out trains for --training-passes: no --spp, --time, --reference or --shard");
+    if (a->training_passes && a->field)
+        return sg_fail(err, "--training-passes: the field's training is done (it is for --field-out)");
     if (!has_sampling)
-        a->sampling = a->cache ? SG_SAMPLING_GUIDED : SG_SAMPLING_BSDF;
-    if ((a->sampling == SG_SAMPLING_SKELETON || a->sampling == SG_SAMPLING_GUIDED) && !a->cache)
-        return sg_fail(err, "--sampling %s needs --cache importance.cache", sg_sampling_name(a->sampling));
+        a->sampling = sg_sampling_default(a->cache != NULL);
+    const SgSamplingMode *mode = sg_sampling_mode(a->sampling);
+    if (mode->uses_cache && !a->cache)
+        return sg_fail(err, "--sampling %s needs --cache importance.cache", mode->name);
+    if ((a->field || a->field_out) && !mode->learns)
+        return sg_fail(err, "--sampling %s learns nothing: it has no field (--describe)", mode->name);
     return true;
 }
 
@@ -232,7 +319,7 @@ typedef struct ShardIdentity {
 } ShardIdentity;
 
 static void shard_identity(const SgScene *scene, const SgRenderOptions *o, const SgImportanceCache *cache,
-                           ShardIdentity *id)
+                           const char *field, ShardIdentity *id)
 {
     uint64_t h = sg_hash_bytes(scene->source_hash, &scene->geometry_hash, sizeof scene->geometry_hash);
     snprintf(id->scene, sizeof id->scene, "%016" PRIx64, h);
@@ -240,10 +327,13 @@ static void shard_identity(const SgScene *scene, const SgRenderOptions *o, const
         snprintf(id->cache, sizeof id->cache, "%016" PRIx64, sg_cache_checksum(cache));
     else
         snprintf(id->cache, sizeof id->cache, "none");
-    char recipe[256];
+    char recipe[4500]; /* the options and a field's path */
     int n = snprintf(recipe, sizeof recipe, "size %dx%d sampling %s seed %" PRIu64 " depth %d exponent %.9g alpha %.9g "
-                     "roulette %s shards %d", o->width, o->height, sg_sampling_name(o->sampling), o->seed,
-                     o->max_depth, o->lobe_exponent, o->alpha, sg_roulette_name(o->roulette), o->shard_count);
+                     "roulette %s shards %d%s%s", o->width, o->height, sg_sampling_name(o->sampling), o->seed,
+                     o->max_depth, o->lobe_exponent, o->alpha, sg_roulette_name(o->roulette), o->shard_count,
+                     field ? " field " : "", field ? field : "");
+    if (n < 0 || (size_t)n >= sizeof recipe)
+        n = (int)strlen(recipe);
     snprintf(id->recipe, sizeof id->recipe, "%016" PRIx64, sg_hash_bytes(SG_HASH_INIT, recipe, (size_t)n));
 }
 
@@ -251,22 +341,25 @@ int main(int argc, char **argv)
 {
     for (int i = 1; i < argc; i++)
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            fputs(usage, stdout);
+            print_usage();
             return 0;
         }
+    if (argc > 1 && !strcmp(argv[1], "--describe"))
+        return describe(argc, argv);
     SgError err = {0};
     Args a;
     if (!parse_args(argc, argv, &a, &err)) {
         sg_error_print("render", &err);
         return 2; /* a usage error, as in every program */
     }
-    if (a.sampling == SG_SAMPLING_OPENPGL && !sg_pgl_require(&err)) { /* said before the scene is read */
-        fprintf(stderr, "render: --sampling openpgl: %s\n", err.message);
+    const SgSamplingMode *mode = sg_sampling_mode(a.sampling);
+    if (mode->available && !mode->available(&err)) { /* said before the scene is read */
+        fprintf(stderr, "render: --sampling %s: %s\n", mode->name, err.message);
         return 1;
     }
     int status = 1;
     SgScene *scene = NULL;
-    SgCacheGuide guide = {0};
+    SgImportanceFile importance = {0};
     SgRenderer *r = NULL;
     float *image = NULL;
     ErrorLog log = {0};
@@ -301,16 +394,17 @@ int main(int argc, char **argv)
     o.shard = (int)a.shard;
     o.shard_count = (int)a.shard_count;
     o.texture_cache_mb = a.texture_cache_mb;
-    if (o.sampling == SG_SAMPLING_SKELETON && !a.has_exponent)
-        o.lobe_exponent = 4.0f; /* the paper's p_skel for its corridor */
+    o.training_passes = (int)a.training_passes;
+    if (!a.has_exponent && mode->lobe_exponent > 0.0f)
+        o.lobe_exponent = mode->lobe_exponent;
 
-    if (a.cache && (o.sampling == SG_SAMPLING_SKELETON || o.sampling == SG_SAMPLING_GUIDED)) {
-        if (!sg_cache_guide_open(&guide, a.cache, scene, a.scene, &o.guide, &err))
+    if (a.cache && mode->uses_cache) {
+        if (!sg_importance_file_open(&importance, a.cache, scene, a.scene, &o.importance, &err))
             goto done;
-        if (guide.dropped)
+        if (importance.dropped)
             fprintf(stderr, "render: %u of %u lights cannot reach the camera: the guide does not follow them%s\n",
-                    guide.dropped, scene->light_count,
-                    guide.dropped == scene->light_count ? " (so it samples the BSDF only)" : "");
+                    importance.dropped, scene->light_count,
+                    importance.dropped == scene->light_count ? " (so it samples the BSDF only)" : "");
     }
 
     int spp_total = a.spp > 0 ? (int)a.spp : scene->render.spp > 0 ? scene->render.spp : 16;
@@ -347,78 +441,87 @@ int main(int argc, char **argv)
     }
 
     SgProgress progress;
-    sg_progress_begin(&progress, "render", a.time > 0 ? 0 : (uint64_t)spp_target);
     double render_seconds = 0.0;
-    for (;;) {
-        double t0 = sg_seconds();
-        sg_renderer_pass(r);
-        render_seconds += sg_seconds() - t0;
-        int spp = sg_renderer_spp(r);
-        if (spp == 1 && sg_renderer_backface_fraction(r) > 0.9)
-            fprintf(stderr, "render: %s: the camera seems to be inside a solid (%.0f%% of its rays hit back faces)\n",
-                    a.scene, 100.0 * sg_renderer_backface_fraction(r));
-        if (log_open) {
-            double mse, relmse, mse8;
-            sg_renderer_image(r, image);
-            error_metrics(image, log.reference, values, (float)exp2(exposure), &mse, &relmse, &mse8);
-            fprintf(log.out.file, "%.6f,%d,%.9g,%.9g,%.9g\n", render_seconds, spp, mse, relmse, mse8);
+    if (a.field_out) { /* the training alone: its passes are the image */
+        int passes = sg_renderer_train_begin(r, &err);
+        if (passes < 0)
+            goto done;
+        sg_progress_begin(&progress, "render: training", (uint64_t)passes);
+        for (int p = 0; p < passes; p++) {
+            double t0 = sg_seconds();
+            sg_renderer_pass(r);
+            render_seconds += sg_seconds() - t0;
+            sg_progress_update(&progress, (uint64_t)p + 1);
         }
-        sg_progress_update(&progress, (uint64_t)spp);
-        if (a.time > 0 ? render_seconds >= a.time : spp >= spp_target)
-            break;
+        sg_renderer_train_end(r);
+        sg_progress_end(&progress);
+        if (!sg_renderer_write_field(r, a.field_out, &err))
+            goto done;
+    } else {
+        if (a.field && !sg_renderer_read_field(r, a.field, &err))
+            goto done;
+        sg_progress_begin(&progress, "render", a.time > 0 ? 0 : (uint64_t)spp_target);
+        for (;;) {
+            double t0 = sg_seconds();
+            sg_renderer_pass(r);
+            render_seconds += sg_seconds() - t0;
+            int spp = sg_renderer_spp(r);
+            if (spp == 1 && sg_renderer_backface_fraction(r) > 0.9)
+                fprintf(stderr,
+                        "render: %s: the camera seems to be inside a solid (%.0f%% of its rays hit back faces)\n",
+                        a.scene, 100.0 * sg_renderer_backface_fraction(r));
+            if (log_open) {
+                double mse, relmse, mse8;
+                sg_renderer_image(r, image);
+                error_metrics(image, log.reference, values, (float)exp2(exposure), &mse, &relmse, &mse8);
+                fprintf(log.out.file, "%.6f,%d,%.9g,%.9g,%.9g\n", render_seconds, spp, mse, relmse, mse8);
+            }
+            sg_progress_update(&progress, (uint64_t)spp);
+            if (a.time > 0 ? render_seconds >= a.time : spp >= spp_target)
+                break;
+        }
+        sg_progress_end(&progress);
     }
-    sg_progress_end(&progress);
 
     ShardIdentity id;
-    shard_identity(scene, &o, guide.cache, &id);
+    shard_identity(scene, &o, importance.cache, a.field, &id);
     char shard_s[32], shard_count_s[32], exposure_s[32];
     snprintf(shard_s, sizeof shard_s, "%d", o.shard);
     snprintf(shard_count_s, sizeof shard_count_s, "%d", o.shard_count);
     snprintf(exposure_s, sizeof exposure_s, "%.9g", exposure);
 
     sg_renderer_image(r, image);
-    char spp_s[32], sec_s[32], seed_s[32], nonfinite_s[32], depth_s[32], exp_s[32], alpha_s[64];
+    char spp_s[32], sec_s[32], seed_s[32], nonfinite_s[32], depth_s[32], exp_s[32];
     snprintf(spp_s, sizeof spp_s, "%d", sg_renderer_spp(r));
     snprintf(sec_s, sizeof sec_s, "%.3f", render_seconds);
     format_u64(seed_s, sizeof seed_s, a.seed);
     format_u64(nonfinite_s, sizeof nonfinite_s, sg_renderer_nonfinite(r));
     snprintf(depth_s, sizeof depth_s, "%d", o.max_depth);
     snprintf(exp_s, sizeof exp_s, "%g", o.lobe_exponent);
-    if (o.sampling == SG_SAMPLING_GUIDED && o.alpha == SG_ALPHA_LEARNED)
-        snprintf(alpha_s, sizeof alpha_s, "learned (lobe in %.0f%% of bounces)",
-                 100.0 * fmax(0.0, sg_renderer_guided_fraction(r)));
-    else
-        snprintf(alpha_s, sizeof alpha_s, "%g", o.alpha);
-    /* what the guide did: the share of bounces it drew, and openpgl's training */
-    char guide_share_s[32], training_s[32], training_sec_s[32], guide_line[160] = "";
+    /* what the guide did: the share of bounces it drew, a learned field's training */
+    SgRenderReport report;
+    sg_renderer_report(r, &report);
+    char guide_share_s[32], training_s[32], training_sec_s[32];
     snprintf(guide_share_s, sizeof guide_share_s, "%.4f", sg_renderer_lobe_share(r));
     snprintf(training_s, sizeof training_s, "%d", sg_renderer_training_passes(r));
     snprintf(training_sec_s, sizeof training_sec_s, "%.3f", sg_renderer_training_seconds(r));
-    if (o.sampling == SG_SAMPLING_OPENPGL)
-        snprintf(guide_line, sizeof guide_line, ", field trained on %d passes (%.2f s), guide drew %.1f%% of bounces",
-                 sg_renderer_training_passes(r), sg_renderer_training_seconds(r), 100.0 * sg_renderer_lobe_share(r));
-    else if (o.sampling != SG_SAMPLING_BSDF)
-        snprintf(guide_line, sizeof guide_line, ", lobe drew %.1f%% of bounces", 100.0 * sg_renderer_lobe_share(r));
-    /* the learned roulette needs the learner: elsewhere paths are cut by albedo */
-    SgRoulette roulette_used =
-        o.sampling == SG_SAMPLING_GUIDED && o.alpha == SG_ALPHA_LEARNED ? o.roulette : SG_ROULETTE_ALBEDO;
     double branches = sg_renderer_branches_per_path(r);
     char roulette[80], branches_s[32];
     snprintf(branches_s, sizeof branches_s, "%.3f", branches);
-    if (roulette_used == SG_ROULETTE_LEARNED) /* it also splits paths */
-        snprintf(roulette, sizeof roulette, "%s (%.2f branches split off a path)", sg_roulette_name(roulette_used),
+    if (report.roulette == SG_ROULETTE_LEARNED) /* it also splits paths */
+        snprintf(roulette, sizeof roulette, "%s (%.2f branches split off a path)", sg_roulette_name(report.roulette),
                  branches);
     else
-        snprintf(roulette, sizeof roulette, "%s", sg_roulette_name(roulette_used));
+        snprintf(roulette, sizeof roulette, "%s", sg_roulette_name(report.roulette));
     SgImageAttribute attrs[] = {
         {"spp", spp_s},
         {"seconds", sec_s},
-        {"sampling", sg_sampling_name(o.sampling)},
+        {"sampling", mode->name},
         {"seed", seed_s},
         {"sg:max_depth", depth_s},
         {"sg:lobe_exponent", exp_s},
-        {"sg:alpha", alpha_s},
-        {"sg:roulette", sg_roulette_name(roulette_used)},
+        {"sg:alpha", report.alpha},
+        {"sg:roulette", sg_roulette_name(report.roulette)},
         {"sg:branches_per_path", branches_s},
         {"sg:nonfinite_samples", nonfinite_s},
         {"sg:guide_share", guide_share_s},
@@ -426,7 +529,9 @@ int main(int argc, char **argv)
         {"sg:training_seconds", training_sec_s},
         {"sg:clamping", "none"},
         {"sg:scene", a.scene},
-        {"sg:cache", guide.cache ? a.cache : ""},
+        {"sg:cache", importance.cache ? a.cache : ""},
+        {"sg:field", a.field ? a.field : a.field_out ? a.field_out : ""},
+        {"sg:training", a.field_out ? "yes" : "no"},
         {"sg:exposure", exposure_s},
         /* for bin/merge */
         {"sg:shards", shard_s},
@@ -445,8 +550,11 @@ int main(int argc, char **argv)
             goto done;
     }
     if (!sg_image_write_exr(a.output, o.width, o.height, image, attrs,
-                            (int)(sizeof attrs / sizeof attrs[0]), &err))
+                            (int)(sizeof attrs / sizeof attrs[0]), &err)) {
+        if (a.field_out) /* no output of a failed run */
+            remove(a.field_out);
         goto done;
+    }
     if (!a.quiet) {
         char shard_line[64] = "";
         if (o.shard_count > 1)
@@ -457,12 +565,11 @@ int main(int argc, char **argv)
                     texture_images / 1048576.0);
         double paths = (double)o.width * o.height * sg_renderer_spp(r);
         fprintf(stderr,
-                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s%s, roulette %s, seed "
+                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s, roulette %s, seed "
                 "%s, %s NaN/inf samples%s\n",
                 o.width, o.height, sg_renderer_spp(r), render_seconds, paths / render_seconds * 1e-6,
-                (double)sg_renderer_rays(r) / render_seconds * 1e-6, sg_sampling_name(o.sampling),
-                o.sampling == SG_SAMPLING_GUIDED ? ", alpha " : "", o.sampling == SG_SAMPLING_GUIDED ? alpha_s : "",
-                guide_line, roulette, seed_s, nonfinite_s, shard_line);
+                (double)sg_renderer_rays(r) / render_seconds * 1e-6, mode->name, report.guide, roulette, seed_s,
+                nonfinite_s, shard_line);
     }
     status = 0;
 
@@ -474,7 +581,7 @@ done:
     free(log.reference);
     free(image);
     sg_renderer_free(r);
-    sg_cache_guide_close(&guide);
+    sg_importance_file_close(&importance);
     if (scene)
         sg_scene_free(scene);
     return status;

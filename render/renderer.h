@@ -16,24 +16,56 @@
 extern "C" {
 #endif
 
+/* The sampling modes, one line each: its name in the enum, on the command
+ * line, and the guide that implements it (render/guides/guide_FILE.c,
+ * which holds everything else about the mode: SgSamplingMode below). A new
+ * mode is one file there and one line here. */
+#define SG_SAMPLING_MODES(X)            \
+    X(BSDF, bsdf, bsdf)                 \
+    X(SKELETON, skeleton, skeleton_rule) \
+    X(GUIDED, guided, mixture)          \
+    X(OPENPGL, openpgl, openpgl)
+
 typedef enum SgSampling {
-    SG_SAMPLING_BSDF,     /* BSDF sampling + next-event estimation with MIS */
-    SG_SAMPLING_SKELETON, /* the paper's rule (section 3.4), biased */
-    SG_SAMPLING_GUIDED,   /* one-sample mixture of BSDF and lobe, unbiased */
-    SG_SAMPLING_OPENPGL,  /* the peer: Open PGL's learned field mixed with the BSDF, as Cycles does */
+#define SG_SAMPLING_ENUM(id, name, file) SG_SAMPLING_##id,
+    SG_SAMPLING_MODES(SG_SAMPLING_ENUM)
+#undef SG_SAMPLING_ENUM
     SG_SAMPLING_COUNT
 } SgSampling;
 
+/* What a sampling mode is, before any renderer is made: what bin/render's
+ * command line, `render --describe` (the farm script) and the benchmarks
+ * ask of it instead of knowing the modes themselves. */
+typedef struct SgSamplingMode {
+    const char *name;
+    const char *help;          /* a line or two for --help, lines after the first indented */
+    bool uses_cache;           /* it needs the importance cache (--cache) */
+    bool default_with_cache;   /* what render samples by, --sampling not given, with a cache */
+    bool default_without_cache;/* ... and without one */
+    float lobe_exponent;       /* its default --exponent (0: it has no lobe) */
+    bool learns;               /* it learns from its own paths while it renders */
+    bool learned_roulette;     /* it can run the learned roulette (SgRoulette) */
+    int training_passes;       /* its training's passes by default (learns; render --field-out) */
+    bool biased;
+    /* NULL: always available; else false, saying why, where this build
+     * lacks what it needs */
+    bool (*available)(SgError *err);
+} SgSamplingMode;
+
+const SgSamplingMode *sg_sampling_mode(SgSampling s);
 const char *sg_sampling_name(SgSampling s);
 bool sg_sampling_parse(const char *name, SgSampling *s);
+/* The mode render samples by when --sampling is not given. */
+SgSampling sg_sampling_default(bool has_cache);
 
-/* Where the guide comes from: the importance cache in bin/render, an
- * analytic stand-in in tests. Returns false when it has no importance point
+/* Where the importance points come from: the importance cache in
+ * bin/render (render/guides/importance_file.h), an analytic stand-in in
+ * tests. Returns false when it has no importance point
  * for world position p and light `light` (p outside the medium...). */
 typedef bool (*SgImportanceFn)(void *ctx, const double p[3], uint32_t light, double point[3]);
 
-typedef struct SgGuide {
-    SgImportanceFn importance_point; /* NULL: no guide (bsdf only) */
+typedef struct SgImportanceSource {
+    SgImportanceFn importance_point; /* NULL: none (only modes without a lobe run) */
     void *ctx;
     /* Optional: the importance cache behind importance_point. The renderer
      * then reads it directly in its own coordinates (the same answers, a
@@ -42,11 +74,11 @@ typedef struct SgGuide {
     /* Probability weight of following each light (scene light order);
      * NULL: the lights' power. A zero weight never follows that light. */
     const double *light_weight;
-    /* The guide is asked at the hit point moved this far (world units) along
+    /* The points are asked for at the hit point moved this far (world units) along
      * the normal facing the incoming ray: a cache's voxel size, so that the
      * query lands in the free space on the point's own side of the wall. */
     double query_offset;
-} SgGuide;
+} SgImportanceSource;
 
 #define SG_ALPHA_LEARNED (-1.0f)
 #define SG_SHARDS_MAX 65536
@@ -81,7 +113,7 @@ typedef struct SgRenderOptions {
      * moments of the bounces traced so far (render/mixture_learning.h) */
     float alpha;
     SgRoulette roulette;
-    SgGuide guide;
+    SgImportanceSource importance;
     /* A shard of a render split into shard_count (render farm): this
      * renderer's pass p is pass shard + p * shard_count of the whole
      * render, whose random numbers and pixel positions it takes, so that
@@ -89,6 +121,9 @@ typedef struct SgRenderOptions {
      * What a guide learns stays within its shard. Default 0 of 1. */
     int shard, shard_count;
     double texture_cache_mb; /* texels held in memory at most; 0: TEXTURE_CACHE_MB_DEFAULT (render/textures.h) */
+    /* modes that learn: the passes their training takes (sg_renderer_train,
+     * and rendering on the clock without a field); 0: the mode's default */
+    int training_passes;
 } SgRenderOptions;
 
 /* Defaults: image size and depth from the scene (320x240, 8 when not
@@ -123,18 +158,49 @@ double sg_renderer_guided_fraction(const SgRenderer *r);
  * the guide's lobe drew (the rest: the BSDF's sampler); 0 before any. */
 double sg_renderer_lobe_share(const SgRenderer *r);
 /* openpgl: the passes whose paths trained the field so far (it learns
- * after each of the first SG_OPENPGL_TRAINING_PASSES), and the seconds
+ * after each of the first SgRenderOptions.training_passes, by default
+ * SG_OPENPGL_TRAINING_PASSES: Cycles' training samples), and the seconds
  * its updates took; 0 in other modes. */
 #define SG_OPENPGL_TRAINING_PASSES 128
 int sg_renderer_training_passes(const SgRenderer *r);
 double sg_renderer_training_seconds(const SgRenderer *r);
-/* Rays traced so far (camera, bounce and shadow rays). */
 /* Bytes of texels the texture cache holds; *images: the images' full size
  * (0 and 0 without textures). */
 size_t sg_renderer_texture_cache(const SgRenderer *r, size_t *images);
+/* Rays traced so far (camera, bounce and shadow rays). */
 uint64_t sg_renderer_rays(const SgRenderer *r);
 /* Branches the learned roulette split off, per camera path, so far. */
 double sg_renderer_branches_per_path(const SgRenderer *r);
+
+/* A learned mode's training as a step of its own (render --field-out,
+ * --field), so that a render's clock counts no learning and the shards of
+ * a farm share one field. Training renders the mode's training passes
+ * (with random numbers of their own: the render that follows draws others)
+ * into the film; freeze then stops the guide's learning for good and
+ * starts the film, the pass count and the counters again, the learned
+ * roulette keeping what it knows of the pixels' noise. A field file holds
+ * what freeze keeps, and what it was made for: reading one into a renderer
+ * of the same scene, cache and options (before its first pass) gives the
+ * renderer frozen with it, which renders the same image, bit for bit, as
+ * the renderer that wrote it after freeze. Fails on a mode that does not
+ * learn, and (read) on a field made for something else, naming the file. */
+bool sg_renderer_train(SgRenderer *r, SgError *err);
+/* The same in steps, for a caller that shows progress: begin returns the
+ * training's passes (-1: the mode learns nothing), each sg_renderer_pass
+ * then trains, until end. */
+int sg_renderer_train_begin(SgRenderer *r, SgError *err);
+void sg_renderer_train_end(SgRenderer *r);
+void sg_renderer_freeze(SgRenderer *r);
+bool sg_renderer_write_field(const SgRenderer *r, const char *path, SgError *err);
+bool sg_renderer_read_field(SgRenderer *r, const char *path, SgError *err);
+
+/* What the render did, in words, for bin/render's summary line and EXR. */
+typedef struct SgRenderReport {
+    SgRoulette roulette; /* the roulette that ran: learned only where the guide learns what bounces bring */
+    char alpha[64];      /* the mixture's weight: the options' number, or how it was learned */
+    char guide[192];     /* the guide's part of the summary line, "" or ", ..." */
+} SgRenderReport;
+void sg_renderer_report(const SgRenderer *r, SgRenderReport *report);
 
 #ifdef __cplusplus
 }

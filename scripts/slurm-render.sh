@@ -125,16 +125,21 @@ else
   done
   scene=$(cd "$(dirname "$scene")" && pwd)/$(basename "$scene")
   [ -n "$name" ] || name=$(basename "${scene%.*}")
-  needs_cache=1
+  # whether the mode needs the precompute: render says (--describe); with
+  # no --sampling, the mode render picks when it is given a cache
+  mode_filter='"default_with_cache": true'
   for ((i = 0; i < ${#render_options[@]}; i++)); do
     if [ "${render_options[$i]}" = --sampling ]; then
-      case ${render_options[$((i + 1))]:-} in bsdf|openpgl) needs_cache=0 ;; esac
+      mode_filter="\"name\": \"${render_options[$((i + 1))]:-}\""
     fi
     case ${render_options[$i]} in
       --cache|--shard|-o|--output|--png|--threads|--reference|--log)
         die "${render_options[$i]}: set by this script, not a render option to pass" ;;
     esac
   done
+  mode=$("$bin/render" --describe | grep -F "$mode_filter") || die "--sampling: not a sampling mode of $bin/render (${mode_filter})"
+  needs_cache=0
+  case $mode in *'"uses_cache": true'*) needs_cache=1 ;; esac
   mkdir -p "$out/shards" "$out/logs" || die "$out: cannot create it"
   dir=$(cd "$out" && pwd)
   # a new render in an old directory: its shards would not merge

@@ -1,4 +1,4 @@
-/* The guide interface (render/path_guide.h) from outside: a guide written
+/* The guide interface (render/guides/path_guide.h) from outside: a guide written
  * here, in this one file, as the next paper's would be, runs in the path
  * tracer through sg_renderer_create_with_guide. It must give the furnace's
  * exact answer; the same guide lying about its pdf must not; and the
@@ -9,7 +9,7 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 
-#include "../render/path_guide.h"
+#include "../render/guides/path_guide.h"
 #include "../render/renderer.h"
 #include "support_render.h"
 

@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../render/openpgl_guide.h"
+#include "../render/guides/openpgl_field.h"
 #include "../render/renderer.h"
 #include "image_io.h"
 #include "scene.h"

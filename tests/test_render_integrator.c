@@ -9,7 +9,7 @@
 
 #include "../render/bsdf.h"
 #include "scene_builder.h"
-#include "../render/openpgl_guide.h"
+#include "../render/guides/openpgl_field.h"
 #include "../render/renderer.h"
 #include "support_render.h"
 
@@ -153,8 +153,8 @@ static void furnace_run(const FurnaceCase *fc)
     o.seed = 5;
     SgtFixedPoint fp = {{0.9 * scale + offset[0] * (scale != 1.0), -0.8 * scale + offset[1] * (scale != 1.0),
                       1.7 * scale + offset[2] * (scale != 1.0)}};
-    o.guide.importance_point = fc->guide ? fc->guide : sgt_fixed_point_guide;
-    o.guide.ctx = &fp;
+    o.importance.importance_point = fc->guide ? fc->guide : sgt_fixed_point_guide;
+    o.importance.ctx = &fp;
     o.lobe_exponent = fc->lobe_exponent;
     const int spp = fc->spp ? fc->spp : 64;
     SgError err = {0};
@@ -271,8 +271,8 @@ static void plane_case(SgSampling mode, SgMaterialType floor_type)
     o.sampling = mode;
     o.seed = 11;
     SgtFixedPoint fp = {{0.3, h, -0.2}};
-    o.guide.importance_point = sgt_fixed_point_guide;
-    o.guide.ctx = &fp;
+    o.importance.importance_point = sgt_fixed_point_guide;
+    o.importance.ctx = &fp;
     Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
     double expected = rho * le * 4.0 * corner_form_factor(a, a, h);
     cr_log_info("plane %s: %.5f +- %.5f, expected %.5f", sg_sampling_name(mode), st.mean[0],
@@ -364,8 +364,8 @@ static Stats floor_in_glowing_box_lit(SgSampling mode, const SgMaterial *floor, 
     o.alpha = 0.5f;
     o.seed = seed;
     SgtFixedPoint fp = {{0.4, 1.2, -0.3}};
-    o.guide.importance_point = sgt_fixed_point_guide;
-    o.guide.ctx = &fp;
+    o.importance.importance_point = sgt_fixed_point_guide;
+    o.importance.ctx = &fp;
     SgError err = {0};
     SgRenderer *r = sg_renderer_create(s, &o, &err);
     cr_assert_not_null(r, "%s", err.message);
@@ -569,8 +569,8 @@ static void mirror_glass_furnace(SgSampling mode)
     o.alpha = 0.5f;
     o.seed = 9;
     SgtFixedPoint fp = {{0.6, 1.0, -0.5}};
-    o.guide.importance_point = sgt_fixed_point_guide;
-    o.guide.ctx = &fp;
+    o.importance.importance_point = sgt_fixed_point_guide;
+    o.importance.ctx = &fp;
     Stats st = render_scene_stats(s, &o, 128, 0, 0, o.width, o.height);
     cr_log_info("mirror and glass furnace %s: mean %.5f +- %.5f", sg_sampling_name(mode), st.mean[0], st.std_error);
     cr_assert_eq(st.nonfinite, 0);
@@ -748,8 +748,8 @@ static void rooms_agree(bool dressed, SgSampling mode, int spp)
     SgRenderOptions o;
     sg_render_options_default(&o, s);
     SgtFixedPoint door = {{2.0, 1.0, 1.7}};
-    o.guide.importance_point = sgt_fixed_point_guide;
-    o.guide.ctx = &door;
+    o.importance.importance_point = sgt_fixed_point_guide;
+    o.importance.ctx = &door;
     o.max_depth = 8;
     o.seed = 1;
     o.lobe_exponent = 10;
@@ -872,8 +872,8 @@ Test(render_integrator, same_seed_same_image_for_any_thread_count)
     SgRenderOptions o;
     sg_render_options_default(&o, s);
     SgtFixedPoint door = {{2.0, 1.0, 1.7}};
-    o.guide.importance_point = sgt_fixed_point_guide;
-    o.guide.ctx = &door;
+    o.importance.importance_point = sgt_fixed_point_guide;
+    o.importance.ctx = &door;
     o.sampling = SG_SAMPLING_GUIDED;
     o.seed = 42;
     /* 12 passes: the learned mixture changes after every one of them
@@ -905,8 +905,8 @@ Test(render_integrator, refuses_bad_options)
     cr_assert_null(sg_renderer_create(s, &o, &err));
     cr_assert(strstr(err.message, "cache") != NULL, "%s", err.message);
     SgtFixedPoint fp = {{0, 0, 0}};
-    o.guide.importance_point = sgt_fixed_point_guide;
-    o.guide.ctx = &fp;
+    o.importance.importance_point = sgt_fixed_point_guide;
+    o.importance.ctx = &fp;
     o.alpha = 0.0f; /* a pure lobe would be biased */
     err = (SgError){0};
     cr_assert_null(sg_renderer_create(s, &o, &err));

@@ -1,4 +1,4 @@
-/* The guided mode's learned mixture weight (render/mixture_learning.h):
+/* The guided mode's learned mixture weight (render/guides/mixture_learning.h):
  * which candidate the second-moment estimates pick on synthetic bounces,
  * the coarse regions answering for sparse fine ones, and, in a rendered
  * two-room scene, that learning keeps the good of a good guide and drops a
@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../render/mixture_learning.h"
+#include "../render/guides/mixture_learning.h"
 #include "../render/renderer.h"
 #include "rng.h"
 #include "support_render.h"
@@ -315,8 +315,8 @@ static double window_variance(WindowRun run, const double guide_point[3], PassSt
     sg_render_options_default(&o, s);
     SgtFixedPoint fp;
     memcpy(fp.point, guide_point, sizeof fp.point);
-    o.guide.importance_point = sgt_fixed_point_guide;
-    o.guide.ctx = &fp;
+    o.importance.importance_point = sgt_fixed_point_guide;
+    o.importance.ctx = &fp;
     o.sampling = run.mode;
     o.alpha = run.alpha;
     o.roulette = run.roulette;

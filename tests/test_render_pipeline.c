@@ -147,10 +147,10 @@ static float *render_corridor(const SgScene *scene, SgImportanceCache *cache, bo
     o.sampling = SG_SAMPLING_GUIDED;
     o.alpha = 0.5f;
     o.threads = 2;
-    o.guide.importance_point = cache_function;
-    o.guide.ctx = cache;
-    o.guide.cache = direct ? cache : NULL;
-    o.guide.query_offset = 1.5 * sg_cache_voxel_size(cache);
+    o.importance.importance_point = cache_function;
+    o.importance.ctx = cache;
+    o.importance.cache = direct ? cache : NULL;
+    o.importance.query_offset = 1.5 * sg_cache_voxel_size(cache);
     SgError e = {0};
     SgRenderer *r = sg_renderer_create(scene, &o, &e);
     cr_assert(r, "%s", e.message);

@@ -937,9 +937,9 @@ Test(stress, renderer_with_odd_importance_points_and_exponents, .timeout = 240)
         for (size_t e = 0; e < sizeof lobe_exponents / sizeof lobe_exponents[0]; e++)
             for (int mode = 0; mode < 2; mode++) {
                 /* query at the hit point itself for the first guide */
-                o.guide.importance_point = odd_guide;
-                o.guide.ctx = (void *)&guides[g];
-                o.guide.query_offset = guides[g].kind == 0 ? 0.0 : 0.1;
+                o.importance.importance_point = odd_guide;
+                o.importance.ctx = (void *)&guides[g];
+                o.importance.query_offset = guides[g].kind == 0 ? 0.0 : 0.1;
                 o.lobe_exponent = lobe_exponents[e];
                 o.sampling = mode ? SG_SAMPLING_SKELETON : SG_SAMPLING_GUIDED;
                 o.seed = (uint64_t)seed++;

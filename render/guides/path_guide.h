@@ -1,13 +1,13 @@
 /* The guides: how the path tracer draws a bounce at a diffuse or glossy
- * vertex. The integrator (render/renderer.c) does not know which guide it
- * runs; each mode is one file implementing these calls:
+ * vertex. The integrator (render/integrator.c) does not know which guide
+ * it runs; each sampling mode is one file implementing these calls:
  *   guide_bsdf.c           bsdf: the material's own sampler
  *   guide_skeleton_rule.c  skeleton: the paper's rule (section 3.4), biased
  *   guide_mixture.c        guided: BSDF and a lobe toward the skeleton's
  *                          importance point, mixed per region as learned
  *   guide_openpgl.c        openpgl: the peer, Open PGL's learned field
- * A new guide is a new file with a `create` function and one line in
- * path_guide.c's table (and its name in SgSampling for the command line).
+ * A new guide is a new file defining its PathGuideKind (what the mode is,
+ * and its `create`) and one line in renderer.h's SG_SAMPLING_MODES.
  *
  * The calls, in the order a pass makes them:
  *   pass_begin      before the pass: whether paths record events for the
@@ -34,14 +34,15 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "bsdf.h"
+#include "../bsdf.h"
 #include "error.h"
-#include "geometry.h"
-#include "lights.h"
-#include "material.h"
-#include "renderer.h"
+#include "../field_file.h"
+#include "../geometry.h"
+#include "../lights.h"
+#include "../material.h"
+#include "../renderer.h"
 #include "rng.h"
-#include "sampling.h"
+#include "../sampling.h"
 #include "vecmath.h"
 
 typedef struct PathGuide PathGuide;
@@ -50,6 +51,7 @@ typedef struct GuideSegment GuideSegment; /* a recorded vertex, the guide's own 
 /* What a guide is made from. */
 typedef struct PathGuideSetup {
     const SgRenderOptions *opt;
+    int training_passes;    /* a learned mode's training: the options', else the mode's default */
     const Geometry *geo;    /* triangles, bounds, local frame */
     const LightSet *lights;
     int threads;            /* worker threads: thread indices are in [0, threads) */
@@ -105,6 +107,7 @@ typedef struct GuideStats {
     double guided_fraction;  /* of the learner's bounces, where it uses the lobe; -1 none */
     int training_passes;     /* passes that updated a learned field */
     double training_seconds; /* the updates' time */
+    double lobe_share;       /* the integrator's count: bounces the guide drew (by_guide) */
 } GuideStats;
 
 typedef struct PathGuideOps {
@@ -138,6 +141,19 @@ typedef struct PathGuideOps {
     void (*record_path_end)(PathGuide *g, int thread);
 
     void (*stats)(const PathGuide *g, GuideStats *s);
+    /* its part of the render's summary line and its alpha (the renderer
+     * sets the roulette, alpha as the options' number and an empty line) */
+    void (*describe)(const PathGuide *g, const GuideStats *s, SgRenderReport *report);
+
+    /* Modes that learn (SgSamplingMode.learns): what they learned, as
+     * bytes for a field file, and learning stopped for good: after
+     * training (freeze), or with what a field file holds (load, before the
+     * first pass; false, saying why, on bytes it cannot take). A frozen
+     * guide's distributions depend only on what it holds, so that a
+     * loaded field renders as the one it was stored from. */
+    bool (*field_store)(const PathGuide *g, FieldBytes *out);
+    bool (*field_load)(PathGuide *g, FieldReader *in, SgError *err);
+    void (*freeze)(PathGuide *g);
 } PathGuideOps;
 
 /* Every guide's struct begins with this. */
@@ -149,17 +165,24 @@ struct PathGuide {
 
 typedef PathGuide *(*PathGuideCreate)(const PathGuideSetup *setup, SgError *err);
 
-PathGuide *guide_bsdf_create(const PathGuideSetup *setup, SgError *err);
-PathGuide *guide_skeleton_rule_create(const PathGuideSetup *setup, SgError *err);
-PathGuide *guide_mixture_create(const PathGuideSetup *setup, SgError *err);
-PathGuide *guide_openpgl_create(const PathGuideSetup *setup, SgError *err);
+/* A sampling mode: what it is, and the guide that implements it. The
+ * renderer checks what the mode says it needs (uses_cache, available)
+ * before `create` runs. */
+typedef struct PathGuideKind {
+    SgSamplingMode mode;
+    PathGuideCreate create;
+} PathGuideKind;
+
+#define PATH_GUIDE_KIND_DECLARE(id, name, file) extern const PathGuideKind guide_##file##_kind;
+SG_SAMPLING_MODES(PATH_GUIDE_KIND_DECLARE)
+#undef PATH_GUIDE_KIND_DECLARE
 
 /* sg_renderer_create with the guide `create` makes, whatever o->sampling
  * names: how a test tries a guide that no mode has yet. */
 SgRenderer *sg_renderer_create_with_guide(const SgScene *scene, const SgRenderOptions *o, PathGuideCreate create,
                                           SgError *err);
 
-/* The guide of a sampling mode. */
+/* The guide of a sampling mode, once what the mode needs is checked. */
 PathGuide *path_guide_create(SgSampling mode, const PathGuideSetup *setup, SgError *err);
 void path_guide_free(PathGuide *g);
 void path_guide_stats(const PathGuide *g, GuideStats *s);

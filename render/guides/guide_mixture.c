@@ -6,26 +6,30 @@
  * bounces brought back, the learner re-chooses between passes (beside the
  * next pass, as a side job), and its regional second moments feed the
  * learned roulette (GuideVertex.rms). */
+#include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "mixture_learning.h"
 #include "path_guide.h"
-#include "skeleton_guide.h"
+#include "importance_lookup.h"
 
 typedef struct Mixture {
     PathGuide base;
-    SkeletonGuide skeleton;
+    ImportanceLookup skeleton;
     SgMixtureCandidate fixed;        /* the options' alpha and exponent */
+    bool alpha_learned;              /* the options ask for a learned alpha */
     SgMixtureLearner *learner;       /* NULL: a fixed alpha, or no light */
     const SgMixtureView *view;       /* the learner's, read at every bounce */
     bool roulette_learns;            /* the learned roulette reads what every vertex brought back */
+    bool frozen;                     /* the learner learns no more: its view is what it holds */
     uint64_t pixels;
     /* this pass's learning paths: one in `stride`, by pixel and pass */
     uint64_t stride, below, pass_key;
 } Mixture;
 
 typedef struct MixtureVertex {
-    GuideQuery query;
+    ImportanceQuery query;
     SgFoldedLobe lobe;
     SgMixtureCandidate mix;
     uint32_t region;
@@ -64,7 +68,7 @@ static void mixture_pass_begin(PathGuide *g, int pass, uint64_t pass_key, GuideP
     x->stride = stride;
     x->below = UINT64_MAX / stride;
     x->pass_key = pass_key;
-    plan->side_job = x->learner != NULL;
+    plan->side_job = x->learner && !x->frozen;
 }
 
 /* Fibonacci hashing (the high bits of pixel times 2^64/golden ratio spread
@@ -73,7 +77,7 @@ static void mixture_pass_begin(PathGuide *g, int pass, uint64_t pass_key, GuideP
 static bool mixture_path_learns(const PathGuide *g, size_t pixel)
 {
     const Mixture *x = (const Mixture *)g;
-    return x->learner &&
+    return x->learner && !x->frozen &&
            (x->stride == 1 || ((uint64_t)pixel + x->pass_key) * 0x9e3779b97f4a7c15ULL < x->below);
 }
 
@@ -85,7 +89,7 @@ static void mixture_pass_end(PathGuide *g, int pass)
 {
     (void)pass;
     Mixture *x = (Mixture *)g;
-    if (x->learner)
+    if (x->learner && !x->frozen)
         sg_mixture_end_pass(x->learner);
 }
 
@@ -110,7 +114,7 @@ static void mixture_vertex_begin(PathGuide *g, const GuideHit *h, SgRng *rng, Gu
         v->learn = h->may_learn && !(state & SG_MIXTURE_STATE_SETTLED);
         v->rms = sg_mixture_radiance(view, mv->region);
     }
-    mv->asked = (lobe_region || v->learn) && skeleton_guide_begin(&x->skeleton, h->p, h->n, rng, &mv->query);
+    mv->asked = (lobe_region || v->learn) && importance_lookup_begin(&x->skeleton, h->p, h->n, rng, &mv->query);
 }
 
 static void mixture_vertex_end(PathGuide *g, const GuideHit *h, bool lit, SgRng *rng, GuideVertex *v)
@@ -119,7 +123,7 @@ static void mixture_vertex_end(PathGuide *g, const GuideHit *h, bool lit, SgRng 
     Mixture *x = (Mixture *)g;
     MixtureVertex *mv = mixture_vertex(v);
     Vec3 axis;
-    if (mv->asked && skeleton_guide_end(&x->skeleton, &mv->query, h->p, h->n, &axis)) {
+    if (mv->asked && importance_lookup_end(&x->skeleton, &mv->query, h->p, h->n, &axis)) {
         /* alpha 1 (a learning path): the BSDF, with the lobe's densities
          * at hand for the learner */
         mv->mixture = true;
@@ -188,8 +192,51 @@ static void mixture_destroy(PathGuide *g)
 {
     Mixture *x = (Mixture *)g;
     sg_mixture_learner_free(x->learner);
-    skeleton_guide_free(&x->skeleton);
+    importance_lookup_free(&x->skeleton);
     free(x);
+}
+
+/* A field file's part: the learner's view (none with a fixed alpha). */
+static bool mixture_field_store(const PathGuide *g, FieldBytes *out)
+{
+    const Mixture *x = (const Mixture *)g;
+    if (!x->learner)
+        return true;
+    size_t size = sg_mixture_view_size(x->learner);
+    unsigned char *view = malloc(size);
+    if (!view)
+        return false;
+    sg_mixture_view_save(x->learner, view);
+    bool ok = field_bytes_put(out, view, size);
+    free(view);
+    return ok;
+}
+
+static bool mixture_field_load(PathGuide *g, FieldReader *in, SgError *err)
+{
+    Mixture *x = (Mixture *)g;
+    x->frozen = true;
+    size_t size = in->size - in->at;
+    if (!x->learner)
+        return size == 0 || sg_fail(err, "a learned mixture, for a render with a fixed alpha");
+    if (!sg_mixture_view_restore(x->learner, in->data + in->at, size))
+        return sg_fail(err, "its learned mixture is for another grid of regions");
+    in->at = in->size;
+    return true;
+}
+
+static void mixture_freeze(PathGuide *g) { ((Mixture *)g)->frozen = true; }
+
+static void mixture_describe(const PathGuide *g, const GuideStats *s, SgRenderReport *report)
+{
+    const Mixture *x = (const Mixture *)g;
+    if (x->alpha_learned && x->frozen)
+        snprintf(report->alpha, sizeof report->alpha, "learned, frozen");
+    else if (x->alpha_learned)
+        snprintf(report->alpha, sizeof report->alpha, "learned (lobe in %.0f%% of bounces)",
+                 100.0 * fmax(0.0, s->guided_fraction));
+    snprintf(report->guide, sizeof report->guide, ", alpha %s, lobe drew %.1f%% of bounces", report->alpha,
+             100.0 * s->lobe_share);
 }
 
 static const PathGuideOps mixture_ops = {
@@ -205,18 +252,20 @@ static const PathGuideOps mixture_ops = {
     .sample = mixture_sample,
     .learn = mixture_learn,
     .stats = mixture_stats,
+    .describe = mixture_describe,
+    .field_store = mixture_field_store,
+    .field_load = mixture_field_load,
+    .freeze = mixture_freeze,
 };
 
 /* The learner's grid covers the triangles' bounds (local coordinates):
  * 32 cells along the longest side, a few thousand regions in a room. */
 #define LEARNER_CELLS 32
 
-PathGuide *guide_mixture_create(const PathGuideSetup *setup, SgError *err)
+static PathGuide *mixture_create(const PathGuideSetup *setup, SgError *err)
 {
     const SgRenderOptions *o = setup->opt;
     const char *path = setup->path;
-    if (!o->guide.importance_point)
-        return sg_fail(err, "%s: %s sampling needs an importance cache", path, sg_sampling_name(o->sampling)), NULL;
     if (o->alpha != SG_ALPHA_LEARNED && !(o->alpha > 0.0f && o->alpha <= 1.0f))
         return sg_fail(err, "%s: the mixture weight alpha must be in (0, 1] to stay unbiased", path), NULL;
     Mixture *x = calloc(1, sizeof *x);
@@ -224,10 +273,11 @@ PathGuide *guide_mixture_create(const PathGuideSetup *setup, SgError *err)
         return sg_fail(err, "%s: out of memory", path), NULL;
     x->base.ops = &mixture_ops;
     x->fixed = (SgMixtureCandidate){o->alpha, o->lobe_exponent};
+    x->alpha_learned = o->alpha == SG_ALPHA_LEARNED;
     x->roulette_learns = o->roulette == SG_ROULETTE_LEARNED;
     x->pixels = (uint64_t)o->width * (uint64_t)o->height;
     x->stride = 1;
-    if (!skeleton_guide_init(&x->skeleton, &o->guide, setup->geo->centre, setup->geo->scale, setup->lights, path,
+    if (!importance_lookup_init(&x->skeleton, &o->importance, setup->geo->centre, setup->geo->scale, setup->lights, path,
                              err)) {
         mixture_destroy(&x->base);
         return NULL;
@@ -246,3 +296,15 @@ PathGuide *guide_mixture_create(const PathGuideSetup *setup, SgError *err)
     }
     return &x->base;
 }
+
+const PathGuideKind guide_mixture_kind = {
+    .mode = {.name = "guided",
+             .help = "unbiased mixture of BSDF and a lobe toward the skeleton's\nimportance point (default with a cache)",
+             .uses_cache = true,
+             .default_with_cache = true,
+             .lobe_exponent = 16.0f,
+             .learns = true,
+             .learned_roulette = true,
+             .training_passes = 32},
+    .create = mixture_create,
+};

@@ -1,8 +1,9 @@
-/* The guide of the skeleton and guided modes (the paper, section 3.4):
- * at a vertex, the axis toward the importance point of the skeleton node
- * nearest the vertex, for a light chosen in proportion to its power. */
-#ifndef SG_RENDER_SKELETON_GUIDE_H
-#define SG_RENDER_SKELETON_GUIDE_H
+/* The skeleton's importance points as the skeleton and guided modes look
+ * them up (the paper, section 3.4): at a vertex, the axis toward the
+ * importance point of the skeleton node nearest the vertex, for a light
+ * chosen in proportion to its power. */
+#ifndef SG_RENDER_IMPORTANCE_LOOKUP_H
+#define SG_RENDER_IMPORTANCE_LOOKUP_H
 
 #include <math.h>
 #include <stdbool.h>
@@ -10,21 +11,21 @@
 
 #include "error.h"
 #include "importance_cache.h"
-#include "lights.h"
-#include "renderer.h"
+#include "../lights.h"
+#include "../renderer.h"
 #include "rng.h"
 #include "vecmath.h"
 
-/* The skeleton's guide at a vertex: which light to follow, and the
- * importance point of the skeleton node nearest the vertex for that light,
- * from the importance cache read in the renderer's frame (a query is then
- * a voxel lookup and a table read, with no call through the guide function
- * and no conversion to world coordinates), or from the guide function. */
-typedef struct SkeletonGuide {
+/* At a vertex: which light to follow, and the importance point of the
+ * skeleton node nearest the vertex for that light, from the importance
+ * cache read in the renderer's frame (a query is then a voxel lookup and a
+ * table read, with no call through the source's function and no
+ * conversion to world coordinates), or from the source's function. */
+typedef struct ImportanceLookup {
     const SgImportanceCache *cache;
     Vec3 origin;       /* voxel (0,0,0)'s corner, local coordinates */
     float inv_voxel;   /* 1 / voxel size */
-    float offset;      /* the guide's query offset */
+    float offset;      /* the source's query offset */
     uint32_t light_count;
     float *points;     /* [node][light][3] importance points, local; NaN: the
                         * light cannot be reached from the node */
@@ -32,34 +33,34 @@ typedef struct SkeletonGuide {
     const uint32_t *octants; /* of its mixed wall voxels (sg_cache_decoded_octants) */
     float extent[3];   /* the grid's size in voxels */
     int64_t stride[3]; /* of x, y, z in the decoded table */
-    /* where `points` is NULL (no cache, or its table too large): the guide
-     * function, in world coordinates */
-    SgGuide guide;
+    /* where `points` is NULL (no cache, or its table too large): the
+     * source's function, in world coordinates */
+    SgImportanceSource source;
     double centre[3];  /* world = local + centre */
     float min_length;  /* an importance point nearer than this gives no direction */
     const LightSet *lights; /* its follow_cdf: which light to follow */
-} SkeletonGuide;
+} ImportanceLookup;
 
-/* `guide` as the renderer was given it, `centre` the world position of
+/* `source` as the renderer was given it, `centre` the world position of
  * the local origin, `scale` the scene's extent. Its table is copied to
- * local coordinates; one too large for memory leaves the guide function
+ * local coordinates; one too large for memory leaves the source's function
  * to answer (same answers, slower). Fails on a cache with another light
  * count than the scene's. */
-bool skeleton_guide_init(SkeletonGuide *g, const SgGuide *guide, const double centre[3], float scale,
+bool importance_lookup_init(ImportanceLookup *g, const SgImportanceSource *source, const double centre[3], float scale,
                          const LightSet *lights, const char *path, SgError *err);
-void skeleton_guide_free(SkeletonGuide *g);
+void importance_lookup_free(ImportanceLookup *g);
 
-/* A guide query in two halves, around the bounce's shadow ray: the first
+/* A lookup in two halves, around the bounce's shadow ray: the first
  * picks the light and starts loading the cache's voxel, the second reads
  * it (by then in cache) and makes the lobe's axis. */
-typedef struct GuideQuery {
+typedef struct ImportanceQuery {
     uint32_t light;
     float voxel[3]; /* the query point in the cache's voxel units */
     int64_t index;  /* its voxel in the decoded table, -1: ask the cache */
-} GuideQuery;
+} ImportanceQuery;
 
 /* The query's first half. False: no light to follow. */
-static inline bool skeleton_guide_begin(const SkeletonGuide *g, Vec3 p, Vec3 n, SgRng *rng, GuideQuery *gq)
+static inline bool importance_lookup_begin(const ImportanceLookup *g, Vec3 p, Vec3 n, SgRng *rng, ImportanceQuery *gq)
 {
     float u = sg_rng_float(rng); /* drawn always: keeps the streams aligned */
     const LightSet *ls = g->lights;
@@ -84,7 +85,7 @@ static inline bool skeleton_guide_begin(const SkeletonGuide *g, Vec3 p, Vec3 n, 
 }
 
 /* The importance point (local coordinates), or false. */
-static inline bool skeleton_guide_point(const SkeletonGuide *g, const GuideQuery *gq, Vec3 p, Vec3 n, Vec3 *q)
+static inline bool importance_lookup_point(const ImportanceLookup *g, const ImportanceQuery *gq, Vec3 p, Vec3 n, Vec3 *q)
 {
     if (g->points) {
         uint32_t node = SG_CACHE_NONE;
@@ -101,26 +102,26 @@ static inline bool skeleton_guide_point(const SkeletonGuide *g, const GuideQuery
         *q = v3(pt[0], pt[1], pt[2]);
         return pt[0] == pt[0]; /* NaN: the light cannot reach the node */
     }
-    double off = g->guide.query_offset;
+    double off = g->source.query_offset;
     double world[3] = {p.x + g->centre[0] + off * n.x, p.y + g->centre[1] + off * n.y,
                        p.z + g->centre[2] + off * n.z};
     double wq[3];
-    if (!g->guide.importance_point(g->guide.ctx, world, gq->light, wq))
+    if (!g->source.importance_point(g->source.ctx, world, gq->light, wq))
         return false;
     *q = v3((float)(wq[0] - g->centre[0]), (float)(wq[1] - g->centre[1]), (float)(wq[2] - g->centre[2]));
     return true;
 }
 
 /* The direction toward the importance point, or false (none, or below the surface). */
-static inline bool skeleton_guide_end(const SkeletonGuide *g, const GuideQuery *gq, Vec3 p, Vec3 n, Vec3 *axis)
+static inline bool importance_lookup_end(const ImportanceLookup *g, const ImportanceQuery *gq, Vec3 p, Vec3 n, Vec3 *axis)
 {
     Vec3 q;
-    if (!skeleton_guide_point(g, gq, p, n, &q))
+    if (!importance_lookup_point(g, gq, p, n, &q))
         return false;
     Vec3 d = v3_sub(q, p);
     float len2 = v3_dot(d, d);
     /* a point at the shading point has no direction; one at infinity (a
-     * bad guide) would give a NaN axis that passes the test below */
+     * bad source) would give a NaN axis that passes the test below */
     float min_len = g->min_length;
     if (!(len2 > min_len * min_len) || !(len2 < INFINITY))
         return false;

@@ -1,12 +1,14 @@
 /* openpgl: the peer, Open PGL's learned guiding integrated as Cycles does
- * (render/openpgl_guide.h wraps the library): one field for the scene,
- * trained after each of the first SG_OPENPGL_TRAINING_PASSES passes from
- * the paths that pass recorded; at a diffuse or glossy vertex the field's
+ * (render/guides/openpgl_field.h wraps the library): one field for the scene,
+ * trained after each of its training passes (SG_OPENPGL_TRAINING_PASSES,
+ * Cycles' training samples, unless the options say) from the paths that
+ * pass recorded, then frozen (or frozen as a field file gives it); at a diffuse or glossy vertex the field's
  * distribution there (cosine product applied) is mixed with the BSDF by
  * one-sample MIS. */
+#include <stdio.h>
 #include <stdlib.h>
 
-#include "openpgl_guide.h"
+#include "openpgl_field.h"
 #include "path_guide.h"
 #include "progress.h"
 
@@ -17,7 +19,9 @@
 typedef struct OpenPgl {
     PathGuide base;
     SgPglField *field;
+    int training_passes;
     bool recording; /* this pass trains the field */
+    bool frozen;    /* it learns no more */
     double training_seconds;
 } OpenPgl;
 
@@ -35,7 +39,7 @@ static void pgl_pass_begin(PathGuide *g, int pass, uint64_t pass_key, GuidePass 
 {
     (void)pass_key;
     OpenPgl *o = (OpenPgl *)g;
-    o->recording = pass < SG_OPENPGL_TRAINING_PASSES;
+    o->recording = !o->frozen && pass < o->training_passes;
     plan->record = o->recording;
 }
 
@@ -112,6 +116,43 @@ static void pgl_stats(const PathGuide *g, GuideStats *s)
     s->training_seconds = o->training_seconds;
 }
 
+/* A field file's part: the updates behind the field, then Open PGL's own bytes. */
+static bool pgl_field_store(const PathGuide *g, FieldBytes *out)
+{
+    const OpenPgl *o = (const OpenPgl *)g;
+    unsigned char *data;
+    size_t size;
+    SgError e = {0};
+    if (!sg_pgl_field_save(o->field, &data, &size, &e))
+        return false;
+    int32_t updates = sg_pgl_field_updates(o->field);
+    bool ok = field_bytes_put(out, &updates, sizeof updates) && field_bytes_put(out, data, size);
+    free(data);
+    return ok;
+}
+
+static bool pgl_field_load(PathGuide *g, FieldReader *in, SgError *err)
+{
+    OpenPgl *o = (OpenPgl *)g;
+    int32_t updates;
+    if (!field_reader_get(in, &updates, sizeof updates) || updates < 0)
+        return sg_fail(err, "its Open PGL field is truncated");
+    if (!sg_pgl_field_restore(o->field, in->data + in->at, in->size - in->at, updates, err))
+        return false;
+    in->at = in->size;
+    o->frozen = true;
+    return true;
+}
+
+static void pgl_freeze(PathGuide *g) { ((OpenPgl *)g)->frozen = true; }
+
+static void pgl_describe(const PathGuide *g, const GuideStats *s, SgRenderReport *report)
+{
+    snprintf(report->guide, sizeof report->guide, ", field trained on %d passes (%.2f s%s), guide drew %.1f%% of bounces",
+             s->training_passes, s->training_seconds, ((const OpenPgl *)g)->frozen ? ", frozen" : "",
+             100.0 * s->lobe_share);
+}
+
 static void pgl_destroy(PathGuide *g)
 {
     OpenPgl *o = (OpenPgl *)g;
@@ -134,14 +175,19 @@ static const PathGuideOps pgl_ops = {
     .record_survival = pgl_record_survival,
     .record_path_end = pgl_record_path_end,
     .stats = pgl_stats,
+    .describe = pgl_describe,
+    .field_store = pgl_field_store,
+    .field_load = pgl_field_load,
+    .freeze = pgl_freeze,
 };
 
-PathGuide *guide_openpgl_create(const PathGuideSetup *setup, SgError *err)
+static PathGuide *pgl_create(const PathGuideSetup *setup, SgError *err)
 {
     OpenPgl *o = calloc(1, sizeof *o);
     if (!o)
         return sg_fail(err, "%s: out of memory", setup->path), NULL;
     o->base.ops = &pgl_ops;
+    o->training_passes = setup->training_passes;
     Vec3 lo, hi;
     geometry_bounds(setup->geo, &lo, &hi);
     SgError e = {0};
@@ -152,3 +198,12 @@ PathGuide *guide_openpgl_create(const PathGuideSetup *setup, SgError *err)
     }
     return &o->base;
 }
+
+const PathGuideKind guide_openpgl_kind = {
+    .mode = {.name = "openpgl",
+             .help = "the peer, Open PGL's learned guiding as Cycles uses it\n(no cache; builds with `make openpgl`)",
+             .learns = true,
+             .training_passes = SG_OPENPGL_TRAINING_PASSES,
+             .available = sg_pgl_require},
+    .create = pgl_create,
+};

@@ -13,8 +13,8 @@
  * Compiled for real only with SG_HAVE_OPENPGL (`make openpgl`); without it
  * sg_pgl_field_create fails, saying how to get it. One thread index per
  * worker of the renderer's pool, in [0, threads). */
-#ifndef SG_OPENPGL_GUIDE_H
-#define SG_OPENPGL_GUIDE_H
+#ifndef SG_OPENPGL_FIELD_H
+#define SG_OPENPGL_FIELD_H
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -41,6 +41,12 @@ void sg_pgl_field_free(SgPglField *f);
 
 /* Learns from the paths ended since the last update, and forgets them. */
 void sg_pgl_field_update(SgPglField *f);
+/* The field in Open PGL's own serialized form (malloc'ed bytes), and a
+ * field read back from such bytes in place of this one's, reporting
+ * `updates` training passes. */
+bool sg_pgl_field_save(SgPglField *f, unsigned char **data, size_t *size, SgError *err);
+bool sg_pgl_field_restore(SgPglField *f, const void *data, size_t size, int updates, SgError *err);
+
 /* Updates so far (training passes), and the samples the last one had. */
 int sg_pgl_field_updates(const SgPglField *f);
 size_t sg_pgl_field_last_samples(const SgPglField *f);

@@ -555,3 +555,33 @@ double sg_mixture_guided_fraction(const SgMixtureLearner *l)
     }
     return all > 0.0 ? guided / all : 0.0;
 }
+
+/* region count, the scene's radiance, then per region its state byte and radiance */
+size_t sg_mixture_view_size(const SgMixtureLearner *l)
+{
+    return sizeof(uint32_t) + sizeof(float) + (size_t)l->region_count * (1 + sizeof(float));
+}
+
+void sg_mixture_view_save(const SgMixtureLearner *l, void *out)
+{
+    unsigned char *o = out;
+    memcpy(o, &l->region_count, sizeof(uint32_t));
+    memcpy(o + 4, &l->view.global_radiance, sizeof(float));
+    memcpy(o + 8, l->view_state, l->region_count);
+    memcpy(o + 8 + l->region_count, l->view_radiance, sizeof(float) * l->region_count);
+}
+
+bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size)
+{
+    const unsigned char *i = in;
+    uint32_t regions;
+    if (size != sg_mixture_view_size(l))
+        return false;
+    memcpy(&regions, i, sizeof regions);
+    if (regions != l->region_count)
+        return false;
+    memcpy(&l->view.global_radiance, i + 4, sizeof(float));
+    memcpy(l->view_state, i + 8, l->region_count);
+    memcpy(l->view_radiance, i + 8 + l->region_count, sizeof(float) * l->region_count);
+    return true;
+}

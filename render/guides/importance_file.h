@@ -3,27 +3,27 @@
  * table unpacked, each light followed in proportion to its power but never
  * one that cannot reach the camera (the paper's litmus test). For
  * bin/render and the benchmarks that render as it does. */
-#ifndef SG_RENDER_CACHE_GUIDE_H
-#define SG_RENDER_CACHE_GUIDE_H
+#ifndef SG_RENDER_IMPORTANCE_FILE_H
+#define SG_RENDER_IMPORTANCE_FILE_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
 #include "error.h"
 #include "importance_cache.h"
-#include "renderer.h"
+#include "../renderer.h"
 #include "scene.h"
 
-typedef struct SgCacheGuide {
+typedef struct SgImportanceFile {
     SgImportanceCache *cache;
     double *follow;   /* per light: its weight in the choice of the light to follow */
     uint32_t dropped; /* lights that cannot reach the camera */
-} SgCacheGuide;
+} SgImportanceFile;
 
 /* Opens the cache at `path` for `scene` (read from scene_path, for the
- * errors) and fills `guide`, which points into g until sg_cache_guide_close. */
-bool sg_cache_guide_open(SgCacheGuide *g, const char *path, const SgScene *scene, const char *scene_path,
-                         SgGuide *guide, SgError *err);
-void sg_cache_guide_close(SgCacheGuide *g);
+ * errors) and fills `guide`, which points into g until sg_importance_file_close. */
+bool sg_importance_file_open(SgImportanceFile *g, const char *path, const SgScene *scene, const char *scene_path,
+                         SgImportanceSource *guide, SgError *err);
+void sg_importance_file_close(SgImportanceFile *g);
 
 #endif

@@ -1,4 +1,4 @@
-#include "cache_guide.h"
+#include "importance_file.h"
 
 #include <inttypes.h>
 #include <stdlib.h>
@@ -8,10 +8,10 @@ static bool cache_importance_point(void *ctx, const double p[3], uint32_t light,
     return sg_cache_importance_point(ctx, p, light, point);
 }
 
-bool sg_cache_guide_open(SgCacheGuide *g, const char *path, const SgScene *scene, const char *scene_path,
-                         SgGuide *guide, SgError *err)
+bool sg_importance_file_open(SgImportanceFile *g, const char *path, const SgScene *scene, const char *scene_path,
+                         SgImportanceSource *guide, SgError *err)
 {
-    *g = (SgCacheGuide){0};
+    *g = (SgImportanceFile){0};
     g->cache = sg_cache_open(path, err);
     if (!g->cache)
         return false;
@@ -60,14 +60,14 @@ bool sg_cache_guide_open(SgCacheGuide *g, const char *path, const SgScene *scene
     guide->query_offset = 1.5 * h;
     return true;
 fail:
-    sg_cache_guide_close(g);
+    sg_importance_file_close(g);
     return false;
 }
 
-void sg_cache_guide_close(SgCacheGuide *g)
+void sg_importance_file_close(SgImportanceFile *g)
 {
     free(g->follow);
     if (g->cache)
         sg_cache_close(g->cache);
-    *g = (SgCacheGuide){0};
+    *g = (SgImportanceFile){0};
 }

@@ -1,11 +1,13 @@
-// Open PGL behind render/openpgl_guide.h: C++ because Open PGL's C entry
+// Open PGL behind render/guides/openpgl_field.h: C++ because Open PGL's C entry
 // points take C++ references and default arguments. Nothing else here.
-#include "openpgl_guide.h"
+#include "openpgl_field.h"
 
 #include <cstdio>
 #include <cstdlib>
 #include <new>
 #include <vector>
+
+#include <unistd.h>
 
 #ifdef SG_HAVE_OPENPGL
 #include <openpgl/openpgl.h>
@@ -108,6 +110,82 @@ extern "C" void sg_pgl_field_update(SgPglField *f)
     pglFieldUpdate(f->field, f->samples);
     pglSampleStorageClear(f->samples);
     f->updates++;
+}
+
+// Open PGL serializes a field only to and from a named file: a private
+// temporary one, gone when done.
+namespace {
+bool temp_file(char (&path)[4096], SgError *err)
+{
+    const char *dir = getenv("TMPDIR");
+    snprintf(path, sizeof path, "%s/sg-pgl-field-XXXXXX", dir && *dir ? dir : "/tmp");
+    int fd = mkstemp(path);
+    if (fd < 0) {
+        sg_fail(err, "Open PGL: cannot make a temporary file in %s", dir && *dir ? dir : "/tmp");
+        return false;
+    }
+    close(fd);
+    return true;
+}
+} // namespace
+
+extern "C" bool sg_pgl_field_save(SgPglField *f, unsigned char **data, size_t *size, SgError *err)
+{
+    char path[4096];
+    if (!temp_file(path, err))
+        return false;
+    bool ok = pglFieldStoreToFile(f->field, path);
+    FILE *in = ok ? fopen(path, "rb") : nullptr;
+    *data = nullptr;
+    *size = 0;
+    if (in && fseek(in, 0, SEEK_END) == 0) {
+        long n = ftell(in);
+        rewind(in);
+        *data = n > 0 ? static_cast<unsigned char *>(malloc((size_t)n)) : nullptr;
+        ok = *data && fread(*data, 1, (size_t)n, in) == (size_t)n;
+        *size = ok ? (size_t)n : 0;
+    } else {
+        ok = false;
+    }
+    if (in)
+        fclose(in);
+    unlink(path);
+    if (!ok) {
+        free(*data);
+        *data = nullptr;
+        sg_fail(err, "Open PGL: could not store its field");
+    }
+    return ok;
+}
+
+extern "C" bool sg_pgl_field_restore(SgPglField *f, const void *data, size_t size, int updates, SgError *err)
+{
+    char path[4096];
+    if (!temp_file(path, err))
+        return false;
+    FILE *out = fopen(path, "wb");
+    bool ok = out && fwrite(data, 1, size, out) == size;
+    ok = (out && fclose(out) == 0) && ok;
+    PGLField field = ok ? pglDeviceNewFieldFromFile(f->device, path) : nullptr;
+    unlink(path);
+    if (!field) {
+        sg_fail(err, "Open PGL could not read the field it holds");
+        return false;
+    }
+    // the threads' distributions belong to the field they were made for
+    for (ThreadState &t : f->threads) {
+        pglReleaseSurfaceSamplingDistribution(t.distribution);
+        t.distribution = pglFieldNewSurfaceSamplingDistribution(field);
+    }
+    pglReleaseField(f->field);
+    f->field = field;
+    f->updates = updates;
+    for (ThreadState &t : f->threads)
+        if (!t.distribution) {
+            sg_fail(err, "Open PGL: could not create a thread's distribution");
+            return false;
+        }
+    return true;
 }
 
 extern "C" int sg_pgl_field_updates(const SgPglField *f) { return f->updates; }
@@ -218,6 +296,11 @@ extern "C" SgPglField *sg_pgl_field_create(Vec3, Vec3, int, SgError *err)
 
 extern "C" void sg_pgl_field_free(SgPglField *) {}
 extern "C" void sg_pgl_field_update(SgPglField *) {}
+extern "C" bool sg_pgl_field_save(SgPglField *, unsigned char **, size_t *, SgError *err) { return sg_pgl_require(err); }
+extern "C" bool sg_pgl_field_restore(SgPglField *, const void *, size_t, int, SgError *err)
+{
+    return sg_pgl_require(err);
+}
 extern "C" int sg_pgl_field_updates(const SgPglField *) { return 0; }
 extern "C" size_t sg_pgl_field_last_samples(const SgPglField *) { return 0; }
 extern "C" SgPglSegment *sg_pgl_segment_next(SgPglField *, int, Vec3, Vec3, Vec3) { return nullptr; }

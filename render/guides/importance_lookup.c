@@ -1,14 +1,14 @@
-#include "skeleton_guide.h"
+#include "importance_lookup.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-bool skeleton_guide_init(SkeletonGuide *g, const SgGuide *guide, const double centre[3], float scale,
+bool importance_lookup_init(ImportanceLookup *g, const SgImportanceSource *source, const double centre[3], float scale,
                          const LightSet *lights, const char *path, SgError *err)
 {
-    *g = (SkeletonGuide){.guide = *guide, .min_length = 1e-6f * scale, .lights = lights};
+    *g = (ImportanceLookup){.source = *source, .min_length = 1e-6f * scale, .lights = lights};
     memcpy(g->centre, centre, sizeof g->centre);
-    const SgImportanceCache *c = guide->cache;
+    const SgImportanceCache *c = source->cache;
     if (!c)
         return true;
     uint32_t nodes = sg_cache_node_count(c), n_lights = sg_cache_light_count(c);
@@ -36,7 +36,7 @@ bool skeleton_guide_init(SkeletonGuide *g, const SgGuide *guide, const double ce
     g->cache = c;
     g->origin = v3((float)(origin[0] - centre[0]), (float)(origin[1] - centre[1]), (float)(origin[2] - centre[2]));
     g->inv_voxel = (float)(1.0 / voxel);
-    g->offset = (float)guide->query_offset;
+    g->offset = (float)source->query_offset;
     g->light_count = lights_n;
     for (uint32_t n = 0; n < nodes; n++)
         for (uint32_t l = 0; l < lights_n; l++) {
@@ -49,7 +49,7 @@ bool skeleton_guide_init(SkeletonGuide *g, const SgGuide *guide, const double ce
     return true;
 }
 
-void skeleton_guide_free(SkeletonGuide *g)
+void importance_lookup_free(ImportanceLookup *g)
 {
     free(g->points);
     g->points = NULL;

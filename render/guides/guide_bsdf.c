@@ -13,7 +13,7 @@ static const PathGuideOps bsdf_ops = {
     .sample = guide_bsdf_sample,
 };
 
-PathGuide *guide_bsdf_create(const PathGuideSetup *setup, SgError *err)
+static PathGuide *bsdf_create(const PathGuideSetup *setup, SgError *err)
 {
     PathGuide *g = calloc(1, sizeof *g);
     if (!g)
@@ -21,3 +21,8 @@ PathGuide *guide_bsdf_create(const PathGuideSetup *setup, SgError *err)
     g->ops = &bsdf_ops;
     return g;
 }
+
+const PathGuideKind guide_bsdf_kind = {
+    .mode = {.name = "bsdf", .help = "BSDF sampling (default without a cache)", .default_without_cache = true},
+    .create = bsdf_create,
+};

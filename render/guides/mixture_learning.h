@@ -199,6 +199,13 @@ void sg_mixture_update(SgMixtureLearner *l);
 void sg_mixture_end_pass(SgMixtureLearner *l);
 void sg_mixture_learn(SgMixtureLearner *l);
 
+/* The view as bytes (a field file's part), and back: all that a learner
+ * that learns no more gives the renderer. Restore fails on bytes of
+ * another size of grid. */
+size_t sg_mixture_view_size(const SgMixtureLearner *l);
+void sg_mixture_view_save(const SgMixtureLearner *l, void *out);
+bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size);
+
 /* A region's sample count, for tests and reports. */
 uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region);
 /* Share of the bounces seen so far that fall in regions whose choice now

@@ -3,19 +3,20 @@
  * importance point of the skeleton node nearest it, and from the BSDF
  * where it is lit. Biased (the lobe's density is not weighed against the
  * BSDF's); kept to reproduce the paper. */
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "path_guide.h"
-#include "skeleton_guide.h"
+#include "importance_lookup.h"
 
 typedef struct SkeletonRule {
     PathGuide base;
-    SkeletonGuide skeleton;
+    ImportanceLookup skeleton;
     float exponent;
 } SkeletonRule;
 
 typedef struct RuleVertex {
-    GuideQuery query;
+    ImportanceQuery query;
     bool asked;      /* the query was begun */
     bool lobe;       /* the bounce follows the lobe alone */
     SgFoldedLobe folded;
@@ -30,7 +31,7 @@ static void rule_vertex_begin(PathGuide *g, const GuideHit *h, SgRng *rng, Guide
     SkeletonRule *s = (SkeletonRule *)g;
     RuleVertex *rv = rule_vertex(v);
     rv->lobe = false;
-    rv->asked = skeleton_guide_begin(&s->skeleton, h->p, h->n, rng, &rv->query);
+    rv->asked = importance_lookup_begin(&s->skeleton, h->p, h->n, rng, &rv->query);
 }
 
 static void rule_vertex_end(PathGuide *g, const GuideHit *h, bool lit, SgRng *rng, GuideVertex *v)
@@ -40,7 +41,7 @@ static void rule_vertex_end(PathGuide *g, const GuideHit *h, bool lit, SgRng *rn
     RuleVertex *rv = rule_vertex(v);
     Vec3 axis;
     /* the query is finished even where the vertex is lit (the cache line it loaded is then wasted) */
-    if (rv->asked && skeleton_guide_end(&s->skeleton, &rv->query, h->p, h->n, &axis) && !lit) {
+    if (rv->asked && importance_lookup_end(&s->skeleton, &rv->query, h->p, h->n, &axis) && !lit) {
         rv->lobe = true;
         rv->folded = sg_folded_lobe(axis, h->n, s->exponent);
     }
@@ -66,8 +67,14 @@ static Vec3 rule_sample(GuideVertex *v, const float u[3], float *pdf)
 static void rule_destroy(PathGuide *g)
 {
     SkeletonRule *s = (SkeletonRule *)g;
-    skeleton_guide_free(&s->skeleton);
+    importance_lookup_free(&s->skeleton);
     free(s);
+}
+
+static void rule_describe(const PathGuide *g, const GuideStats *s, SgRenderReport *report)
+{
+    (void)g;
+    snprintf(report->guide, sizeof report->guide, ", lobe drew %.1f%% of bounces", 100.0 * s->lobe_share);
 }
 
 static const PathGuideOps rule_ops = {
@@ -78,23 +85,30 @@ static const PathGuideOps rule_ops = {
     .vertex_end = rule_vertex_end,
     .pdf = rule_pdf,
     .sample = rule_sample,
+    .describe = rule_describe,
 };
 
-PathGuide *guide_skeleton_rule_create(const PathGuideSetup *setup, SgError *err)
+static PathGuide *rule_create(const PathGuideSetup *setup, SgError *err)
 {
     const SgRenderOptions *o = setup->opt;
-    if (!o->guide.importance_point)
-        return sg_fail(err, "%s: %s sampling needs an importance cache", setup->path, sg_sampling_name(o->sampling)),
-               NULL;
     SkeletonRule *s = calloc(1, sizeof *s);
     if (!s)
         return sg_fail(err, "%s: out of memory", setup->path), NULL;
     s->base.ops = &rule_ops;
     s->exponent = o->lobe_exponent;
-    if (!skeleton_guide_init(&s->skeleton, &o->guide, setup->geo->centre, setup->geo->scale, setup->lights,
+    if (!importance_lookup_init(&s->skeleton, &o->importance, setup->geo->centre, setup->geo->scale, setup->lights,
                              setup->path, err)) {
         rule_destroy(&s->base);
         return NULL;
     }
     return &s->base;
 }
+
+const PathGuideKind guide_skeleton_rule_kind = {
+    .mode = {.name = "skeleton",
+             .help = "the paper's rule as written (biased; for reproduction)",
+             .uses_cache = true,
+             .lobe_exponent = 4.0f, /* the paper's p_skel for its corridor */
+             .biased = true},
+    .create = rule_create,
+};

@@ -1,0 +1,429 @@
+#include "integrator.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "bsdf.h"
+#include "roulette.h"
+#include "sampling.h"
+
+static inline float power_heuristic(float a, float b)
+{
+    float a2 = a * a, b2 = b * b;
+    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
+
+/* ---- the path's state ------------------------------------------------------ */
+
+/* Between vertices. */
+typedef struct PathState {
+    Vec3 o, d;
+    Vec3 beta;
+    /* What beta would be under BSDF sampling (the product of albedos):
+     * Russian roulette follows it, not beta, so that a guided path is not
+     * killed for carrying a small weight where its pdf was large. Any
+     * survival probability is unbiased once divided out. */
+    Vec3 rr_beta;
+    bool specular_bounce; /* the last bounce was drawn by its BSDF alone: emission counts fully */
+    float prev_pdf;
+    Vec3 prev_p;
+} PathState;
+
+/* A diffuse or glossy vertex, as far as drawing its bounce needs. */
+typedef struct BounceVertex {
+    const Material *m;
+    GuideVertex g;     /* the guide's distribution there */
+    Vec3 origin, p;
+    GuideSegment *seg; /* recording: the vertex's record */
+} BounceVertex;
+
+/* A learning vertex waiting for the rest of its branch. */
+typedef struct PendingRecord {
+    GuideVertex v;  /* as its bounce was drawn */
+    Vec3 beta;      /* path throughput of the bounce (before the roulette, where it cut the path) */
+    Vec3 radiance;  /* radiance gathered before the bounce */
+    bool bounced;   /* a direction above the surface was drawn */
+    bool cut;       /* the albedo roulette cut the path here */
+} PendingRecord;
+
+#define MAX_PENDING 32
+
+/* A vertex where the learned roulette split the path: its bounce is drawn
+ * again, `remaining` more times, once the branches before have ended. */
+typedef struct SplitPoint {
+    BounceVertex v;
+    PathState ps;      /* at the vertex, beta already divided by the split factor */
+    int depth;
+    int remaining;
+    int mark;          /* the branch's first record in pending[] */
+    bool learn;        /* the vertex learns: each branch gets a record */
+} SplitPoint;
+
+/* One camera path as it is traced: where it is, what it gathered, the
+ * records of its learning vertices (known once their branch has ended) and
+ * the split points its other branches wait at. */
+typedef struct Path {
+    const Integrator *it;
+    const PathCtx *pc;
+    PathState ps;
+    Vec3 radiance;
+    Vec3 *seen;
+    int depth;
+    int branches;
+    int pending_count, split_count;
+    PendingRecord pending[MAX_PENDING];
+    SplitPoint splits[SPLIT_STACK];
+} Path;
+
+/* ---- what a finished branch tells the guide -------------------------------- */
+
+static Vec3 per_throughput(Vec3 c, Vec3 beta)
+{
+    return v3(beta.x > 0.0f ? c.x / beta.x : 0.0f, beta.y > 0.0f ? c.y / beta.y : 0.0f,
+              beta.z > 0.0f ? c.z / beta.z : 0.0f);
+}
+
+/* The records pending[from..to) of a finished branch: what each bounce
+ * brought back is the radiance gathered since it, `radiance` now. */
+static void finish_records(PathGuide *g, const PendingRecord *pending, int from, int to, Vec3 radiance, int tile)
+{
+    for (int i = from; i < to; i++) {
+        const PendingRecord *pr = &pending[i];
+        float t = luminance(pr->beta);
+        BounceOutcome o = {.radiance = luminance(per_throughput(v3_sub(radiance, pr->radiance), pr->beta)),
+                           .weight = t * t, .bounced = pr->bounced, .cut = pr->cut};
+        g->ops->learn(g, tile, &pr->v, &o);
+    }
+}
+
+/* ---- surfaces --------------------------------------------------------------- */
+
+/* A textured material's albedo at a hit, its texture's value there. */
+static Vec3 textured_albedo(const Integrator *it, const Material *m, const Hit *h, int thread)
+{
+    Vec3 c = texture_set_eval_at(it->textures, m->texture, h->tri, h->b1, h->b2, thread);
+    Vec3 top = m->type == SG_MATERIAL_GLOSSY ? v3_sub(v3(1, 1, 1), m->ks) : v3(1, 1, 1); /* kd + ks <= 1 */
+    return v3(sg_minf(sg_maxf(c.x, 0.0f), top.x), sg_minf(sg_maxf(c.y, 0.0f), top.y),
+              sg_minf(sg_maxf(c.z, 0.0f), top.z));
+}
+
+/* The material's albedo at a hit: kd, or its texture's value there (the
+ * untextured case inline: it is every vertex of most scenes). */
+static inline Vec3 surface_albedo(const Integrator *it, const Material *m, const Hit *h, int thread)
+{
+    return m->texture ? textured_albedo(it, m, h, thread) : m->kd;
+}
+
+/* Emission toward the path (one-sided, toward the winding normal), MIS
+ * weighted against the light sample of the vertex before. */
+static void add_emission(Path *p, const Hit *h, const Material *m, float cos_o, GuideSegment *seg)
+{
+    const Integrator *it = p->it;
+    float w = 1.0f;
+    if (!p->ps.specular_bounce) {
+        Vec3 dp = v3_sub(h->p, p->ps.prev_p);
+        float pl = light_set_pdf(it->lights, it->geo->tris[h->tri].light, v3_dot(dp, dp), -cos_o);
+        w = power_heuristic(p->ps.prev_pdf, pl);
+    }
+    p->radiance = v3_add(p->radiance, v3_scale(v3_mul(p->ps.beta, m->emission), w));
+    if (seg)
+        it->guide->ops->record_emission(seg, m->emission, w);
+}
+
+/* A mirror's, smooth conductor's or glass's bounce, drawn from its BSDF
+ * alone (bsdf.h); false where the path ends. */
+static bool specular_bounce(Path *p, const Material *m, const Hit *h, Vec3 wo, Vec3 n, bool entering,
+                            GuideSegment *seg)
+{
+    const Integrator *it = p->it;
+    SgRng *rng = p->pc->rng;
+    PathState *ps = &p->ps;
+    SpecularBounce b;
+    if (m->delta) {
+        Vec3 albedo = m->type == SG_MATERIAL_CONDUCTOR ? surface_albedo(it, m, h, p->pc->thread) : m->kd;
+        bsdf_sample_delta(m, albedo, wo, n, entering, bsdf_delta_chooses(m) ? sg_rng_float(rng) : 0.0f, &b);
+    } else {
+        float uc = sg_rng_float(rng), u1 = sg_rng_float(rng), u2 = sg_rng_float(rng);
+        if (!bsdf_sample_rough_glass(m, wo, n, entering, uc, u1, u2, &b))
+            return false;
+    }
+    ps->d = b.wi;
+    ps->o = offset_origin(it->geo, h->p, b.transmitted ? v3_scale(n, -1.0f) : n);
+    ps->beta = v3_mul(ps->beta, b.weight);
+    ps->rr_beta = v3_mul(ps->rr_beta, b.rr_weight);
+    ps->specular_bounce = true;
+    if (seg)
+        it->guide->ops->record_bounce(seg, b.wi, b.pdf, b.weight, b.delta, b.eta, b.delta ? 0.0f : m->roughness);
+    return true;
+}
+
+/* ---- a diffuse or glossy vertex ---------------------------------------------- */
+
+/* Next-event estimation: one point on the lights, its shadow ray, and what
+ * it brings (before the MIS weight). */
+typedef struct LightSample {
+    bool lit;         /* the sampled point is visible (whatever its cosine) */
+    Vec3 c;           /* f cos Le / pdf, 0 where the point gives nothing */
+    Vec3 wi;
+    float pdf, cos_x; /* pdf 0: no contribution */
+} LightSample;
+
+static LightSample sample_light(const Integrator *it, const BounceVertex *v, bool lit_below_horizon, SgRng *rng,
+                                PathStats *st)
+{
+    LightSample ls = {0};
+    float ul = sg_rng_float(rng), ut = sg_rng_float(rng);
+    float ua = sg_rng_float(rng), ub = sg_rng_float(rng);
+    uint32_t t;
+    Vec3 y;
+    const Geometry *geo = it->geo;
+    if (!light_set_sample(it->lights, geo->vertices, geo->indices, ul, ut, ua, ub, &t, &y))
+        return ls;
+    Vec3 n = v->g.bsdf.lobe.n;
+    Vec3 to = v3_sub(y, v->origin);
+    float dist2 = v3_dot(to, to);
+    float dist = sqrtf(dist2);
+    Vec3 wi = v3_scale(to, 1.0f / dist);
+    float cos_l = -v3_dot(wi, geo->tris[t].normal);
+    float cos_x = v3_dot(wi, n);
+    if (!(dist > 0.0f && cos_l > 0.0f && (cos_x > 0.0f || lit_below_horizon)))
+        return ls;
+    st->rays++;
+    if (occluded(geo, v->origin, wi, dist * (1.0f - 1e-4f)))
+        return ls;
+    ls.lit = true;
+    if (cos_x > 0.0f) {
+        const Material *lm = &it->materials[geo->tris[t].material];
+        float pl = light_set_pdf(it->lights, geo->tris[t].light, dist2, cos_l);
+        Vec3 f = bsdf_eval(&v->g.bsdf, wi);
+        ls.c = v3_scale(v3_mul(f, lm->emission), cos_x / pl);
+        ls.wi = wi;
+        ls.cos_x = cos_x;
+        ls.pdf = pl;
+    }
+    return ls;
+}
+
+/* Draws the vertex's bounce into the path state; false where the path
+ * ends (below the surface). `pr`: the vertex's learning record, if any. */
+static bool take_bounce(const PathGuide *guide, BounceVertex *v, PathState *ps, SgRng *rng, PendingRecord *pr,
+                        PathStats *st)
+{
+    float u[3];
+    u[0] = sg_rng_float(rng);
+    u[1] = sg_rng_float(rng);
+    u[2] = sg_rng_float(rng);
+    float pdf;
+    Vec3 wi = guide->ops->sample(&v->g, u, &pdf);
+    st->bounces++;
+    st->lobe_bounces += v->g.by_guide;
+    float cos_x = v3_dot(wi, v->g.bsdf.lobe.n);
+    bool above = cos_x > 0.0f && pdf > 0.0f;
+    if (pr) {
+        pr->v = v->g;
+        pr->bounced = above;
+    }
+    if (!above)
+        return false; /* below the surface: f = 0, the path ends */
+    Vec3 f = bsdf_eval(&v->g.bsdf, wi);
+    Vec3 weight = v3_scale(f, cos_x / pdf);
+    ps->beta = v3_mul(ps->beta, weight);
+    if (v->seg)
+        guide->ops->record_bounce(v->seg, wi, pdf, weight, false, 1.0f, v->m->roughness);
+    ps->d = wi;
+    ps->o = v->origin;
+    ps->prev_pdf = pdf;
+    ps->prev_p = v->p;
+    ps->specular_bounce = false;
+    return true;
+}
+
+/* The roulette at a vertex whose light sample is done and whose bounce is
+ * not drawn yet: it decides on the bounce alone, and a path cut here keeps
+ * its direct light and pays for no direction, pdf or guide lobe it would
+ * not follow. The learned roulette where the vertex knows what its bounce
+ * brings back (GuideVertex.rms), may split the path; elsewhere by albedo.
+ * False where the path is cut. */
+static bool vertex_roulette(Path *p, const BounceVertex *v, PendingRecord *pr, bool *decided)
+{
+    PathState *ps = &p->ps;
+    SgRng *rng = p->pc->rng;
+    ps->rr_beta = v3_mul(ps->rr_beta, bsdf_albedo(&v->g.bsdf));
+    if (p->pc->pixel_deviation > 0.0f && v->g.rms >= 0.0f) {
+        float worth = luminance(ps->beta) * v->g.rms / p->pc->pixel_deviation;
+        if (p->depth >= ROULETTE_DEPTH) {
+            *decided = true;
+            ps->rr_beta = v3(1, 1, 1);
+        }
+        bool may_split = p->split_count < SPLIT_STACK && p->pc->may_split;
+        RouletteVerdict rv = roulette_learned(worth, p->depth, p->branches, may_split, rng);
+        if (rv.branches == 0) {
+            if (pr) /* what a surviving bounce brings is what the guide estimates */
+                p->pending_count--;
+            return false;
+        }
+        ps->beta = v3_scale(ps->beta, rv.scale);
+        if (rv.branches > 1) { /* the others wait, from this vertex on */
+            p->splits[p->split_count++] = (SplitPoint){*v, *ps, p->depth, rv.branches - 1,
+                                                       pr ? (int)(pr - p->pending) : p->pending_count, pr != NULL};
+            p->branches += rv.branches - 1;
+        }
+    } else if (p->depth >= ROULETTE_DEPTH) {
+        *decided = true;
+        if (!roulette_albedo(p->it->guide, &ps->beta, &ps->rr_beta, rng, v->seg)) {
+            if (pr) /* the guide hears of a bounce cut before it was drawn */
+                *pr = (PendingRecord){.v = v->g, .beta = pr->beta, .radiance = p->radiance, .cut = true};
+            return false;
+        }
+    }
+    return true;
+}
+
+/* A diffuse or glossy vertex: the guide's distribution there, the light
+ * sample weighted by MIS against it, the roulette, then the bounce. False
+ * where the path ends; *decided: a roulette has decided here. */
+static bool scatter(Path *p, const Hit *h, const Material *m, Vec3 wo, Vec3 n, bool front, GuideSegment *seg,
+                    bool *decided)
+{
+    const Integrator *it = p->it;
+    const PathCtx *pc = p->pc;
+    PathGuide *guide = it->guide;
+    const PathGuideOps *gops = guide->ops;
+    /* field by field: zeroing the whole vertex (its BSDF's microfacet
+     * fields, unused by most) costs per bounce; the guide's state starts
+     * zeroed as guides expect */
+    BounceVertex v;
+    v.m = m;
+    v.p = h->p;
+    v.seg = seg;
+    memset(v.g.state, 0, sizeof v.g.state);
+    bsdf_init(&v.g.bsdf, m, n, wo, surface_albedo(it, m, h, pc->thread));
+    v.g.learn = false;
+    v.g.rms = -1.0f;
+    v.g.by_guide = false;
+    /* n is the winding normal or its opposite: the other bin of the pair */
+    GuideHit gh = {.p = h->p, .n = n, .m = m, .thread = pc->thread,
+                   .normal_bin = it->geo->tris[h->tri].normal_bin ^ (front ? 0u : 1u),
+                   .may_learn = pc->learn_tile >= 0 && p->pending_count < MAX_PENDING};
+    if (gops->vertex_begin)
+        gops->vertex_begin(guide, &gh, pc->rng, &v.g);
+    PendingRecord *pr = NULL;
+    if (v.g.learn) { /* the weight of a bounce the roulette cuts; the rest is set when it is drawn */
+        pr = &p->pending[p->pending_count++];
+        *pr = (PendingRecord){.beta = p->ps.beta};
+    }
+    v.origin = offset_origin(it->geo, h->p, n);
+
+    LightSample ls = sample_light(it, &v, gops->lit_below_horizon, pc->rng, pc->st);
+    if (gops->vertex_end)
+        gops->vertex_end(guide, &gh, ls.lit, pc->rng, &v.g);
+    if (ls.pdf > 0.0f) {
+        float w = power_heuristic(ls.pdf, gops->pdf(&v.g, ls.wi, ls.cos_x));
+        Vec3 c = v3_scale(ls.c, w);
+        p->radiance = v3_add(p->radiance, v3_mul(p->ps.beta, c));
+        if (seg)
+            gops->record_direct(seg, c);
+    }
+    if (!vertex_roulette(p, &v, pr, decided))
+        return false;
+    if (pr) { /* the bounce's throughput and what came before it */
+        pr->beta = p->ps.beta;
+        pr->radiance = p->radiance;
+    }
+    return take_bounce(guide, &v, &p->ps, pc->rng, pr, pc->st);
+}
+
+/* ---- the path ------------------------------------------------------------------ */
+
+/* The path's next vertex: what it sees there, and its bounce. False where
+ * the branch ends. */
+static bool path_vertex(Path *p)
+{
+    const Integrator *it = p->it;
+    const PathCtx *pc = p->pc;
+    Hit h = intersect(it->geo, p->ps.o, p->ps.d, INFINITY);
+    pc->st->rays++;
+    if (!h.found)
+        return false;
+    Vec3 ng = it->geo->tris[h.tri].normal;
+    float cos_o = v3_dot(p->ps.d, ng);
+    bool front = cos_o < 0.0f;
+    if (p->depth == 0 && pc->first_pass && cos_o > 0.0f)
+        pc->st->backface++;
+    const Material *m = &it->materials[it->geo->tris[h.tri].material];
+    Vec3 wo = v3_scale(p->ps.d, -1.0f);
+    Vec3 n = front ? ng : v3_scale(ng, -1.0f); /* facing wo */
+    PathGuide *guide = it->guide;
+    GuideSegment *seg = pc->record ? guide->ops->record_vertex(guide, pc->thread, h.p, wo, n) : NULL;
+
+    if (m->emissive && front)
+        add_emission(p, &h, m, cos_o, seg);
+    if (p->depth == 0)
+        *p->seen = p->radiance; /* emission the camera sees directly */
+    if (p->depth + 1 >= it->max_depth)
+        return false;
+
+    bool decided = false; /* a roulette has decided at this vertex */
+    if (m->delta || m->type == SG_MATERIAL_DIELECTRIC) {
+        if (!specular_bounce(p, m, &h, wo, n, front, seg))
+            return false;
+    } else if (m->black || !scatter(p, &h, m, wo, n, front, seg, &decided)) {
+        return false;
+    }
+    /* after a specular bounce: the albedo roulette */
+    if (p->depth >= ROULETTE_DEPTH && !decided && !roulette_albedo(guide, &p->ps.beta, &p->ps.rr_beta, pc->rng, seg))
+        return false;
+    return v3_max_component(p->ps.beta) > 0.0f;
+}
+
+/* The branch has ended: what its vertices brought back is known; the next
+ * branch of the deepest split starts from that vertex's bounce. False
+ * where that bounce ends it at once. */
+static bool path_resume_split(Path *p)
+{
+    SplitPoint *sp = &p->splits[p->split_count - 1];
+    finish_records(p->it->guide, p->pending, sp->mark, p->pending_count, p->radiance, p->pc->learn_tile);
+    p->pending_count = sp->mark;
+    BounceVertex v = sp->v;
+    p->ps = sp->ps;
+    p->depth = sp->depth;
+    PendingRecord *pr = NULL;
+    if (sp->learn && p->pending_count < MAX_PENDING) {
+        pr = &p->pending[p->pending_count++];
+        *pr = (PendingRecord){.beta = p->ps.beta, .radiance = p->radiance};
+    }
+    if (--sp->remaining == 0)
+        p->split_count--;
+    bool alive = take_bounce(p->it->guide, &v, &p->ps, p->pc->rng, pr, p->pc->st) &&
+                 v3_max_component(p->ps.beta) > 0.0f;
+    p->depth++;
+    return alive;
+}
+
+Vec3 integrator_trace(const Integrator *it, Vec3 o, Vec3 d, const PathCtx *pc, Vec3 *seen)
+{
+    /* field by field: the records and split points are written before read */
+    Path p;
+    p.it = it;
+    p.pc = pc;
+    p.ps = (PathState){o, d, v3(1, 1, 1), v3(1, 1, 1), true /* the camera ray counts as one */, 0.0f, o};
+    p.radiance = v3(0, 0, 0);
+    p.seen = seen;
+    p.depth = 0;
+    p.branches = 1;
+    p.pending_count = p.split_count = 0;
+    bool alive = true;
+    for (;;) {
+        if (alive)
+            while (path_vertex(&p))
+                p.depth++;
+        if (!p.split_count)
+            break;
+        alive = path_resume_split(&p);
+    }
+    finish_records(it->guide, p.pending, 0, p.pending_count, p.radiance, pc->learn_tile);
+    if (pc->record)
+        it->guide->ops->record_path_end(it->guide, pc->thread);
+    pc->st->branches += (uint64_t)(p.branches - 1);
+    return p.radiance;
+}

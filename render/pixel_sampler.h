@@ -1,0 +1,26 @@
+/* Which random numbers a pixel's sample takes in each pass, and where in
+ * the pixel its camera ray goes: both depend only on (seed, pixel, pass),
+ * never on the thread that renders it, so the image is the same for any
+ * thread count (and a shard's passes are the whole render's). */
+#ifndef SG_RENDER_PIXEL_SAMPLER_H
+#define SG_RENDER_PIXEL_SAMPLER_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "rng.h"
+
+/* One pass of the whole render (pass numbers count the unsharded render). */
+typedef struct PixelSampler {
+    uint64_t pass;
+    uint64_t pass_key;   /* the pass's random streams (also handed to the guide) */
+    uint64_t jitter_key; /* the seed's: the same for every pass */
+} PixelSampler;
+
+void pixel_sampler_init(PixelSampler *ps, uint64_t seed, uint64_t pass);
+
+/* Pixel `pix`'s random stream for the pass, and its camera ray's position
+ * in the pixel, (jx, jy) in [0, 1)^2. */
+void pixel_sampler_start(const PixelSampler *ps, size_t pix, SgRng *rng, float *jx, float *jy);
+
+#endif
