@@ -6,9 +6,11 @@
 #   scripts/slurm-render.sh --resume DIR [--wait]
 #
 # On Slurm (sbatch on the PATH, --local not given) three submissions:
-#   1. the precompute (voxelize, skeletonize, importance into DIR/), one job;
+#   1. the precompute (voxelize, skeletonize, importance into DIR/; for a
+#      mode that learns, its training into DIR/NAME.field), one job;
 #   2. the shards, a job array 0..N-1 that waits for it (afterok): task K
-#      runs `render SCENE --cache DIR/importance.cache --shard K/N` into
+#      runs `render SCENE --cache DIR/importance.cache [--field DIR/NAME.field]
+#      --shard K/N` into
 #      DIR/shards/NAME-K.exr;
 #   3. the merge, after the whole array (afterok): bin/merge into
 #      DIR/NAME.exr and DIR/NAME.png.
@@ -23,7 +25,9 @@
 # DIR must be on storage every node sees: the cache is memory-mapped
 # read-only by every shard from there. RENDER_OPTIONS go to every shard
 # (--spp is the whole render's: shard K renders passes K, K+N, ...;
-# --sampling bsdf or openpgl need no precompute).
+# --sampling bsdf or openpgl need no cache: render --describe says; the
+# modes that learn, guided and openpgl, train once and every shard renders
+# with the same frozen field, so N shards are as good as one process).
 #
 # Options:
 #   --name NAME          output name (default: the scene file's name)
@@ -44,29 +48,45 @@ run_step() {
   local step=$1 dir=$2
   # shellcheck source=/dev/null
   source "$dir/farm.env" || die "$dir/farm.env: cannot read the render's settings"
+  : "${learns:=0}" # a render set up before fields
   case $step in
     precompute)
-      [ "$needs_cache" = 1 ] || exit 0
-      local key
-      key=$("$bin/voxelize" "$scene" --key) || exit 1
-      if [ "$key" = "$(cat "$dir/geometry.key" 2>/dev/null)" ] && [ -e "$dir/importance.cache" ]; then
-        echo "slurm-render: precompute: $dir/importance.cache is up to date"
-        exit 0
+      if [ "$needs_cache" = 1 ]; then
+        local key
+        key=$("$bin/voxelize" "$scene" --key) || exit 1
+        if [ "$key" = "$(cat "$dir/geometry.key" 2>/dev/null)" ] && [ -e "$dir/importance.cache" ]; then
+          echo "slurm-render: precompute: $dir/importance.cache is up to date"
+        else
+          "$bin/voxelize" "$scene" -o "$dir/medium.vdb" --quiet &&
+            "$bin/skeletonize" "$dir/medium.vdb" -o "$dir/skeleton.ply" --quiet &&
+            "$bin/importance" "$dir/medium.vdb" "$dir/skeleton.ply" -o "$dir/importance.cache" --quiet || exit 1
+          printf '%s\n' "$key" >"$dir/geometry.key"
+        fi
       fi
-      "$bin/voxelize" "$scene" -o "$dir/medium.vdb" --quiet &&
-        "$bin/skeletonize" "$dir/medium.vdb" -o "$dir/skeleton.ply" --quiet &&
-        "$bin/importance" "$dir/medium.vdb" "$dir/skeleton.ply" -o "$dir/importance.cache" --quiet || exit 1
-      printf '%s\n' "$key" >"$dir/geometry.key"
+      [ "$learns" = 1 ] || exit 0
+      # a mode that learns: its training once, here; every shard renders
+      # with the field frozen, as one process would (render --field-out)
+      local cache=() train_options=() i
+      [ "$needs_cache" = 1 ] && cache=(--cache "$dir/importance.cache")
+      for ((i = 0; i < ${#render_options[@]}; i++)); do
+        case ${render_options[$i]} in
+          --spp|--time) i=$((i + 1)) ;; # the render's, not the training's
+          *) train_options+=("${render_options[$i]}") ;;
+        esac
+      done
+      "$bin/render" "$scene" "${cache[@]}" "${train_options[@]}" --field-out "$dir/$name.field" \
+        -o "$dir/$name-training.exr" --quiet || exit 1
       ;;
     shard)
       local k=${3:-${SLURM_ARRAY_TASK_ID:-}}
       [ -n "$k" ] || die "shard: no shard index (SLURM_ARRAY_TASK_ID)"
-      local cache=()
+      local cache=() field=()
       [ "$needs_cache" = 1 ] && cache=(--cache "$dir/importance.cache")
+      [ "$learns" = 1 ] && field=(--field "$dir/$name.field")
       # on a node: the cores Slurm gave the task; here: every core
       local threads=(--threads "${SLURM_CPUS_PER_TASK:-$cpus}")
       [ -n "${SG_FARM_LOCAL:-}" ] && threads=()
-      exec "$bin/render" "$scene" "${cache[@]}" "${render_options[@]}" --shard "$k/$shards" \
+      exec "$bin/render" "$scene" "${cache[@]}" "${field[@]}" "${render_options[@]}" --shard "$k/$shards" \
         "${threads[@]}" -o "$dir/shards/$name-$k.exr" --quiet
       ;;
     merge)
@@ -138,15 +158,16 @@ else
     esac
   done
   mode=$("$bin/render" --describe | grep -F "$mode_filter") || die "--sampling: not a sampling mode of $bin/render (${mode_filter})"
-  needs_cache=0
+  needs_cache=0 learns=0
   case $mode in *'"uses_cache": true'*) needs_cache=1 ;; esac
+  case $mode in *'"learns": true'*) learns=1 ;; esac
   mkdir -p "$out/shards" "$out/logs" || die "$out: cannot create it"
   dir=$(cd "$out" && pwd)
   # a new render in an old directory: its shards would not merge
-  rm -f "$dir/shards/$name"-*.exr "$dir/$name.exr" "$dir/$name.png"
+  rm -f "$dir/shards/$name"-*.exr "$dir/$name.exr" "$dir/$name.png" "$dir/$name.field"
   {
-    printf 'scene=%q\nbin=%q\nshards=%q\nname=%q\ncpus=%q\nneeds_cache=%q\nextra_sbatch=%q\n' \
-      "$scene" "$bin" "$shards" "$name" "$cpus" "$needs_cache" "$extra_sbatch"
+    printf 'scene=%q\nbin=%q\nshards=%q\nname=%q\ncpus=%q\nneeds_cache=%q\nlearns=%q\nextra_sbatch=%q\n' \
+      "$scene" "$bin" "$shards" "$name" "$cpus" "$needs_cache" "$learns" "$extra_sbatch"
     printf 'render_options=('
     printf '%q ' "${render_options[@]}"
     printf ')\n'

@@ -1,12 +1,18 @@
 #!/usr/bin/env bash
-# Convergence: the paper's table 2 on our scenes. For each scene, the
-# precompute (voxelize, skeletonize, importance) and a bsdf reference made of
-# two independent halves, both kept in bench/out/NAME/ and remade only when
-# what they depend on changes; then `bsdf`, `skeleton`, `guided` and
-# `openpgl` (Open PGL, the peer; left out, said in the notes, when this
-# build of render has no Open PGL) for a fixed time each, with several
-# seeds, modes interleaved within each seed, every run logging its error
-# curve against the reference. bench/convergence (bench/convergence.c)
+# Convergence: the paper's table 2 on our scenes, as a fair race. For each
+# scene, the precompute (voxelize, skeletonize, importance) and a bsdf
+# reference made of two independent halves, both kept in bench/out/NAME/ and
+# remade only when what they depend on changes; then each learned mode's
+# training, alone (render --field-out: guided, guided with the albedo
+# roulette, and openpgl, Open PGL the peer, left out and said in the notes
+# when this build of render has no Open PGL), timed; then `bsdf`,
+# `skeleton`, `guided`, `guided-albedo` (guided --roulette albedo: the guide
+# judged apart from the learned roulette) and `openpgl`, the learned ones
+# from their stored field (render --field: nothing learned on the clock),
+# for a fixed time each, with several seeds, modes interleaved within each
+# seed, every run logging its error curve against the reference. The
+# preparation (precompute, training) is tabled, and time-to-error is given
+# twice: rendering alone, and with each mode's preparation added. bench/convergence (bench/convergence.c)
 # averages the curves over seeds and writes the tables (relMSE, 8-bit MSE
 # and linear MSE); gnuplot draws relMSE and MSE against time; `convergence
 # strip` makes the equal-time crops. Settings: SG_QUICK=1 (a first look), default, SG_LONG=1
@@ -25,9 +31,9 @@ REFERENCE_VERSION=1
 if [ "${SG_QUICK:-0}" = 1 ]; then
   setting=quick pixels=9600 seconds=4 seeds=1 ref_seconds=15
 elif [ "${SG_LONG:-0}" = 1 ]; then
-  setting=long pixels=76800 seconds=60 seeds=5 ref_seconds=600
+  setting=long pixels=921600 seconds=240 seeds=3 ref_seconds=1800
 else
-  setting=default pixels=19200 seconds=12 seeds=3 ref_seconds=60
+  setting=default pixels=76800 seconds=20 seeds=3 ref_seconds=120
 fi
 pixels=${SG_CONV_PIXELS:-$pixels}
 seconds=${SG_CONV_SECONDS:-$seconds}
@@ -48,7 +54,10 @@ scenes=(
   "staircase|../shared/scenes/staircase/staircase.pbrt|256"
   "bathroom|../shared/scenes/bathroom/bathroom.pbrt|384"
 )
-modes=(bsdf skeleton guided openpgl)
+modes=(bsdf skeleton guided guided-albedo openpgl)
+# a column's render options: its mode, and what sets it apart
+declare -A mode_options=([guided-albedo]="--sampling guided --roulette albedo")
+options_of() { echo "${mode_options[$1]:---sampling $1}"; }
 
 note() { [ -t 2 ] && printf '\r\033[Kconvergence: %s' "$*" >&2; return 0; }
 for p in voxelize skeletonize importance render; do
@@ -64,7 +73,7 @@ notes=()
 # make bench builds it first): one pixel of the corridor tells.
 if ! probe=$("$bin/render" data/corridor/corridor.json --sampling openpgl --spp 1 --size 4x3 \
                -o "$tables/probe.exr" --quiet 2>&1); then
-  modes=(bsdf skeleton guided)
+  modes=(bsdf skeleton guided guided-albedo)
   notes+=("openpgl: not run, this build of render cannot: ${probe##*$'\n'} (make bench builds the peer first with scripts/build-openpgl.sh; it needs ../shared/peers/openpgl-0.7.1.tar.gz)")
 fi
 rm -f "$tables/probe.exr"
@@ -80,16 +89,37 @@ precompute() {
   key=$("$bin/voxelize" "$scene" "${res[@]}" --key 2>&1) || { notes+=("$name: voxelize --key failed: $key"); return 1; }
   local stale=0
   [ "$key" = "$(cat "$dir/geometry.key" 2>/dev/null)" ] || stale=1
-  for f in medium.vdb skeleton.ply importance.cache; do [ -e "$dir/$f" ] || stale=1; done
+  for f in medium.vdb skeleton.ply importance.cache precompute.ns; do [ -e "$dir/$f" ] || stale=1; done
   for p in voxelize skeletonize importance; do [ "$bin/$p" -nt "$dir/importance.cache" ] && stale=1; done
   [ $stale = 0 ] && return 0
   note "$name: precompute"
   rm -f "$dir/geometry.key"
+  local t0
+  t0=$(date +%s%N)
   "$bin/voxelize" "$scene" "${res[@]}" -o "$dir/medium.vdb" >"$dir/precompute.log" 2>&1 &&
   "$bin/skeletonize" "$dir/medium.vdb" -o "$dir/skeleton.ply" >>"$dir/precompute.log" 2>&1 &&
   "$bin/importance" "$dir/medium.vdb" "$dir/skeleton.ply" -o "$dir/importance.cache" >>"$dir/precompute.log" 2>&1 ||
     { notes+=("$name: precompute failed: $(tail -1 "$dir/precompute.log")"); return 1; }
   printf '%s\n' "$key" >"$dir/geometry.key"
+  printf '%s\n' "$(( $(date +%s%N) - t0 ))" >"$dir/precompute.ns"
+}
+
+# train NAME SCENE DIR SIZE MODE: MODE's field, DIR/fields-SIZE/MODE.field,
+# and the seconds its training took (its passes, as render counts a run's
+# time) in MODE.seconds; remade when the cache or render changed
+train() {
+  local name=$1 scene=$2 dir=$3 size=$4 mode=$5 fdir=$3/fields-$4 line
+  mkdir -p "$fdir"
+  if [ -e "$fdir/$mode.field" ] && [ -e "$fdir/$mode.seconds" ] && [ "$fdir/$mode.field" -nt "$bin/render" ] &&
+     [ "$fdir/$mode.field" -nt "$dir/importance.cache" ]; then
+    return 0
+  fi
+  note "$name: $mode, training"
+  # shellcheck disable=SC2046
+  line=$("$bin/render" "$scene" --cache "$dir/importance.cache" $(options_of "$mode") --seed 999 --size "$size" \
+           --field-out "$fdir/$mode.field" -o "$fdir/$mode-training.exr" 2>&1) ||
+    { notes+=("$name: $mode training failed: ${line##*$'\n'}"); return 1; }
+  sed -nE 's/.* spp, ([0-9.]+) s,.*/\1/p' <<<"$line" | tail -1 >"$fdir/$mode.seconds"
 }
 
 # reference NAME SCENE DIR SIZE EXPOSURE: DIR/ref.exr and DIR/ref.txt
@@ -140,7 +170,8 @@ reference() {
 
 field() { awk -v k="$1" '{for(i=1;i<NF;i++) if($i==k) print $(i+1)}' "$2"; }
 
-declare -A color=([bsdf]="#1f77b4" [skeleton]="#ff7f0e" [guided]="#2ca02c" [openpgl]="#d62728")
+declare -A color=([bsdf]="#1f77b4" [skeleton]="#ff7f0e" [guided]="#2ca02c" [guided-albedo]="#8c564b"
+                  [openpgl]="#d62728")
 declare -A label=([skeleton]="skeleton (biased)")
 
 # panel DIR COLUMN YLABEL REF-ERROR LEVEL1 LEVEL2: the gnuplot commands of
@@ -194,6 +225,26 @@ for entry in "${scenes[@]}"; do
   read -r size exposure < <("$tool" size "$scene" "$pixels") || { notes+=("$name: cannot read the scene"); continue; }
   refdir=$dir/ref-$setting
   reference "$name" "$scene" "$refdir" "$size" "$exposure" || continue
+  # each learned mode's training, alone and timed; its preparation
+  # (seconds): the precompute for the modes that read the cache, and its
+  # own training
+  declare -A field_of=() prep_of=()
+  pre_s=$(awk '{printf "%.2f", $1 / 1e9}' "$dir/precompute.ns" 2>/dev/null)
+  for mode in "${modes[@]}"; do
+    read -r _ m_sampling _ <<<"$(options_of "$mode")"
+    desc=$("$bin/render" --describe "$m_sampling")
+    prep=0 train_s=
+    [[ $desc == *'"uses_cache": true'* ]] && prep=${pre_s:-0}
+    if [[ $desc == *'"learns": true'* ]] && train "$name" "$scene" "$dir" "$size" "$mode"; then
+      field_of[$mode]=$dir/fields-$size/$mode.field
+      train_s=$(cat "$dir/fields-$size/$mode.seconds")
+      prep=$(awk -v a="$prep" -v b="${train_s:-0}" 'BEGIN{printf "%.2f", a + b}')
+    fi
+    prep_of[$mode]=$prep
+    printf '| %s | %s | %s | %s | %s |\n' "$name" "$mode" \
+      "$([[ $desc == *'"uses_cache": true'* ]] && echo "${pre_s:-?}" || echo -)" "${train_s:--}" "$prep" \
+      >>"$tables/preparation.md"
+  done
   runs=$dir/runs
   rm -rf "$runs"; mkdir -p "$runs"
   for seed in $(seq "$seeds"); do
@@ -201,11 +252,23 @@ for entry in "${scenes[@]}"; do
     for k in "${!modes[@]}"; do
       mode=${modes[$(((k + seed - 1) % ${#modes[@]}))]}
       note "$name: $mode, seed $seed/$seeds, $seconds s"
-      "$bin/render" "$scene" --cache "$dir/importance.cache" --sampling "$mode" --time "$seconds" \
-        --seed "$seed" --size "$size" --reference "$refdir/ref.exr" --log "$runs/$mode-$seed.csv" \
-        -o "$runs/$mode-$seed.exr" --quiet 2>"$runs/$mode-$seed.err" ||
+      field=()
+      [ -n "${field_of[$mode]:-}" ] && field=(--field "${field_of[$mode]}")
+      # shellcheck disable=SC2046
+      "$bin/render" "$scene" --cache "$dir/importance.cache" $(options_of "$mode") "${field[@]}" \
+        --time "$seconds" --seed "$seed" --size "$size" --reference "$refdir/ref.exr" \
+        --log "$runs/$mode-$seed.csv" -o "$runs/$mode-$seed.exr" --quiet 2>"$runs/$mode-$seed.err" ||
         notes+=("$name: $mode seed $seed failed: $(tail -1 "$runs/$mode-$seed.err")")
     done
+  done
+  # the same runs with each mode's preparation on its clock
+  prepared=$dir/runs-prepared
+  rm -rf "$prepared"; mkdir -p "$prepared"
+  for f in "$runs"/*.csv; do
+    mode=$(basename "$f" .csv); mode=${mode%-*}
+    awk -F, -v OFS=, -v p="${prep_of[$mode]:-0}" 'NR == 1 { print; next } { $1 = $1 + p; print }' "$f" \
+      >"$prepared/$(basename "$f")"
+    cp "${f%.csv}.exr" "$prepared/" 2>/dev/null
   done
   ref_args=()
   for k in relmse mse8 mse spp seconds state; do
@@ -215,6 +278,10 @@ for entry in "${scenes[@]}"; do
   "$tool" analyze "$name" "$runs" "$seeds" "$tables" --modes "$mode_list" --size "$size" "${ref_args[@]}" \
     2>"$runs/analyze.err" ||
     { notes+=("$name: analyze failed: $(tail -1 "$runs/analyze.err")"); continue; }
+  mkdir -p "$tables/prepared"
+  "$tool" analyze "$name" "$prepared" "$seeds" "$tables/prepared" --modes "$mode_list" --size "$size" \
+    "${ref_args[@]}" 2>"$prepared/analyze.err" ||
+    notes+=("$name: analyze (preparation counted) failed: $(tail -1 "$prepared/analyze.err")")
   fig="![$name: relMSE and MSE against time]($report_link/$name-convergence.png)"
   if [ $have_gnuplot = 1 ]; then
     plot "$name" "$dir" "$size" "$runs/levels.txt" "$(field relmse "$refdir/ref.txt")" \
@@ -238,7 +305,8 @@ note "done"; [ -t 2 ] && printf '\n' >&2
 # table NAME: a table analyze wrote, its header first ("(no results)" when
 # no scene got that far)
 table() {
-  if [ -s "$tables/$1.md" ]; then cat "$tables/$1.head" "$tables/$1.md"; else echo "(no results)"; fi
+  local t=${2:-$tables}
+  if [ -s "$t/$1.md" ]; then cat "$t/$1.head" "$t/$1.md"; else echo "(no results)"; fi
 }
 has_openpgl=0
 [[ " ${modes[*]} " == *" openpgl "* ]] && has_openpgl=1
@@ -257,6 +325,22 @@ table reference
 echo
 echo "An error measured against the reference is the run's own error plus the reference's (they are"
 echo "independent): a curve cannot go below the reference's own error, drawn dashed in the plots."
+echo
+echo "### Preparation"
+echo
+echo "What each mode needs before its first sample, in seconds: the precompute (voxelize, skeletonize,"
+echo "importance; wall time, scene loading included) for the modes that read the importance cache, and"
+echo "the training of a mode that learns (\`render --field-out\`, at the runs' size, its passes as"
+echo "render counts a run's time: scene loading and set-up excluded). Every run of a learned mode starts"
+echo "from that stored field, frozen (\`render --field\`): nothing is learned on the run's clock."
+echo
+if [ -s "$tables/preparation.md" ]; then
+  echo "| scene | mode | precompute s | training s | preparation s |"
+  echo "|---|---|---|---|---|"
+  cat "$tables/preparation.md"
+else
+  echo "(no results)"
+fi
 echo
 echo "### Table 2: seconds to reach a relMSE level"
 echo
@@ -286,6 +370,19 @@ echo "two and lose on this one. Same rules as above."
 echo
 table table2-mse
 echo
+echo "### Table 2 with preparation counted: seconds to reach a relMSE level"
+echo
+echo "The same runs, each mode's curve moved right by its preparation (table above): the seconds from"
+echo "nothing to the level, for a user who renders this scene once."
+echo
+table table2-relmse "$tables/prepared"
+echo
+echo "The same, for mse8 and for linear MSE:"
+echo
+table table2-mse8 "$tables/prepared"
+echo
+table table2-mse "$tables/prepared"
+echo
 echo "### Equal time"
 echo
 echo "Errors of the mean curves at the time every mode reached; ratio = bsdf error / mode error (for"
@@ -293,20 +390,6 @@ echo "unbiased modes, the speed-up); µs/sample: wall time per path over both co
 echo
 table equal-time
 echo
-if [ $has_openpgl = 1 ]; then
-  echo "### Where openpgl's training goes"
-  echo
-  echo "Open PGL learns its field from the paths of the first passes (render's"
-  echo "SG_OPENPGL_TRAINING_PASSES): each such pass records its paths and the field is updated before the"
-  echo "next, which samples from it; every pass renders the image all the same. Field updates s: time in"
-  echo "Open PGL's update (sg:training_seconds, part of the run's time); training passes took s: time"
-  echo "until the last training pass ended (its curve's time at that spp), recording and learning"
-  echo "included; guide drew: share of all bounces of the run sampled from the field (sg:guide_share)."
-  echo "Means over the runs (EXR attributes of MODE-SEED.exr)."
-  echo
-  table training
-  echo
-fi
 echo "### Plots and equal-time crops"
 echo
 for line in "${figures[@]}"; do printf '%s\n\n' "$line"; done
