@@ -47,6 +47,7 @@ static const char usage[] =
     "                   [--ref-seconds S] [--ref-state TEXT]\n"
     "       convergence strip REF.exr --exposure STOPS -o STRIP.png [--crop X,Y,W,H] [--scale K]\n"
     "                   IMAGE.exr...\n"
+    "       convergence error IMAGE.exr REF.exr --exposure STOPS   (prints relmse X mse8 Y mse Z)\n"
     "The arithmetic of bench/sections/60-convergence.sh (see the comment at the top of\n"
     "bench/convergence.c).\n";
 
@@ -113,6 +114,32 @@ static int cmd_reference(int argc, char **argv, SgError *err)
     SgImageAttribute attrs[] = {{"sg:reference", "mean of two independent bsdf halves"}};
     if (!sg_image_write_exr(out, w[0], h[0], rgb[0], attrs, 1, err))
         goto done;
+    printf("relmse %.6g mse8 %.6g mse %.6g\n", relmse, mse8, mse);
+    status = 0;
+done:
+    free(rgb[0]);
+    free(rgb[1]);
+    return status;
+}
+
+/* ---- error --------------------------------------------------------------- */
+
+static int cmd_error(int argc, char **argv, SgError *err)
+{
+    double exposure;
+    if (argc != 6 || strcmp(argv[4], "--exposure") || !parse_double(argv[5], &exposure))
+        return sg_fail(err, "error: want IMAGE.exr REF.exr --exposure STOPS"), 1;
+    int w[2], h[2];
+    float *rgb[2] = {NULL, NULL};
+    int status = 1;
+    if (!sg_image_read(argv[2], &w[0], &h[0], &rgb[0], err) || !sg_image_read(argv[3], &w[1], &h[1], &rgb[1], err))
+        goto done;
+    if (w[0] != w[1] || h[0] != h[1]) {
+        sg_fail(err, "%s: is %dx%d, %s is %dx%d", argv[2], w[0], h[0], argv[3], w[1], h[1]);
+        goto done;
+    }
+    double relmse, mse8, mse;
+    sg_image_errors(rgb[0], rgb[1], (size_t)w[0] * h[0] * 3, (float)exp2(exposure), &relmse, &mse8, &mse);
     printf("relmse %.6g mse8 %.6g mse %.6g\n", relmse, mse8, mse);
     status = 0;
 done:
@@ -261,8 +288,10 @@ int main(int argc, char **argv)
         status = sg_convergence_analyze(argc, argv, &err);
     else if (!strcmp(argv[1], "strip"))
         status = cmd_strip(argc, argv, &err);
+    else if (!strcmp(argv[1], "error"))
+        status = cmd_error(argc, argv, &err);
     else {
-        sg_fail(&err, "unknown command %s (size, reference, analyze, strip)", argv[1]);
+        sg_fail(&err, "unknown command %s (size, reference, analyze, strip, error)", argv[1]);
         status = 2;
     }
     if (status)

@@ -289,25 +289,6 @@ typedef struct ErrorLog {
     size_t values;
 } ErrorLog;
 
-static void error_metrics(const float *x, const float *ref, size_t n, float scale, double *mse,
-                          double *relmse, double *mse8)
-{
-    /* relMSE on the image as exposed (error_metrics.h); mse8 on the PNG's
-     * bytes, the paper's MSE on tone-mapped images ("MSE 100" ~ 28 dB PSNR) */
-    double eps = sg_relmse_epsilon(scale);
-    double s = 0.0, rs = 0.0, s8 = 0.0;
-    for (size_t i = 0; i < n; i++) {
-        double d = (double)x[i] - ref[i];
-        s += d * d;
-        rs += sg_relmse_term(d, ref[i], eps);
-        double d8 = sg_srgb_byte(x[i] * scale) - sg_srgb_byte(ref[i] * scale);
-        s8 += d8 * d8;
-    }
-    *mse = s / n;
-    *relmse = rs / n;
-    *mse8 = s8 / n;
-}
-
 static void format_u64(char *buf, size_t size, uint64_t v) { snprintf(buf, size, "%" PRIu64, v); }
 
 /* What bin/merge checks that shards agree on, as 16 hex digits each: the
@@ -473,7 +454,7 @@ int main(int argc, char **argv)
             if (log_open) {
                 double mse, relmse, mse8;
                 sg_renderer_image(r, image);
-                error_metrics(image, log.reference, values, (float)exp2(exposure), &mse, &relmse, &mse8);
+                sg_image_errors(image, log.reference, values, (float)exp2(exposure), &relmse, &mse8, &mse);
                 fprintf(log.out.file, "%.6f,%d,%.9g,%.9g,%.9g\n", render_seconds, spp, mse, relmse, mse8);
             }
             sg_progress_update(&progress, (uint64_t)spp);

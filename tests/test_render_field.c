@@ -4,6 +4,7 @@
  * field made for something else, or a broken one, in one line with no
  * output. */
 #include <criterion/criterion.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -264,4 +265,62 @@ Test(render_field, the_program_trains_renders_and_refuses_what_is_not_its_field,
     /* options that do not go together */
     snprintf(args, sizeof args, "%s --sampling openpgl --field-out %s --spp 4", scene, field);
     refused(dir, args, "--field-out");
+}
+
+/* The shards of a farm render with one field: merged, they are the one
+ * process's image (to float rounding) where nothing else is learned on the
+ * clock (albedo roulette; the learned one also counts each shard's own
+ * pixels' noise). */
+static void shards_from_one_field(SgSampling mode)
+{
+    if (skip_without(mode))
+        return;
+    SgScene *s = sgt_furnace_scene();
+    SgRenderOptions o = field_options(s, mode, 4);
+    o.roulette = SG_ROULETTE_ALBEDO;
+    char field[4200];
+    snprintf(field, sizeof field, "%s/shards.field", sg_test_tmpdir());
+    SgError err = {0};
+    SgRenderer *t = renderer(s, &o);
+    cr_assert(sg_renderer_train(t, &err) && sg_renderer_write_field(t, field, &err), "%s", err.message);
+    sg_renderer_free(t);
+
+    enum { PASSES = 8, SHARDS = 4 };
+    size_t n = 3 * (size_t)o.width * o.height;
+    SgRenderer *one = renderer(s, &o);
+    cr_assert(sg_renderer_read_field(one, field, &err), "%s", err.message);
+    float *whole = render_passes(one, &o, PASSES);
+    double *merged = calloc(n, sizeof *merged);
+    for (int k = 0; k < SHARDS; k++) {
+        SgRenderOptions ok = o;
+        ok.shard = k;
+        ok.shard_count = SHARDS;
+        SgRenderer *r = renderer(s, &ok);
+        cr_assert(sg_renderer_read_field(r, field, &err), "%s", err.message);
+        float *img = render_passes(r, &ok, PASSES / SHARDS);
+        for (size_t i = 0; i < n; i++)
+            merged[i] += img[i] / SHARDS;
+        free(img);
+        sg_renderer_free(r);
+    }
+    double worst = 0.0;
+    for (size_t i = 0; i < n; i++) {
+        double d = fabs(merged[i] - whole[i]) / fmax(1e-6, fabs(whole[i]));
+        worst = fmax(worst, d);
+    }
+    cr_assert(worst < 1e-5, "%s: %d shards from one field differ from one process by %g (relative)",
+              sg_sampling_name(mode), SHARDS, worst);
+    free(merged);
+    free(whole);
+    sg_renderer_free(one);
+    sgt_scene_free(s);
+}
+
+Test(render_field, guided_shards_from_one_field_are_one_process, .timeout = 120)
+{
+    shards_from_one_field(SG_SAMPLING_GUIDED);
+}
+Test(render_field, openpgl_shards_from_one_field_are_one_process, .timeout = 120)
+{
+    shards_from_one_field(SG_SAMPLING_OPENPGL);
 }
