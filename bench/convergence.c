@@ -77,6 +77,17 @@ static int cmd_size(int argc, char **argv, SgError *err)
     return 0;
 }
 
+/* Two images of one size into rgb[0], rgb[1] (the caller frees both). */
+static bool read_pair(const char *a, const char *b, int *w, int *h, float *rgb[2], SgError *err)
+{
+    int wb, hb;
+    if (!sg_image_read(a, w, h, &rgb[0], err) || !sg_image_read(b, &wb, &hb, &rgb[1], err))
+        return false;
+    if (wb != *w || hb != *h)
+        return sg_fail(err, "%s: is %dx%d, %s is %dx%d", b, wb, hb, a, *w, *h);
+    return true;
+}
+
 /* ---- reference ----------------------------------------------------------- */
 
 static int cmd_reference(int argc, char **argv, SgError *err)
@@ -97,22 +108,17 @@ static int cmd_reference(int argc, char **argv, SgError *err)
     }
     if (nh != 2 || !out)
         return sg_fail(err, "reference: want HALF_A.exr HALF_B.exr -o REF.exr"), 1;
-    int w[2], h[2];
+    int w, h;
     float *rgb[2] = {NULL, NULL};
     int status = 1;
-    if (!sg_image_read(halves[0], &w[0], &h[0], &rgb[0], err) ||
-        !sg_image_read(halves[1], &w[1], &h[1], &rgb[1], err))
+    if (!read_pair(halves[0], halves[1], &w, &h, rgb, err))
         goto done;
-    if (w[0] != w[1] || h[0] != h[1]) {
-        sg_fail(err, "%s: is %dx%d, %s is %dx%d", halves[1], w[1], h[1], halves[0], w[0], h[0]);
-        goto done;
-    }
-    size_t n = (size_t)w[0] * h[0] * 3;
+    size_t n = (size_t)w * h * 3;
     double relmse, mse8, mse;
     /* the mean goes into the first half's buffer */
     sg_reference_from_halves(rgb[0], rgb[1], n, (float)exp2(exposure), rgb[0], &relmse, &mse8, &mse);
     SgImageAttribute attrs[] = {{"sg:reference", "mean of two independent bsdf halves"}};
-    if (!sg_image_write_exr(out, w[0], h[0], rgb[0], attrs, 1, err))
+    if (!sg_image_write_exr(out, w, h, rgb[0], attrs, 1, err))
         goto done;
     printf("relmse %.6g mse8 %.6g mse %.6g\n", relmse, mse8, mse);
     status = 0;
@@ -129,17 +135,13 @@ static int cmd_error(int argc, char **argv, SgError *err)
     double exposure;
     if (argc != 6 || strcmp(argv[4], "--exposure") || !parse_double(argv[5], &exposure))
         return sg_fail(err, "error: want IMAGE.exr REF.exr --exposure STOPS"), 1;
-    int w[2], h[2];
+    int w, h;
     float *rgb[2] = {NULL, NULL};
     int status = 1;
-    if (!sg_image_read(argv[2], &w[0], &h[0], &rgb[0], err) || !sg_image_read(argv[3], &w[1], &h[1], &rgb[1], err))
+    if (!read_pair(argv[2], argv[3], &w, &h, rgb, err))
         goto done;
-    if (w[0] != w[1] || h[0] != h[1]) {
-        sg_fail(err, "%s: is %dx%d, %s is %dx%d", argv[2], w[0], h[0], argv[3], w[1], h[1]);
-        goto done;
-    }
     double relmse, mse8, mse;
-    sg_image_errors(rgb[0], rgb[1], (size_t)w[0] * h[0] * 3, (float)exp2(exposure), &relmse, &mse8, &mse);
+    sg_image_errors(rgb[0], rgb[1], (size_t)w * h * 3, (float)exp2(exposure), &relmse, &mse8, &mse);
     printf("relmse %.6g mse8 %.6g mse %.6g\n", relmse, mse8, mse);
     status = 0;
 done:

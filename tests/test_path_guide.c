@@ -161,10 +161,9 @@ static const PathGuideOps uniform_ops = {
 
 static PathGuide *uniform_create(const PathGuideSetup *setup, SgError *err)
 {
-    UniformGuide *u = calloc(1, sizeof *u);
+    UniformGuide *u = path_guide_alloc(sizeof *u, &uniform_ops, setup, err);
     if (!u)
-        return sg_fail(err, "%s: out of memory", setup->path), NULL;
-    u->base.ops = &uniform_ops;
+        return NULL;
     u->calls = &g_calls;
     u->pdf_error = g_pdf_error;
     return &u->base;

@@ -15,11 +15,7 @@ static const PathGuideOps bsdf_ops = {
 
 static PathGuide *bsdf_create(const PathGuideSetup *setup, SgError *err)
 {
-    PathGuide *g = calloc(1, sizeof *g);
-    if (!g)
-        return sg_fail(err, "%s: out of memory", setup->path), NULL;
-    g->ops = &bsdf_ops;
-    return g;
+    return path_guide_alloc(sizeof(PathGuide), &bsdf_ops, setup, err);
 }
 
 const PathGuideKind guide_bsdf_kind = {

@@ -268,10 +268,9 @@ static PathGuide *mixture_create(const PathGuideSetup *setup, SgError *err)
     const char *path = setup->path;
     if (o->alpha != SG_ALPHA_LEARNED && !(o->alpha > 0.0f && o->alpha <= 1.0f))
         return sg_fail(err, "%s: the mixture weight alpha must be in (0, 1] to stay unbiased", path), NULL;
-    Mixture *x = calloc(1, sizeof *x);
+    Mixture *x = path_guide_alloc(sizeof *x, &mixture_ops, setup, err);
     if (!x)
-        return sg_fail(err, "%s: out of memory", path), NULL;
-    x->base.ops = &mixture_ops;
+        return NULL;
     x->fixed = (SgMixtureCandidate){o->alpha, o->lobe_exponent};
     x->alpha_learned = o->alpha == SG_ALPHA_LEARNED;
     x->roulette_learns = o->roulette == SG_ROULETTE_LEARNED;

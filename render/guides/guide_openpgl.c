@@ -183,10 +183,9 @@ static const PathGuideOps pgl_ops = {
 
 static PathGuide *pgl_create(const PathGuideSetup *setup, SgError *err)
 {
-    OpenPgl *o = calloc(1, sizeof *o);
+    OpenPgl *o = path_guide_alloc(sizeof *o, &pgl_ops, setup, err);
     if (!o)
-        return sg_fail(err, "%s: out of memory", setup->path), NULL;
-    o->base.ops = &pgl_ops;
+        return NULL;
     o->training_passes = setup->training_passes;
     Vec3 lo, hi;
     geometry_bounds(setup->geo, &lo, &hi);

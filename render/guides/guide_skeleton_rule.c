@@ -91,10 +91,9 @@ static const PathGuideOps rule_ops = {
 static PathGuide *rule_create(const PathGuideSetup *setup, SgError *err)
 {
     const SgRenderOptions *o = setup->opt;
-    SkeletonRule *s = calloc(1, sizeof *s);
+    SkeletonRule *s = path_guide_alloc(sizeof *s, &rule_ops, setup, err);
     if (!s)
-        return sg_fail(err, "%s: out of memory", setup->path), NULL;
-    s->base.ops = &rule_ops;
+        return NULL;
     s->exponent = o->lobe_exponent;
     if (!importance_lookup_init(&s->skeleton, &o->importance, setup->geo->centre, setup->geo->scale, setup->lights,
                              setup->path, err)) {

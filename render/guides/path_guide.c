@@ -1,6 +1,7 @@
 #include "path_guide.h"
 
 #include <stddef.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* The modes in SG_SAMPLING_MODES's order, each the kind its guide file defines. */
@@ -50,6 +51,15 @@ PathGuide *path_guide_create(SgSampling mode, const PathGuideSetup *setup, SgErr
     if (m->uses_cache && !setup->opt->importance.importance_point)
         return sg_fail(err, "%s: %s sampling needs an importance cache", setup->path, m->name), NULL;
     return kinds[mode]->create(setup, err);
+}
+
+void *path_guide_alloc(size_t size, const PathGuideOps *ops, const PathGuideSetup *setup, SgError *err)
+{
+    PathGuide *g = calloc(1, size);
+    if (!g)
+        return sg_fail(err, "%s: out of memory", setup->path), NULL;
+    g->ops = ops;
+    return g;
 }
 
 void path_guide_free(PathGuide *g)

@@ -182,6 +182,10 @@ SG_SAMPLING_MODES(PATH_GUIDE_KIND_DECLARE)
 SgRenderer *sg_renderer_create_with_guide(const SgScene *scene, const SgRenderOptions *o, PathGuideCreate create,
                                           SgError *err);
 
+/* A guide's struct of `size` bytes (its PathGuide first), zeroed, with its
+ * ops; NULL, err saying so, when out of memory. */
+void *path_guide_alloc(size_t size, const PathGuideOps *ops, const PathGuideSetup *setup, SgError *err);
+
 /* The guide of a sampling mode, once what the mode needs is checked. */
 PathGuide *path_guide_create(SgSampling mode, const PathGuideSetup *setup, SgError *err);
 void path_guide_free(PathGuide *g);
