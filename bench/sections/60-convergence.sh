@@ -43,12 +43,15 @@ report_dir=${SG_REPORT_DIR:-bench/out/report-$setting}
 report_link=${SG_REPORT_LINK:-$report_dir}
 mkdir -p "$report_dir"
 
-# name|scene|voxel resolution (empty: the scene's own). The staircase and
+# name|scene|voxel resolution (empty: the scene's own). The dark corridor
+# (issue 29) is lit round two corners, where guided's learned mixture
+# regressed unseen by the corridor's one corner. The staircase and
 # the bathroom are their pbrt-v4 files, with their textures and microfacet
 # materials; a pbrt file names no voxel size, so the bench gives the one
 # their JSON stand-ins in data/external/ use.
 scenes=(
   "corridor|data/corridor/corridor.json|"
+  "dark-corridor|data/dark-corridor/dark-corridor.json|"
   "cornell-box|data/cornell-box/cornell-box.json|"
   "sponza|data/sponza/sponza-bench.json|"
   "staircase|../shared/scenes/staircase/staircase.pbrt|256"
