@@ -219,6 +219,38 @@ Test(render_learning, regions_learn_the_second_moment_of_what_leaves_them)
     sg_mixture_learner_free(l);
 }
 
+/* What leaves a vertex in the dark is heavy-tailed: one report in 100
+ * carries 10, the rest nothing (mean square 1). A region that has seen 200
+ * of them and none of the rare ones (13% of such regions) must not claim a
+ * mean square of 0: the learned roulette would cut its paths at its floor
+ * and the rare survivor that finds the light would come back 20 times too
+ * heavy (issue 29's fireflies). Its coarse region, which saw 3000 of the
+ * same paths next door, pulls it up as MIN_SAMPLES (256) reports would. */
+Test(render_learning, a_region_that_missed_the_rare_light_is_not_taken_for_dark)
+{
+    SgMixtureLearner *l = unit_learner();
+    const SgMixtureView *v = sg_mixture_view(l);
+    /* one coarse cell (fine cells 1/8, coarse ones 4 of them) */
+    uint32_t busy = sg_mixture_region(l, v3(0.05f, 0.05f, 0.05f), v3(0, 1, 0));
+    uint32_t unlucky = sg_mixture_region(l, v3(0.3f, 0.3f, 0.3f), v3(0, 1, 0));
+    cr_assert_neq(busy, unlucky);
+    for (int i = 0; i < 3000; i++) {
+        SgMixtureRecord rec = {.region = busy, .radiance = i % 100 == 0 ? 10.0f : 0.0f, .weight = 1.0f};
+        sg_mixture_record(l, (uint32_t)(i & 1), &rec);
+    }
+    sg_mixture_update(l);
+    feed_radiance(l, unlucky, 200, 0.0f, 0.0f);
+    double coarse_m2 = 30.0 * 100.0 / 3200.0; /* busy's 3000 and unlucky's 200 */
+    float want = (float)sqrt(256.0 * coarse_m2 / (200.0 + 256.0));
+    float got = sg_mixture_radiance(v, unlucky);
+    cr_log_info("unlucky region: rms %g (its coarse region's %g, its own 0)", got, sqrt(coarse_m2));
+    cr_assert_float_eq(got, want, 1e-4f, "unlucky region: rms %g, want %g", got, want);
+    /* the busy region's own 3000 reports rule its estimate (their M2 is 1) */
+    got = sg_mixture_radiance(v, busy);
+    cr_assert_float_eq(got, 1.0f, 1e-4f, "busy region: rms %g", got);
+    sg_mixture_learner_free(l);
+}
+
 /* ---- rendered: two rooms and a window ------------------------------------ */
 
 /* Two rooms joined by a small window: the light on room A's ceiling is

@@ -406,12 +406,37 @@ static float rms_radiance(const RegionStats *st)
                : -1.0f;
 }
 
-/* A region's root mean square outgoing radiance, or its coarse region's;
- * -1 leaves it to the whole scene's (view.global_radiance), which changes
- * every pass and would otherwise be copied to every sparse region. */
+/* A fine region's own root mean square outgoing radiance, pulled toward
+ * its coarse region's (the scene's while that has too few) as if that had
+ * given MIN_SAMPLES of its reports: (S + N0 M2_coarse) / (n + N0). What
+ * leaves a vertex in the dark is heavy-tailed (most reports 0, a rare one
+ * that found the light carries the rest), so a region's own mean square
+ * from a few hundred reports is most often far below its truth; the learned
+ * roulette then cut its paths at ROULETTE_MIN_SURVIVAL and the rare
+ * survivor that found the light came back 20 times too heavy: the
+ * fireflies of guided on a corridor lit round two corners (issue 29). The
+ * coarse region has seen many more of the paths through that part of the
+ * scene; past a few thousand reports the region's own estimate rules. */
+static float shrunk_rms_radiance(const SgMixtureLearner *l, uint32_t region)
+{
+    const RegionStats *st = &l->stats[region], *prior = &l->coarse[l->coarse_of[region]];
+    if (st->radiance_samples < RADIANCE_MIN_SAMPLES)
+        return -1.0f;
+    if (prior->radiance_samples < RADIANCE_MIN_SAMPLES)
+        prior = &l->global;
+    if (prior->radiance_samples < RADIANCE_MIN_SAMPLES)
+        return rms_radiance(st);
+    double n0 = MIN_SAMPLES, prior_m2 = prior->radiance_sum2 / (double)prior->radiance_samples;
+    return (float)sqrt((st->radiance_sum2 + n0 * prior_m2) / ((double)st->radiance_samples + n0));
+}
+
+/* A region's root mean square outgoing radiance (shrunk_rms_radiance), or
+ * its coarse region's; -1 leaves it to the whole scene's
+ * (view.global_radiance), which changes every pass and would otherwise be
+ * copied to every sparse region. */
 static void refresh_radiance(SgMixtureLearner *l, uint32_t region)
 {
-    float m = l->flags[region] & REGION_SEEN ? rms_radiance(&l->stats[region]) : -1.0f;
+    float m = l->flags[region] & REGION_SEEN ? shrunk_rms_radiance(l, region) : -1.0f;
     if (m >= 0.0f)
         l->flags[region] |= REGION_OWN_RADIANCE;
     else
