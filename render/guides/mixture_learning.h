@@ -31,7 +31,7 @@
  * Every vertex of a learning path also reports what its bounce brought
  * back (all that came after the bounce, per unit throughput of the
  * bounce); each region's root mean square of that drives the guided
- * mode's learned Russian roulette (render/renderer.c).
+ * mode's learned Russian roulette (render/roulette.h).
  *
  * Unbiased: a pass uses only the choices made after the previous passes,
  * which are fixed before it starts, so each pass is an unbiased estimate.
