@@ -239,7 +239,6 @@ void sg_cache_close(SgImportanceCache *cache)
 uint64_t sg_cache_geometry_hash(const SgImportanceCache *c) { return c->header.geometry_hash; }
 uint64_t sg_cache_skeleton_hash(const SgImportanceCache *c) { return c->header.skeleton_hash; }
 uint64_t sg_cache_checksum(const SgImportanceCache *c) { return c->header.checksum; }
-uint64_t sg_cache_medium_hash(const SgImportanceCache *c) { return c->header.medium_hash; }
 uint32_t sg_cache_light_count(const SgImportanceCache *c) { return c->header.light_count; }
 uint32_t sg_cache_node_count(const SgImportanceCache *c) { return c->header.node_count; }
 uint32_t sg_cache_component_count(const SgImportanceCache *c) { return c->header.component_count; }
@@ -258,15 +257,6 @@ void sg_cache_grid(const SgImportanceCache *c, int dims[3], double origin[3])
 bool sg_cache_light_has_paths(const SgImportanceCache *c, uint32_t light)
 {
     return light < c->header.light_count && c->lights[light].component != SG_CACHE_NONE;
-}
-
-bool sg_cache_node_position(const SgImportanceCache *c, uint32_t node, double p[3])
-{
-    if (node >= c->header.node_count)
-        return false;
-    for (int a = 0; a < 3; a++)
-        p[a] = c->nodes[node].position[a];
-    return true;
 }
 
 /* Index of voxel (i,j,k) in a table of the grid, x fastest (the decoded table). */
