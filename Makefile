@@ -75,6 +75,8 @@ TEST_SRC := $(wildcard tests/test_*.c)
 TEST_SUPPORT_SRC := $(filter-out $(TEST_SRC),$(wildcard tests/*.c))
 TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TEST_SUPPORT_OBJ := $(TEST_SUPPORT_SRC:%.c=$(BUILD)/%.o)
+# tests find the repository's data files from any working directory
+$(BUILD)/tests/support_files.o: CPPFLAGS += -DSG_SOURCE_ROOT='"$(CURDIR)"'
 
 # Benchmarks: each bench/*.c is a program; bench/run.sh drives them.
 BENCH_SRC := $(wildcard bench/*.c)

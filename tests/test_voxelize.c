@@ -12,6 +12,9 @@
 #include "support_files.h"
 #include "voxelize/voxelize.h"
 
+/* written into scenes in temporary folders: absolute (sg_test_source_path) */
+#define CORNELL_OBJ "data/cornell-box/CornellBox-Original.obj"
+
 /* ---- triangle/box overlap against a brute-force reference --------------- */
 
 /* Clips a convex polygon by the half-space s * x[axis] <= bound. */
@@ -315,9 +318,9 @@ Test(voxelize, same_grid_at_any_unit)
     SgMedium cornell[2];
     for (int i = 0; i < 2; i++) {
         snprintf(json, sizeof json,
-                 "{ \"meshes\": [ { \"file\": \"%s/data/cornell-box/CornellBox-Original.obj\", "
+                 "{ \"meshes\": [ { \"file\": \"%s\", "
                  "\"transform\": { \"scale\": %g } } ] }",
-                 getenv("PWD"), i ? 1e4 : 1e-3);
+                 sg_test_source_path(CORNELL_OBJ), i ? 1e4 : 1e-3);
         SgScene *s = load_text(dir, "cornell.json", json);
         SgVoxelizeStats st;
         voxelize_ok(s, 50, &cornell[i], &st);
@@ -393,15 +396,15 @@ Test(voxelize, scene_grouping_and_hash)
     const char *dir = sg_test_tmpdir();
     char json[1024];
     snprintf(json, sizeof json,
-             "{ \"mesh\": \"%s/data/cornell-box/CornellBox-Original.obj\", "
+             "{ \"mesh\": \"%s\", "
              "\"camera\": { \"position\": [0.3, 1, 1.5], \"look_at\": [0, 1, 0] } }",
-             getenv("PWD"));
+             sg_test_source_path(CORNELL_OBJ));
     SgScene *moved = load_text(dir, "moved.json", json);
     cr_assert_eq(moved->geometry_hash, s->geometry_hash);
     snprintf(json, sizeof json,
-             "{ \"meshes\": [ { \"file\": \"%s/data/cornell-box/CornellBox-Original.obj\", "
+             "{ \"meshes\": [ { \"file\": \"%s\", "
              "\"transform\": { \"translate\": [0, 0.001, 0] } } ] }",
-             getenv("PWD"));
+             sg_test_source_path(CORNELL_OBJ));
     SgScene *shifted = load_text(dir, "shifted.json", json);
     cr_assert_neq(shifted->geometry_hash, s->geometry_hash);
     sg_scene_free(s);
@@ -504,9 +507,9 @@ Test(voxelize, camera_in_a_wall_is_reported)
     char json[1024];
     /* Camera on the Cornell box's back wall plane. */
     snprintf(json, sizeof json,
-             "{ \"mesh\": \"%s/data/cornell-box/CornellBox-Original.obj\", "
+             "{ \"mesh\": \"%s\", "
              "\"camera\": { \"position\": [0, 1, -1.02], \"look_at\": [0, 1, 0] } }",
-             getenv("PWD"));
+             sg_test_source_path(CORNELL_OBJ));
     char *scene = sg_test_write(dir, "wall.json", json);
     char prog[4096], cmd[16384], err[4096];
     snprintf(cmd, sizeof cmd, "%s '%s' -o '%s/m.vdb' --resolution 32",
