@@ -251,7 +251,7 @@ $(OUT)/image.exr: $(SCENE) $(OUT)/importance.cache $(BIN)/render
 	$(BIN)/render $(SCENE) --cache $(OUT)/importance.cache -o $@ --png $(OUT)/image.png $(RENDER_FLAGS)
 
 # make farm SCENE=... [SHARDS=4] [FARM_OUT=out/NAME/farm] [RENDER_FLAGS=...]:
-# the render split into shards on Slurm (sbatch found), else here, and
+# the render split into shards on Slurm (a controller answers), else here, and
 # merged (scripts/slurm-render.sh; README "Rendering on a cluster").
 SHARDS ?= 4
 FARM_OUT ?= $(OUT)/farm

@@ -242,6 +242,69 @@ Test(render_farm, local_shards_are_the_single_render_in_bsdf_mode)
     free(one.rgb);
 }
 
+/* A slurm.conf whose controller is not running (nothing listens on port 1
+ * of the loopback): `scontrol ping` says DOWN at once. Where Slurm is not
+ * installed, the script sees no controller either. */
+static void no_controller(const char *tmp)
+{
+    char conf[4200];
+    snprintf(conf, sizeof conf, "%s/slurm.conf", tmp);
+    sg_test_write(tmp, "slurm.conf",
+                  "ClusterName=none\nSlurmctldHost=localhost(127.0.0.1)\nSlurmctldPort=1\n"
+                  "NodeName=localhost CPUs=1\nPartitionName=all Nodes=localhost\n");
+    setenv("SLURM_CONF", conf, 1);
+}
+
+/* Slurm installed but no controller answering (a workstation): the shards
+ * run here, one line says so, and the image is the farm's. */
+Test(render_farm, no_controller_runs_the_shards_here)
+{
+    const char *tmp = sg_test_tmpdir();
+    const char *bin = sg_test_bin_dir();
+    no_controller(tmp);
+    char cmd[16384], err[4096];
+    snprintf(cmd, sizeof cmd,
+             "bash scripts/slurm-render.sh " SCENE " --shards 3 --out %s/here --bin %s -- --sampling bsdf --spp 7 "
+             "--size 24x18 --seed 2 >/dev/null",
+             tmp, bin);
+    int status = sg_test_run(cmd, err, sizeof err);
+    cr_assert_eq(status, 0, "slurm-render without a controller failed (%d): %s", status, err);
+    /* the script's one line, then merge's summary */
+    const char *said = strstr(err, "slurm-render: ");
+    cr_assert(said && !strstr(said + 1, "slurm-render: "), "one line should say where the shards ran: %s", err);
+    cr_assert(strstr(said, "no Slurm controller answers") || strstr(said, "not installed"), "said: %s", err);
+    cr_assert(strstr(said, "running the 3 shards here\n"), "said: %s", err);
+    char dir[4200];
+    snprintf(dir, sizeof dir, "%s/here", tmp);
+    check_exact_merge(dir, 3, 7);
+}
+
+/* --slurm insists on the cluster: without one it fails in one line before
+ * writing anything. */
+Test(render_farm, slurm_without_a_controller_fails_and_writes_nothing)
+{
+    const char *tmp = sg_test_tmpdir();
+    const char *bin = sg_test_bin_dir();
+    no_controller(tmp);
+    char cmd[16384], err[4096], path[4200];
+    snprintf(cmd, sizeof cmd,
+             "bash scripts/slurm-render.sh " SCENE " --shards 3 --out %s/farm --bin %s --slurm -- --sampling bsdf "
+             "--spp 7",
+             tmp, bin);
+    int status = sg_test_run(cmd, err, sizeof err);
+    cr_assert_eq(status, 1, "--slurm without a controller: exit %d (%s)", status, err);
+    cr_assert_eq(sg_test_count_lines(err), 1, "not one line: %s", err);
+    cr_assert(strstr(err, "slurm-render: --slurm: "), "said: %s", err);
+    snprintf(path, sizeof path, "%s/farm", tmp);
+    cr_assert(!sg_test_exists(path), "a refused --slurm left %s", path);
+    /* one or the other */
+    snprintf(cmd, sizeof cmd, "bash scripts/slurm-render.sh " SCENE " --shards 3 --out %s/farm --bin %s --slurm --local",
+             tmp, bin);
+    status = sg_test_run(cmd, err, sizeof err);
+    cr_assert_eq(status, 2, "--slurm --local: exit %d (%s)", status, err);
+    cr_assert(!sg_test_exists(path), "a usage error left %s", path);
+}
+
 Test(render_farm, render_refuses_a_shard_it_cannot_render)
 {
     const char *tmp = sg_test_tmpdir();
