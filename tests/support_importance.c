@@ -133,3 +133,29 @@ void sgt_temp_path(char *out, size_t cap, const char *tag)
 {
     snprintf(out, cap, "/tmp/sg_test_imp_%s_%ld", tag, (long)getpid());
 }
+
+/* Two rooms (x 1..13 and 17..28) with no opening between them; a light
+ * with a skeleton line in each, and a third light sealed inside the wall
+ * (no seed, no node). */
+void sgt_sealed_rooms(SgMedium *medium, SgSkeleton *skeleton)
+{
+    SgMedium m;
+    sgt_medium_init(&m, 30, 12, 5);
+    sgt_box(&m, 1, 1, 1, 13, 10, 3, 1);
+    sgt_box(&m, 17, 1, 1, 28, 10, 3, 1);
+    double l0[3] = {14.0, 6.5, 2.5}, l1[3] = {29.0, 6.5, 2.5}, l2[3] = {15.0, 6.0, 2.0};
+    int s0[3] = {13, 6, 2}, s1[3] = {28, 6, 2};
+    sgt_add_light(&m, l0, s0);
+    sgt_add_light(&m, l1, s1);
+    sgt_add_light(&m, l2, NULL);
+    SgSkeleton s = {0};
+    int a0[3] = {2, 6, 2}, a1[3] = {13, 6, 2}, b0[3] = {17, 6, 2}, b1[3] = {28, 6, 2};
+    uint32_t e0 = sgt_line(&s, SG_CACHE_NONE, a0, a1);
+    uint32_t e1 = sgt_line(&s, SG_CACHE_NONE, b0, b1);
+    s.nodes[e0].kind = SG_NODE_LIGHT;
+    s.nodes[e0].light = 0;
+    s.nodes[e1].kind = SG_NODE_LIGHT;
+    s.nodes[e1].light = 1;
+    *medium = m;
+    *skeleton = s;
+}

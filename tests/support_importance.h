@@ -23,6 +23,10 @@ void sgt_edge(SgSkeleton *s, uint32_t a, uint32_t b);
  * chained to `from` (SG_CACHE_NONE: no link); returns the last node. */
 uint32_t sgt_line(SgSkeleton *s, uint32_t from, const int a[3], const int b[3]);
 
+/* The sealed rooms: two rooms with no opening between them, a light and a
+ * skeleton line in each, a third light sealed inside the wall (no seed). */
+void sgt_sealed_rooms(SgMedium *m, SgSkeleton *s);
+
 /* Recomputes the checksum of cache bytes in place (to forge files that
  * pass the checksum but are wrong in another way). */
 void sgt_cache_fix_checksum(uint8_t *data, size_t size);

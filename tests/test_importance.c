@@ -513,22 +513,8 @@ Test(importance_points, sealed_rooms_light_unreachable_from_camera)
     /* Two rooms with no opening (wall x 14..16), a light and a skeleton in each; a third
      * light is sealed inside the wall (no seed, no node). */
     SgMedium m;
-    sgt_medium_init(&m, 30, 12, 5);
-    sgt_box(&m, 1, 1, 1, 13, 10, 3, 1);
-    sgt_box(&m, 17, 1, 1, 28, 10, 3, 1);
-    double l0[3] = {14.0, 6.5, 2.5}, l1[3] = {29.0, 6.5, 2.5}, l2[3] = {15.0, 6.0, 2.0};
-    int s0[3] = {13, 6, 2}, s1[3] = {28, 6, 2};
-    sgt_add_light(&m, l0, s0);
-    sgt_add_light(&m, l1, s1);
-    sgt_add_light(&m, l2, NULL);
-    SgSkeleton s = {0};
-    int a0[3] = {2, 6, 2}, a1[3] = {13, 6, 2}, b0[3] = {17, 6, 2}, b1[3] = {28, 6, 2};
-    uint32_t e0 = sgt_line(&s, SG_CACHE_NONE, a0, a1);
-    uint32_t e1 = sgt_line(&s, SG_CACHE_NONE, b0, b1);
-    s.nodes[e0].kind = SG_NODE_LIGHT;
-    s.nodes[e0].light = 0;
-    s.nodes[e1].kind = SG_NODE_LIGHT;
-    s.nodes[e1].light = 1;
+    SgSkeleton s;
+    sgt_sealed_rooms(&m, &s);
     char path[256];
     SgImportanceCache *c = build_and_open(&m, &s, "sealed", 1, path, sizeof path);
     cr_assert_eq(sg_cache_component_count(c), 2);

@@ -4,6 +4,7 @@
  * and without Slurm. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,6 +46,20 @@ static void mean_difference(const Image *a, const Image *b, double *mean, double
     }
     *mean = s / n;
     *se = sqrt(fmax(0.0, s2 / n - *mean * *mean) / (n - 1));
+}
+
+/* scripts/slurm-render.sh on the corridor with the programs under test and
+ * the options given (printf-style): its exit status, its stderr in err. */
+static int slurm_render(char err[4096], const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static int slurm_render(char err[4096], const char *fmt, ...)
+{
+    char options[8192], cmd[16384];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(options, sizeof options, fmt, ap);
+    va_end(ap);
+    snprintf(cmd, sizeof cmd, "bash scripts/slurm-render.sh " SCENE " --bin %s %s", sg_test_bin_dir(), options);
+    return sg_test_run(cmd, err, 4096);
 }
 
 static void stop_cluster(void)
@@ -113,11 +128,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
     char cmd[16384], err[4096];
 
     /* 1. four shards of a 32 spp render, merged */
-    snprintf(cmd, sizeof cmd,
-             "bash scripts/slurm-render.sh " SCENE " --shards 4 --out %s/farm --bin %s --wait -- --spp 32 "
-             "--size 48x36 --seed 7 >/dev/null",
-             tmp, bin);
-    int status = sg_test_run(cmd, err, sizeof err);
+    int status = slurm_render(err, "--shards 4 --out %s/farm --wait -- --spp 32 --size 48x36 --seed 7 >/dev/null", tmp);
     cr_assert_eq(status, 0, "slurm-render failed (%d): %s", status, err);
     char dir[4200];
     snprintf(dir, sizeof dir, "%s/farm", tmp);
@@ -145,11 +156,8 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
 
     /* 3. a shard cancelled while it runs leaves no file; --resume renders it
      * again, and the merge follows */
-    snprintf(cmd, sizeof cmd,
-             "bash scripts/slurm-render.sh " SCENE " --shards 4 --out %s/farm2 --bin %s -- --spp 4000 --size 48x36 "
-             "--seed 3 >/dev/null",
-             tmp, bin);
-    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(slurm_render(err, "--shards 4 --out %s/farm2 -- --spp 4000 --size 48x36 --seed 3 >/dev/null", tmp), 0,
+                 "%s", err);
     char job[64] = "";
     for (int i = 0; i < 400 && !job[0]; i++) { /* shard 0 running */
         FILE *p = popen("squeue -h -n corridor-shards -t RUNNING -o '%i' | grep '_0$'", "r");
@@ -215,11 +223,8 @@ Test(render_farm, local_shards_are_the_single_render_in_bsdf_mode)
     const char *tmp = sg_test_tmpdir();
     const char *bin = sg_test_bin_dir();
     char cmd[16384], err[4096];
-    snprintf(cmd, sizeof cmd,
-             "bash scripts/slurm-render.sh " SCENE " --shards 3 --out %s/local --bin %s --local -- --sampling bsdf "
-             "--spp 10 --size 48x36 --seed 5 >/dev/null",
-             tmp, bin);
-    int status = sg_test_run(cmd, err, sizeof err);
+    int status = slurm_render(err, "--shards 3 --out %s/local --local -- --sampling bsdf --spp 10 --size 48x36 --seed 5 "
+                                   ">/dev/null", tmp);
     cr_assert_eq(status, 0, "slurm-render --local failed (%d): %s", status, err);
     char dir[4200];
     snprintf(dir, sizeof dir, "%s/local", tmp);
@@ -260,14 +265,10 @@ static void no_controller(const char *tmp)
 Test(render_farm, no_controller_runs_the_shards_here)
 {
     const char *tmp = sg_test_tmpdir();
-    const char *bin = sg_test_bin_dir();
     no_controller(tmp);
-    char cmd[16384], err[4096];
-    snprintf(cmd, sizeof cmd,
-             "bash scripts/slurm-render.sh " SCENE " --shards 3 --out %s/here --bin %s -- --sampling bsdf --spp 7 "
-             "--size 24x18 --seed 2 >/dev/null",
-             tmp, bin);
-    int status = sg_test_run(cmd, err, sizeof err);
+    char err[4096];
+    int status = slurm_render(err, "--shards 3 --out %s/here -- --sampling bsdf --spp 7 --size 24x18 --seed 2 >/dev/null",
+                              tmp);
     cr_assert_eq(status, 0, "slurm-render without a controller failed (%d): %s", status, err);
     /* the script's one line, then merge's summary */
     const char *said = strstr(err, "slurm-render: ");
@@ -284,23 +285,16 @@ Test(render_farm, no_controller_runs_the_shards_here)
 Test(render_farm, slurm_without_a_controller_fails_and_writes_nothing)
 {
     const char *tmp = sg_test_tmpdir();
-    const char *bin = sg_test_bin_dir();
     no_controller(tmp);
-    char cmd[16384], err[4096], path[4200];
-    snprintf(cmd, sizeof cmd,
-             "bash scripts/slurm-render.sh " SCENE " --shards 3 --out %s/farm --bin %s --slurm -- --sampling bsdf "
-             "--spp 7",
-             tmp, bin);
-    int status = sg_test_run(cmd, err, sizeof err);
+    char err[4096], path[4200];
+    int status = slurm_render(err, "--shards 3 --out %s/farm --slurm -- --sampling bsdf --spp 7", tmp);
     cr_assert_eq(status, 1, "--slurm without a controller: exit %d (%s)", status, err);
     cr_assert_eq(sg_test_count_lines(err), 1, "not one line: %s", err);
     cr_assert(strstr(err, "slurm-render: --slurm: "), "said: %s", err);
     snprintf(path, sizeof path, "%s/farm", tmp);
     cr_assert(!sg_test_exists(path), "a refused --slurm left %s", path);
     /* one or the other */
-    snprintf(cmd, sizeof cmd, "bash scripts/slurm-render.sh " SCENE " --shards 3 --out %s/farm --bin %s --slurm --local",
-             tmp, bin);
-    status = sg_test_run(cmd, err, sizeof err);
+    status = slurm_render(err, "--shards 3 --out %s/farm --slurm --local", tmp);
     cr_assert_eq(status, 2, "--slurm --local: exit %d (%s)", status, err);
     cr_assert(!sg_test_exists(path), "a usage error left %s", path);
 }
