@@ -61,6 +61,28 @@ static void write_sealed_rooms(const char *dir, char *medium_path, char *skeleto
     sgt_medium_free(&m);
 }
 
+/* importance --info CACHE [SCENE] > info, read back. */
+static cJSON *info_json(const char *cache, const char *scene, const char *info)
+{
+    char cmd[16384], err[4096];
+    snprintf(cmd, sizeof cmd, "%s --info %s %s > %s", program, cache, scene ? scene : "", info);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
+    return read_json(info);
+}
+
+/* A scene over the sealed rooms (one triangle; the camera is what counts)
+ * with the camera at `position` (JSON), looking along the rooms. */
+static const char *rooms_scene(const char *dir, const char *name, const char *position)
+{
+    char text[1024];
+    snprintf(text, sizeof text,
+             "{ \"meshes\": [ { \"vertices\": [0,0,0, 30,0,0, 0,12,0], \"triangles\": [0,1,2] } ],\n"
+             "  \"camera\": { \"position\": %s, \"look_at\": [10, 6.5, 2.5], \"fov\": 50 },\n"
+             "  \"image\": { \"width\": 32, \"height\": 24 } }\n",
+             position);
+    return sg_test_write(dir, name, text);
+}
+
 Test(importance_cli, help_and_usage_errors, .init = setup)
 {
     char cmd[8192], err[4096];
@@ -90,9 +112,7 @@ Test(importance_cli, sealed_rooms_build_info_and_scene_litmus, .init = setup)
     cr_assert(sg_test_exists(vectors));
 
     /* Without a scene: lights with a place on the skeleton. */
-    snprintf(cmd, sizeof cmd, "%s --info %s > %s", program, cache, info);
-    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
-    cJSON *j = read_json(info);
+    cJSON *j = info_json(cache, NULL, info);
     cr_assert_eq(json_number(j, "lights_total"), 3);
     cr_assert_eq(json_number(j, "lights_reachable"), 2);
     cr_assert_eq(json_number(j, "nodes"), 12 + 12);
@@ -102,27 +122,13 @@ Test(importance_cli, sealed_rooms_build_info_and_scene_litmus, .init = setup)
     cJSON_Delete(j);
 
     /* With a scene whose camera is in room A: only light 0 reaches it. */
-    const char *scene = sg_test_write(
-        dir, "rooms.json",
-        "{ \"meshes\": [ { \"vertices\": [0,0,0, 30,0,0, 0,12,0], \"triangles\": [0,1,2] } ],\n"
-        "  \"camera\": { \"position\": [5.5, 6.5, 2.5], \"look_at\": [10, 6.5, 2.5], \"fov\": 50 },\n"
-        "  \"image\": { \"width\": 32, \"height\": 24 } }\n");
-    snprintf(cmd, sizeof cmd, "%s --info %s %s > %s", program, cache, scene, info);
-    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
-    j = read_json(info);
+    j = info_json(cache, rooms_scene(dir, "rooms.json", "[5.5, 6.5, 2.5]"), info);
     cr_assert_eq(json_number(j, "lights_total"), 3);
     cr_assert_eq(json_number(j, "lights_reachable"), 1);
     cr_assert(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(j, "camera_in_medium")));
     cJSON_Delete(j);
     /* Camera in room B: only light 1. */
-    scene = sg_test_write(
-        dir, "rooms_b.json",
-        "{ \"meshes\": [ { \"vertices\": [0,0,0, 30,0,0, 0,12,0], \"triangles\": [0,1,2] } ],\n"
-        "  \"camera\": { \"position\": [25.5, 3.5, 1.5], \"look_at\": [10, 6.5, 2.5], \"fov\": 50 },\n"
-        "  \"image\": { \"width\": 32, \"height\": 24 } }\n");
-    snprintf(cmd, sizeof cmd, "%s --info %s %s > %s", program, cache, scene, info);
-    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
-    j = read_json(info);
+    j = info_json(cache, rooms_scene(dir, "rooms_b.json", "[25.5, 3.5, 1.5]"), info);
     cr_assert_eq(json_number(j, "lights_reachable"), 1);
     cJSON_Delete(j);
 }
