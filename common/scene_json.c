@@ -27,17 +27,21 @@ typedef struct Builder {
 
 /* ---- JSON helpers ------------------------------------------------------- */
 
-static bool json_vec3(const cJSON *item, double out[3])
+/* The first n items of an array (that has them), if all are finite numbers. */
+static bool json_finite_numbers(const cJSON *array, int n, double *out)
 {
-    if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3)
-        return false;
-    for (int a = 0; a < 3; a++) {
-        const cJSON *v = cJSON_GetArrayItem(item, a);
+    for (int i = 0; i < n; i++) {
+        const cJSON *v = cJSON_GetArrayItem(array, i);
         if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble))
             return false;
-        out[a] = v->valuedouble;
+        out[i] = v->valuedouble;
     }
     return true;
+}
+
+static bool json_vec3(const cJSON *item, double out[3])
+{
+    return cJSON_IsArray(item) && cJSON_GetArraySize(item) == 3 && json_finite_numbers(item, 3, out);
 }
 
 static bool json_color(const cJSON *item, float out[3])
@@ -188,13 +192,8 @@ static bool parse_transform(const char *path, const cJSON *obj, const char *owne
         if (!cJSON_IsArray(matrix) || cJSON_GetArraySize(matrix) != 16)
             return sg_fail(err, "%s: %s.transform.matrix must hold 16 numbers", path, owner);
         double v[16];
-        for (int i = 0; i < 16; i++) {
-            const cJSON *x = cJSON_GetArrayItem(matrix, i);
-            if (!cJSON_IsNumber(x) || !isfinite(x->valuedouble))
-                return sg_fail(err, "%s: %s.transform.matrix must hold finite numbers", path,
-                               owner);
-            v[i] = x->valuedouble;
-        }
+        if (!json_finite_numbers(matrix, 16, v))
+            return sg_fail(err, "%s: %s.transform.matrix must hold finite numbers", path, owner);
         if (v[12] != 0 || v[13] != 0 || v[14] != 0 || v[15] != 1)
             return sg_fail(err, "%s: %s.transform.matrix must be affine (last row 0 0 0 1)",
                            path, owner);
@@ -227,13 +226,8 @@ static bool parse_transform(const char *path, const cJSON *obj, const char *owne
         if (!cJSON_IsArray(rotate) || cJSON_GetArraySize(rotate) != 4)
             return sg_fail(err, "%s: %s.transform.rotate must be [degrees, x, y, z]", path,
                            owner);
-        for (int i = 0; i < 4; i++) {
-            const cJSON *x = cJSON_GetArrayItem(rotate, i);
-            if (!cJSON_IsNumber(x) || !isfinite(x->valuedouble))
-                return sg_fail(err, "%s: %s.transform.rotate must hold finite numbers", path,
-                               owner);
-            v[i] = x->valuedouble;
-        }
+        if (!json_finite_numbers(rotate, 4, v))
+            return sg_fail(err, "%s: %s.transform.rotate must hold finite numbers", path, owner);
         if (!sg_transform_rotation(&rot, v[0], v + 1))
             return sg_fail(err, "%s: %s.transform.rotate axis is zero", path, owner);
     }

@@ -33,6 +33,19 @@ static Image load(const char *path)
     return im;
 }
 
+/* The image DIR/NAME (printf-style name). */
+static Image load_at(const char *dir, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static Image load_at(const char *dir, const char *fmt, ...)
+{
+    char name[256], path[4500];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(name, sizeof name, fmt, ap);
+    va_end(ap);
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    return load(path);
+}
+
 /* Mean of merged - other over pixels and channels, and its standard
  * error from the differences' spread (pixels are independent). */
 static void mean_difference(const Image *a, const Image *b, double *mean, double *se)
@@ -95,16 +108,13 @@ static void start_cluster(void)
 /* The farm's merged image is exactly the spp-weighted mean of its shards. */
 static void check_exact_merge(const char *dir, int shards, long total_spp)
 {
-    char path[4200];
-    snprintf(path, sizeof path, "%s/corridor.exr", dir);
-    Image merged = load(path);
+    Image merged = load_at(dir, "corridor.exr");
     cr_assert_eq(merged.spp, total_spp, "merged spp %ld, expected %ld", merged.spp, total_spp);
     size_t n = (size_t)merged.w * merged.h * 3;
     double *sum = calloc(n, sizeof *sum);
     long spp = 0;
     for (int k = 0; k < shards; k++) {
-        snprintf(path, sizeof path, "%s/shards/corridor-%d.exr", dir, k);
-        Image s = load(path);
+        Image s = load_at(dir, "shards/corridor-%d.exr", k);
         cr_assert(s.w == merged.w && s.h == merged.h);
         for (size_t i = 0; i < n; i++)
             sum[i] += (double)s.spp * s.rgb[i];
@@ -141,11 +151,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
              "--quiet",
              bin, tmp, tmp);
     cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
-    char path[4200];
-    snprintf(path, sizeof path, "%s/farm/corridor.exr", tmp);
-    Image merged = load(path);
-    snprintf(path, sizeof path, "%s/single.exr", tmp);
-    Image single = load(path);
+    Image merged = load_at(tmp, "farm/corridor.exr"), single = load_at(tmp, "single.exr");
     double mean, se;
     mean_difference(&merged, &single, &mean, &se);
     cr_log_info("farm of 4 against one process: mean difference %.3g +- %.3g", mean, se);
@@ -196,6 +202,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
     status = sg_test_run(cmd, err, sizeof err);
     cr_assert_eq(status, 1, "merge of 3 of 4 shards: exit %d (%s)", status, err);
     cr_assert(strstr(err, "missing"), "the refusal does not say what is missing: %s", err);
+    char path[4200];
     snprintf(path, sizeof path, "%s/partial.exr", tmp);
     cr_assert(!sg_test_exists(path), "a refused merge left %s", path);
 
@@ -232,11 +239,7 @@ Test(render_farm, local_shards_are_the_single_render_in_bsdf_mode)
     snprintf(cmd, sizeof cmd, "%s/render " SCENE " --sampling bsdf --spp 10 --size 48x36 --seed 5 -o %s/one.exr --quiet",
              bin, tmp);
     cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
-    char path[4200];
-    snprintf(path, sizeof path, "%s/local/corridor.exr", tmp);
-    Image merged = load(path);
-    snprintf(path, sizeof path, "%s/one.exr", tmp);
-    Image one = load(path);
+    Image merged = load_at(tmp, "local/corridor.exr"), one = load_at(tmp, "one.exr");
     size_t n = (size_t)one.w * one.h * 3;
     double worst = 0;
     for (size_t i = 0; i < n; i++)
