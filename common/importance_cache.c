@@ -554,6 +554,14 @@ bool sg_cache_nearest_node_voxel(const SgImportanceCache *c, const float v[3], u
     return nearest_node_voxel(c, d, node);
 }
 
+/* The stored importance point of a node for a light (both in range). */
+static inline void node_point(const SgImportanceCache *c, uint32_t node, uint32_t light, double point[3])
+{
+    const float *q = c->points + ((size_t)node * c->header.light_count + light) * 3;
+    for (int a = 0; a < 3; a++)
+        point[a] = q[a];
+}
+
 bool sg_cache_importance_point(const SgImportanceCache *c, const double p[3], uint32_t light,
                                double point[3])
 {
@@ -563,10 +571,7 @@ bool sg_cache_importance_point(const SgImportanceCache *c, const double p[3], ui
     uint32_t comp = c->lights[light].component;
     if (comp == SG_CACHE_NONE || (!c->one_component && c->nodes[n].component != comp))
         return false;
-    const float *q = c->points + ((size_t)n * c->header.light_count + light) * 3;
-    point[0] = q[0];
-    point[1] = q[1];
-    point[2] = q[2];
+    node_point(c, n, light, point);
     return true;
 }
 
@@ -587,9 +592,6 @@ bool sg_cache_node_importance_point(const SgImportanceCache *c, uint32_t node, u
     uint32_t comp = c->lights[light].component;
     if (comp == SG_CACHE_NONE || c->nodes[node].component != comp)
         return false;
-    const float *q = c->points + ((size_t)node * c->header.light_count + light) * 3;
-    point[0] = q[0];
-    point[1] = q[1];
-    point[2] = q[2];
+    node_point(c, node, light, point);
     return true;
 }
