@@ -42,6 +42,20 @@ uint32_t sgt_add_light(SgMedium *m, const double p[3], const int seed[3])
     return m->light_count++;
 }
 
+void sgt_medium_boxes(SgMedium *m, int nx, int ny, int nz, const int (*boxes)[7], int count)
+{
+    sgt_medium_init(m, nx, ny, nz);
+    for (int b = 0; b < count; b++)
+        sgt_box(m, boxes[b][0], boxes[b][1], boxes[b][2], boxes[b][3], boxes[b][4], boxes[b][5],
+                (uint8_t)boxes[b][6]);
+}
+
+void sgt_medium_open(SgMedium *m, int nx, int ny, int nz)
+{
+    const int all[1][7] = {{0, 0, 0, nx - 1, ny - 1, nz - 1, 1}};
+    sgt_medium_boxes(m, nx, ny, nz, all, 1);
+}
+
 void sgt_medium_free(SgMedium *m)
 {
     sg_grid_release(&m->grid);
