@@ -76,6 +76,8 @@ TEST_SRC := $(wildcard tests/test_*.c)
 TEST_SUPPORT_SRC := $(filter-out $(TEST_SRC),$(wildcard tests/*.c))
 TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TEST_SUPPORT_OBJ := $(TEST_SUPPORT_SRC:%.c=$(BUILD)/%.o)
+# tests find the repository's data files from any working directory
+$(BUILD)/tests/support_files.o: CPPFLAGS += -DSG_SOURCE_ROOT='"$(CURDIR)"'
 
 # Benchmarks: each bench/*.c is a program; bench/run.sh drives them.
 BENCH_SRC := $(wildcard bench/*.c)
@@ -270,7 +272,7 @@ $(OUT)/image.exr: $(SCENE) $(OUT)/importance.cache $(BIN)/render $(SCENE_FIELD)
 	  -o $@ --png $(OUT)/image.png $(RENDER_FLAGS)
 
 # make farm SCENE=... [SHARDS=4] [FARM_OUT=out/NAME/farm] [RENDER_FLAGS=...]:
-# the render split into shards on Slurm (sbatch found), else here, and
+# the render split into shards on Slurm (a controller answers), else here, and
 # merged (scripts/slurm-render.sh; README "Rendering on a cluster").
 SHARDS ?= 4
 FARM_OUT ?= $(OUT)/farm

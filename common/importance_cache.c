@@ -239,7 +239,6 @@ void sg_cache_close(SgImportanceCache *cache)
 uint64_t sg_cache_geometry_hash(const SgImportanceCache *c) { return c->header.geometry_hash; }
 uint64_t sg_cache_skeleton_hash(const SgImportanceCache *c) { return c->header.skeleton_hash; }
 uint64_t sg_cache_checksum(const SgImportanceCache *c) { return c->header.checksum; }
-uint64_t sg_cache_medium_hash(const SgImportanceCache *c) { return c->header.medium_hash; }
 uint32_t sg_cache_light_count(const SgImportanceCache *c) { return c->header.light_count; }
 uint32_t sg_cache_node_count(const SgImportanceCache *c) { return c->header.node_count; }
 uint32_t sg_cache_component_count(const SgImportanceCache *c) { return c->header.component_count; }
@@ -258,15 +257,6 @@ void sg_cache_grid(const SgImportanceCache *c, int dims[3], double origin[3])
 bool sg_cache_light_has_paths(const SgImportanceCache *c, uint32_t light)
 {
     return light < c->header.light_count && c->lights[light].component != SG_CACHE_NONE;
-}
-
-bool sg_cache_node_position(const SgImportanceCache *c, uint32_t node, double p[3])
-{
-    if (node >= c->header.node_count)
-        return false;
-    for (int a = 0; a < 3; a++)
-        p[a] = c->nodes[node].position[a];
-    return true;
 }
 
 /* Index of voxel (i,j,k) in a table of the grid, x fastest (the decoded table). */
@@ -564,6 +554,14 @@ bool sg_cache_nearest_node_voxel(const SgImportanceCache *c, const float v[3], u
     return nearest_node_voxel(c, d, node);
 }
 
+/* The stored importance point of a node for a light (both in range). */
+static inline void node_point(const SgImportanceCache *c, uint32_t node, uint32_t light, double point[3])
+{
+    const float *q = c->points + ((size_t)node * c->header.light_count + light) * 3;
+    for (int a = 0; a < 3; a++)
+        point[a] = q[a];
+}
+
 bool sg_cache_importance_point(const SgImportanceCache *c, const double p[3], uint32_t light,
                                double point[3])
 {
@@ -573,10 +571,7 @@ bool sg_cache_importance_point(const SgImportanceCache *c, const double p[3], ui
     uint32_t comp = c->lights[light].component;
     if (comp == SG_CACHE_NONE || (!c->one_component && c->nodes[n].component != comp))
         return false;
-    const float *q = c->points + ((size_t)n * c->header.light_count + light) * 3;
-    point[0] = q[0];
-    point[1] = q[1];
-    point[2] = q[2];
+    node_point(c, n, light, point);
     return true;
 }
 
@@ -597,9 +592,6 @@ bool sg_cache_node_importance_point(const SgImportanceCache *c, uint32_t node, u
     uint32_t comp = c->lights[light].component;
     if (comp == SG_CACHE_NONE || c->nodes[node].component != comp)
         return false;
-    const float *q = c->points + ((size_t)node * c->header.light_count + light) * 3;
-    point[0] = q[0];
-    point[1] = q[1];
-    point[2] = q[2];
+    node_point(c, node, light, point);
     return true;
 }

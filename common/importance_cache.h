@@ -90,7 +90,6 @@ static inline uint32_t sg_cache_entry_node(uint32_t entry, const uint32_t *octan
         return octants[8 * (size_t)(entry & SG_CACHE_MIXED_INDEX) + octant];
     return entry & ~SG_CACHE_WALL_BIT; /* a wall whose neighbours agree */
 }
-bool sg_cache_node_position(const SgImportanceCache *cache, uint32_t node, double p[3]);
 /* Importance point of a node for a light; false if the light cannot reach it. */
 bool sg_cache_node_importance_point(const SgImportanceCache *cache, uint32_t node,
                                     uint32_t light, double point[3]);
@@ -100,7 +99,6 @@ bool sg_cache_light_has_paths(const SgImportanceCache *cache, uint32_t light);
 uint64_t sg_cache_skeleton_hash(const SgImportanceCache *cache);
 /* The file's checksum (FNV-1a 64 of its bytes, verified on open): its identity. */
 uint64_t sg_cache_checksum(const SgImportanceCache *cache);
-uint64_t sg_cache_medium_hash(const SgImportanceCache *cache);
 uint32_t sg_cache_component_count(const SgImportanceCache *cache);
 uint64_t sg_cache_medium_voxels(const SgImportanceCache *cache);
 uint64_t sg_cache_bytes(const SgImportanceCache *cache);

@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 
 bool sg_read_file(const char *path, const char *what, size_t max_bytes, char **data, size_t *size, SgError *err)
@@ -68,4 +69,10 @@ bool sg_read_file(const char *path, const char *what, size_t max_bytes, char **d
     *data = buf;
     *size = n;
     return true;
+}
+
+bool sg_has_extension(const char *path, const char *ext)
+{
+    size_t n = strlen(path), e = strlen(ext);
+    return n > e && !strcasecmp(path + n - e, ext);
 }

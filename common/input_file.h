@@ -27,6 +27,10 @@ extern "C" {
  * or holds more than max_bytes. Works on pipes as on files. */
 bool sg_read_file(const char *path, const char *what, size_t max_bytes, char **data, size_t *size, SgError *err);
 
+/* A file's type by its name: path ends with ext (".ply"), in any case,
+ * after at least one character. */
+bool sg_has_extension(const char *path, const char *ext);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,7 +1,6 @@
 #include "progress.h"
 
 #include <stdio.h>
-#include <stdlib.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -16,8 +15,7 @@ void sg_progress_begin(SgProgress *p, const char *label, uint64_t total)
 {
     p->label = label;
     p->total = total;
-    const char *quiet = getenv("SG_QUIET");
-    p->enabled = isatty(STDERR_FILENO) && !(quiet && *quiet && *quiet != '0');
+    p->enabled = isatty(STDERR_FILENO); /* a log or a pipe gets the summary alone */
     p->started = sg_seconds();
     p->last_print = 0;
 }

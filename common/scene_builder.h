@@ -1,4 +1,4 @@
-/* What the scene front ends (JSON: scene.c, pbrt: pbrt/) share: the
+/* What the scene front ends (JSON: scene_json.c with mesh_file.c, pbrt: pbrt/) share: the
  * flat world-space arrays of an SgScene grown as meshes arrive, degenerate
  * triangles dropped, and the finishing pass that groups emissive triangles
  * into lights and computes the bounds and the geometry hash. */

@@ -1,6 +1,6 @@
 /* 4x4 transforms in double precision, row-major, acting on column vectors
- * (p' = M p): the one matrix type of the scene front ends (scene.c's JSON
- * transforms, pbrt/loader.c's CTM and camera) and its operations. */
+ * (p' = M p): the one matrix type of the scene front ends (scene_json.c's JSON
+ * transforms, the pbrt CTM and camera) and its operations. */
 #ifndef SG_TRANSFORM_H
 #define SG_TRANSFORM_H
 

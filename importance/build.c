@@ -73,53 +73,69 @@ static uint8_t bits_for(int palette_size)
     return 16;
 }
 
+/* Block (bi, bj, bk)'s palette and each voxel's index into it; its size. */
+static int block_palette_at(const BlockPass *p, int bi, int bj, int bk, uint32_t palette[512], uint16_t index[512])
+{
+    uint32_t labels[512];
+    block_labels(p->labels, bi, bj, bk, labels);
+    return block_palette(labels, palette, index);
+}
+
+/* visit(p, b, bi, bj, bk) for every block b of the slab bk. */
+static void each_block_of_slab(BlockPass *p, int bk, void (*visit)(BlockPass *, size_t, int, int, int))
+{
+    for (int bj = 0; bj < p->by; bj++)
+        for (int bi = 0; bi < p->bx; bi++)
+            visit(p, (size_t)bi + (size_t)p->bx * ((size_t)bj + (size_t)p->by * (size_t)bk), bi, bj, bk);
+}
+
+/* Pass 1: a block's palette size and bits per voxel. */
+static void count_block(BlockPass *p, size_t b, int bi, int bj, int bk)
+{
+    uint32_t palette[512];
+    uint16_t index[512];
+    int size = block_palette_at(p, bi, bj, bk, palette, index);
+    if (size == 1 && palette[0] == SG_CACHE_NONE)
+        size = 0; /* nothing labelled: no block stored */
+    p->palette_size[b] = (uint16_t)size;
+    p->bits[b] = bits_for(size);
+}
+
+/* Pass 2: a stored block's palette and packed indices. */
+static void encode_block(BlockPass *p, size_t b, int bi, int bj, int bk)
+{
+    if (p->block_index[b] == SG_CACHE_NONE)
+        return;
+    const SgCacheBlock *r = &p->records[p->block_index[b]];
+    uint32_t palette[512];
+    uint16_t index[512];
+    block_palette_at(p, bi, bj, bk, palette, index);
+    memcpy(p->palette + r->palette_offset, palette, r->palette_size * sizeof *palette);
+    uint8_t *data = p->voxel_bits + r->data_offset;
+    if (r->bits == 16) {
+        for (int v = 0; v < 512; v++) {
+            data[2 * v] = (uint8_t)index[v];
+            data[2 * v + 1] = (uint8_t)(index[v] >> 8);
+        }
+    } else if (r->bits > 0) {
+        memset(data, 0, (size_t)64 * r->bits);
+        for (int v = 0; v < 512; v++) {
+            unsigned bit = (unsigned)v * r->bits;
+            data[bit >> 3] |= (uint8_t)(index[v] << (bit & 7));
+        }
+    }
+}
+
 static void block_count_slab(void *ctx, uint64_t bk, int thread)
 {
     (void)thread;
-    BlockPass *p = ctx;
-    uint32_t labels[512], palette[512];
-    uint16_t index[512];
-    for (int bj = 0; bj < p->by; bj++)
-        for (int bi = 0; bi < p->bx; bi++) {
-            size_t b = (size_t)bi + (size_t)p->bx * ((size_t)bj + (size_t)p->by * bk);
-            block_labels(p->labels, bi, bj, (int)bk, labels);
-            int size = block_palette(labels, palette, index);
-            if (size == 1 && palette[0] == SG_CACHE_NONE)
-                size = 0; /* nothing labelled: no block stored */
-            p->palette_size[b] = (uint16_t)size;
-            p->bits[b] = bits_for(size);
-        }
+    each_block_of_slab(ctx, (int)bk, count_block);
 }
 
 static void block_encode_slab(void *ctx, uint64_t bk, int thread)
 {
     (void)thread;
-    BlockPass *p = ctx;
-    uint32_t labels[512], palette[512];
-    uint16_t index[512];
-    for (int bj = 0; bj < p->by; bj++)
-        for (int bi = 0; bi < p->bx; bi++) {
-            size_t b = (size_t)bi + (size_t)p->bx * ((size_t)bj + (size_t)p->by * bk);
-            if (p->block_index[b] == SG_CACHE_NONE)
-                continue;
-            const SgCacheBlock *r = &p->records[p->block_index[b]];
-            block_labels(p->labels, bi, bj, (int)bk, labels);
-            block_palette(labels, palette, index);
-            memcpy(p->palette + r->palette_offset, palette, r->palette_size * sizeof *palette);
-            uint8_t *data = p->voxel_bits + r->data_offset;
-            if (r->bits == 16) {
-                for (int v = 0; v < 512; v++) {
-                    data[2 * v] = (uint8_t)index[v];
-                    data[2 * v + 1] = (uint8_t)(index[v] >> 8);
-                }
-            } else if (r->bits > 0) {
-                memset(data, 0, (size_t)64 * r->bits);
-                for (int v = 0; v < 512; v++) {
-                    unsigned bit = (unsigned)v * r->bits;
-                    data[bit >> 3] |= (uint8_t)(index[v] << (bit & 7));
-                }
-            }
-        }
+    each_block_of_slab(ctx, (int)bk, encode_block);
 }
 
 /* ---- importance points, in parallel over chunks of nodes --------------- */

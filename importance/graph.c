@@ -263,23 +263,6 @@ uint32_t sg_graph_components(const SgGraph *g, uint32_t *component, uint32_t *st
     return count;
 }
 
-uint32_t sg_importance_components(const SgSkeleton *skeleton, uint32_t *component, SgError *err)
-{
-    SgGraph g;
-    if (!sg_graph_build(skeleton, &g, err))
-        return 0;
-    uint32_t *stack = malloc(((size_t)skeleton->node_count + 1) * sizeof *stack);
-    if (!stack) {
-        sg_graph_release(&g);
-        sg_fail(err, "out of memory for the skeleton components");
-        return 0;
-    }
-    uint32_t count = sg_graph_components(&g, component, stack);
-    free(stack);
-    sg_graph_release(&g);
-    return count;
-}
-
 /* ---- shortest paths: binary heap keyed by (distance, node) ------------- */
 
 typedef struct HeapItem {

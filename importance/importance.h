@@ -61,10 +61,6 @@ bool sg_importance_label_voxels(const SgGrid *grid, const SgSkeleton *skeleton, 
  * (exact voxel traversal, Amanatides & Woo; in voxel units). */
 bool sg_importance_visible(const SgGrid *grid, const int a[3], const int b[3]);
 
-/* Connected components of the graph: component[n] in [0, count). */
-uint32_t sg_importance_components(const SgSkeleton *skeleton, uint32_t *component,
-                                  SgError *err);
-
 /* Identity of a skeleton graph (positions, voxels, kinds, lights, edges). */
 uint64_t sg_importance_skeleton_hash(const SgSkeleton *skeleton);
 

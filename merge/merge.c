@@ -8,12 +8,12 @@
 
 #include "cli.h"
 #include "output_file.h"
-#include "render/renderer.h" /* SG_SHARDS_MAX */
+#include "shard_format.h"
 
 /* What every input must have and agree on: a merge of different renders is
  * no render. */
-static const char *const checked[] = {"sampling",      "seed",          "sg:shard_count",
-                                      "sg:scene_hash", "sg:cache_hash", "sg:recipe"};
+static const char *const checked[] = {SG_ATTR_SAMPLING,   SG_ATTR_SEED,       SG_ATTR_SHARD_COUNT,
+                                      SG_ATTR_SCENE_HASH, SG_ATTR_CACHE_HASH, SG_ATTR_RECIPE};
 #define CHECKED (int)(sizeof checked / sizeof checked[0])
 
 typedef struct Input {
@@ -73,11 +73,11 @@ static bool parse_shards(Input *in, const char *list, int count, SgError *err)
     for (char *tok = strtok_r(copy, ",", &save); tok && ok; tok = strtok_r(NULL, ",", &save)) {
         long k;
         if (!sg_parse_long(tok, 0, LONG_MAX, &k))
-            ok = sg_fail(err, "%s: sg:shards holds '%s', not a shard index", in->path, tok);
+            ok = sg_fail(err, "%s: " SG_ATTR_SHARDS " holds '%s', not a shard index", in->path, tok);
         else if (k >= count)
-            ok = sg_fail(err, "%s: sg:shards holds shard %ld, not below sg:shard_count %d", in->path, k, count);
+            ok = sg_fail(err, "%s: " SG_ATTR_SHARDS " holds shard %ld, not below " SG_ATTR_SHARD_COUNT " %d", in->path, k, count);
         else if (in->held[k])
-            ok = sg_fail(err, "%s: sg:shards names shard %ld twice", in->path, k);
+            ok = sg_fail(err, "%s: " SG_ATTR_SHARDS " names shard %ld twice", in->path, k);
         else {
             in->held[k] = 1;
             if (in->first < 0 || k < in->first)
@@ -86,7 +86,7 @@ static bool parse_shards(Input *in, const char *list, int count, SgError *err)
     }
     free(copy);
     if (ok && in->first < 0)
-        ok = sg_fail(err, "%s: sg:shards is empty", in->path);
+        ok = sg_fail(err, "%s: " SG_ATTR_SHARDS " is empty", in->path);
     return ok;
 }
 
@@ -99,19 +99,19 @@ static bool input_read(Input *in, const char *path, SgError *err)
     if (!sg_image_read_attributes(path, &in->attrs, &in->attr_count, err))
         return false;
     /* what says "ours" first, so that another EXR is named as such */
-    const char *shards = required(in, "sg:shards", err);
-    if (!shards || !required(in, "sg:shard_count", err) || !required(in, "sg:recipe", err))
+    const char *shards = required(in, SG_ATTR_SHARDS, err);
+    if (!shards || !required(in, SG_ATTR_SHARD_COUNT, err) || !required(in, SG_ATTR_RECIPE, err))
         return false;
     for (int a = 0; a < CHECKED; a++)
         if (!required(in, checked[a], err))
             return false;
-    const char *spp = required(in, "spp", err);
+    const char *spp = required(in, SG_ATTR_SPP, err);
     if (!spp)
         return false;
     long count;
-    const char *count_s = find(in, "sg:shard_count");
+    const char *count_s = find(in, SG_ATTR_SHARD_COUNT);
     if (!sg_parse_long(count_s, 1, SG_SHARDS_MAX, &count))
-        return sg_fail(err, "%s: sg:shard_count '%s' is not a shard count (1 to %d)", path, count_s, SG_SHARDS_MAX);
+        return sg_fail(err, "%s: " SG_ATTR_SHARD_COUNT " '%s' is not a shard count (1 to %d)", path, count_s, SG_SHARDS_MAX);
     if (!parse_shards(in, shards, (int)count, err))
         return false;
     /* at most 2^40 a shard: the sums below cannot overflow */
@@ -120,19 +120,19 @@ static bool input_read(Input *in, const char *path, SgError *err)
     if (in->spp <= 0)
         return sg_fail(err, "%s: spp %ld: a shard holds at least one sample per pixel", path, in->spp);
     const char *v;
-    if ((v = find(in, "seconds"))) {
+    if ((v = find(in, SG_ATTR_SECONDS))) {
         if (!sg_parse_double(v, 0, 1e300, &in->seconds))
             return sg_fail(err, "%s: seconds '%s' is not a time", path, v);
         in->has_seconds = true;
     }
-    if ((v = find(in, "sg:nonfinite_samples"))) {
+    if ((v = find(in, SG_ATTR_NONFINITE_SAMPLES))) {
         if (!sg_parse_long(v, 0, LONG_MAX / SG_SHARDS_MAX, &in->nonfinite))
-            return sg_fail(err, "%s: sg:nonfinite_samples '%s' is not a count", path, v);
+            return sg_fail(err, "%s: " SG_ATTR_NONFINITE_SAMPLES " '%s' is not a count", path, v);
         in->has_nonfinite = true;
     }
-    if ((v = find(in, "sg:guide_share"))) {
+    if ((v = find(in, SG_ATTR_GUIDE_SHARE))) {
         if (!sg_parse_double(v, 0, 1, &in->guide_share))
-            return sg_fail(err, "%s: sg:guide_share '%s' is not a share", path, v);
+            return sg_fail(err, "%s: " SG_ATTR_GUIDE_SHARE " '%s' is not a share", path, v);
         in->has_guide_share = true;
     }
     return true;
@@ -203,7 +203,7 @@ static bool check_inputs(SgMerged *m, const Input *in, int count, bool partial, 
                 return sg_fail(err, "%s has %s '%s', %s has '%s': not shards of one render", in[0].path, checked[a],
                                x, in[i].path, y);
         }
-    int shards = m->shard_count = atoi(find(&in[0], "sg:shard_count"));
+    int shards = m->shard_count = atoi(find(&in[0], SG_ATTR_SHARD_COUNT));
     int *owner = malloc((size_t)shards * sizeof *owner);
     *held = calloc((size_t)shards, 1);
     if (!owner || !*held) {
@@ -289,27 +289,27 @@ static bool merged_attributes(SgMerged *m, const Input *in, int count, const cha
     }
     char buf[64];
     snprintf(buf, sizeof buf, "%ld", m->spp);
-    if (!add_attribute(m, "spp", buf, err))
+    if (!add_attribute(m, SG_ATTR_SPP, buf, err))
         return false;
     snprintf(buf, sizeof buf, "%.3f", m->seconds);
-    if (all_seconds && !add_attribute(m, "seconds", buf, err))
+    if (all_seconds && !add_attribute(m, SG_ATTR_SECONDS, buf, err))
         return false;
-    if (!add_attribute(m, "sampling", find(&in[0], "sampling"), err) ||
-        !add_attribute(m, "seed", find(&in[0], "seed"), err))
+    if (!add_attribute(m, SG_ATTR_SAMPLING, find(&in[0], SG_ATTR_SAMPLING), err) ||
+        !add_attribute(m, SG_ATTR_SEED, find(&in[0], SG_ATTR_SEED), err))
         return false;
     for (int a = 0; a < in[0].attr_count; a++) {
         const char *name = in[0].attrs[a].name, *value = in[0].attrs[a].value;
-        if (strncmp(name, "sg:", 3))
+        if (strncmp(name, SG_ATTR_PREFIX, sizeof SG_ATTR_PREFIX - 1))
             continue; /* spp... above; the rest is the file format's */
         bool ok = true;
-        if (!strcmp(name, "sg:shards")) {
+        if (!strcmp(name, SG_ATTR_SHARDS)) {
             char *list = shard_list(held, m->shard_count);
             ok = list ? add_attribute(m, name, list, err) : sg_fail(err, "out of memory");
             free(list);
-        } else if (!strcmp(name, "sg:nonfinite_samples")) {
+        } else if (!strcmp(name, SG_ATTR_NONFINITE_SAMPLES)) {
             snprintf(buf, sizeof buf, "%ld", nonfinite);
             ok = !all_nonfinite || add_attribute(m, name, buf, err);
-        } else if (!strcmp(name, "sg:guide_share")) {
+        } else if (!strcmp(name, SG_ATTR_GUIDE_SHARE)) {
             /* two digits more than render writes: merged images merge again */
             snprintf(buf, sizeof buf, "%.6f", share / (double)m->spp);
             ok = !all_share || add_attribute(m, name, buf, err);
@@ -321,7 +321,7 @@ static bool merged_attributes(SgMerged *m, const Input *in, int count, const cha
                 same = other && !strcmp(other, value);
             }
             ok = !same || add_attribute(m, name, value, err);
-            if (same && !strcmp(name, "sg:exposure") && !sg_parse_double(value, -100, 100, &m->exposure))
+            if (same && !strcmp(name, SG_ATTR_EXPOSURE) && !sg_parse_double(value, -100, 100, &m->exposure))
                 m->exposure = 0;
         }
         if (!ok)

@@ -11,6 +11,7 @@
 #include "error.h"
 #include "importance_cache.h"
 #include "scene.h"
+#include "shard_format.h" /* SG_SHARDS_MAX, the pass rule of SgRenderOptions.shard */
 
 #ifdef __cplusplus
 extern "C" {
@@ -81,7 +82,6 @@ typedef struct SgImportanceSource {
 } SgImportanceSource;
 
 #define SG_ALPHA_LEARNED (-1.0f)
-#define SG_SHARDS_MAX 65536
 
 /* How paths are cut short (unbiased either way: a surviving path is
  * divided by its survival probability). */

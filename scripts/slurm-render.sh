@@ -5,7 +5,7 @@
 #   scripts/slurm-render.sh SCENE --shards N --out DIR [options] [-- RENDER_OPTIONS]
 #   scripts/slurm-render.sh --resume DIR [--wait]
 #
-# On Slurm (sbatch on the PATH, --local not given) three submissions:
+# On Slurm (a controller answers `scontrol ping`, or --slurm) three submissions:
 #   1. the precompute (voxelize, skeletonize, importance into DIR/; for a
 #      mode that learns, its training into DIR/NAME.field), one job;
 #   2. the shards, a job array 0..N-1 that waits for it (afterok): task K
@@ -19,8 +19,9 @@
 # writes its EXR under a temporary name renamed when complete, so a killed
 # shard leaves nothing behind. --resume DIR submits again the shards whose
 # EXR is missing (after scancel, a time limit, a dead node) and the merge.
-# Without Slurm (or with --local) the same steps run here, one after the
-# other, with the same outputs.
+# Where no Slurm controller answers (Slurm installed but not configured, or
+# not installed), or with --local, the same steps run here, one after the
+# other, with the same outputs; a line says so unless --local asked for it.
 #
 # DIR must be on storage every node sees: the cache is memory-mapped
 # read-only by every shard from there. RENDER_OPTIONS go to every shard
@@ -33,7 +34,8 @@
 #   --name NAME          output name (default: the scene file's name)
 #   --cpus-per-shard C   cores per shard (default 1; render --threads C)
 #   --sbatch "ARGS"      more sbatch arguments for every job (partition, time limit...)
-#   --local              run here even where Slurm is installed
+#   --local              run here even where a Slurm controller answers
+#   --slurm              submit to Slurm, or fail (exit 1, nothing written) if no controller answers
 #   --wait               on Slurm: return when the merge has ended (exit 1 if it failed)
 #   --bin DIR            the programs (default: bin/ beside this script)
 set -uo pipefail
@@ -105,7 +107,7 @@ if [ "${1:-}" = --step ]; then
 fi
 
 # ---- submission ----
-scene= shards= out= name= cpus=1 extra_sbatch= local=0 wait=0 resume= bin="$here/../bin"
+scene= shards= out= name= cpus=1 extra_sbatch= where=auto wait=0 resume= bin="$here/../bin"
 render_options=()
 while [ $# -gt 0 ]; do
   case $1 in
@@ -115,7 +117,9 @@ while [ $# -gt 0 ]; do
     --name) name=${2:-}; shift 2 ;;
     --cpus-per-shard) cpus=${2:-}; shift 2 ;;
     --sbatch) extra_sbatch=${2:-}; shift 2 ;;
-    --local) local=1; shift ;;
+    --local|--slurm)
+      [ $where = auto ] || [ $where = "${1#--}" ] || { echo "slurm-render: --local and --slurm: one or the other, please" >&2; exit 2; }
+      where=${1#--}; shift ;;
     --wait) wait=1; shift ;;
     --resume) resume=${2:-}; shift 2 ;;
     --bin) bin=${2:-}; shift 2 ;;
@@ -125,14 +129,41 @@ while [ $# -gt 0 ]; do
   esac
 done
 
+# Where the shards run: on Slurm where its controller answers, else here.
+# sbatch alone proves nothing: Debian's slurm-wlm installs it on machines
+# with no cluster, where it dies on the missing configuration.
 use_slurm=0
-[ $local = 0 ] && command -v sbatch >/dev/null 2>&1 && use_slurm=1
+choose_where() {
+  [ $where = local ] && return 0
+  local why=
+  if ! command -v sbatch >/dev/null 2>&1 || ! command -v scontrol >/dev/null 2>&1; then
+    why="Slurm is not installed (no sbatch, scontrol)"
+  else
+    local answer status
+    answer=$(timeout 5 scontrol ping 2>&1); status=$?
+    if [[ "$answer" == *" is UP"* ]]; then
+      use_slurm=1
+      return 0
+    fi
+    if [ $status = 124 ]; then
+      why="no Slurm controller answers (scontrol ping: no answer in 5 s)"
+    else
+      # its last line but the banner says why: "Slurmctld(primary) at HOST is
+      # DOWN", "scontrol: fatal: Could not establish a configuration source"
+      answer=$(printf '%s\n' "$answer" | grep -v '^\*' | grep . | tail -1)
+      why="no Slurm controller answers (scontrol ping: ${answer#scontrol: })"
+    fi
+  fi
+  [ $where = slurm ] && die "--slurm: $why"
+  echo "slurm-render: $why: running the $shards shards here" >&2
+}
 
 if [ -n "$resume" ]; then
   dir=$(cd "$resume" 2>/dev/null && pwd) || die "$resume: no such directory"
   [ -r "$dir/farm.env" ] || die "$dir: not a render farm directory (no farm.env)"
   # shellcheck source=/dev/null
   source "$dir/farm.env"
+  choose_where
 else
   [ -n "$scene" ] || { echo "slurm-render: no scene given (see --help)" >&2; exit 2; }
   [[ "$shards" =~ ^[1-9][0-9]*$ ]] || { echo "slurm-render: --shards N: a positive integer, please" >&2; exit 2; }
@@ -161,6 +192,7 @@ else
   needs_cache=0 learns=0
   case $mode in *'"uses_cache": true'*) needs_cache=1 ;; esac
   case $mode in *'"learns": true'*) learns=1 ;; esac
+  choose_where
   mkdir -p "$out/shards" "$out/logs" || die "$out: cannot create it"
   dir=$(cd "$out" && pwd)
   # a new render in an old directory: its shards would not merge

@@ -51,6 +51,13 @@ bool sg_test_exists(const char *path)
     return stat(path, &st) == 0;
 }
 
+const char *sg_test_source_path(const char *relative)
+{
+    char *path = ring_slot();
+    snprintf(path, 4096, "%s/%s", SG_SOURCE_ROOT, relative);
+    return path;
+}
+
 const char *sg_test_bin_dir(void)
 {
     const char *bin = getenv("SG_BIN");
@@ -71,7 +78,7 @@ int sg_test_run(const char *command, char *err_text, size_t size)
         abort();
     close(fd);
     char full[16384];
-    snprintf(full, sizeof full, "SG_QUIET=1 %s 2>%s", command, errfile);
+    snprintf(full, sizeof full, "%s 2>%s", command, errfile);
     int status = system(full);
     if (err_text && size) {
         FILE *f = fopen(errfile, "rb");

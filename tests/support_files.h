@@ -11,6 +11,10 @@ const char *sg_test_tmpdir(void);
  * ring of 32 static slots: do not free. */
 char *sg_test_write(const char *dir, const char *name, const char *text);
 bool sg_test_exists(const char *path);
+/* The absolute path of a file of the source tree (relative: "data/..."),
+ * whatever the working directory: for scenes written elsewhere that name
+ * the repository's meshes. */
+const char *sg_test_source_path(const char *relative);
 /* Where the programs are: SG_BIN, else bin. */
 const char *sg_test_bin_dir(void);
 /* Path of a program in sg_test_bin_dir(). */

@@ -42,6 +42,20 @@ uint32_t sgt_add_light(SgMedium *m, const double p[3], const int seed[3])
     return m->light_count++;
 }
 
+void sgt_medium_boxes(SgMedium *m, int nx, int ny, int nz, const int (*boxes)[7], int count)
+{
+    sgt_medium_init(m, nx, ny, nz);
+    for (int b = 0; b < count; b++)
+        sgt_box(m, boxes[b][0], boxes[b][1], boxes[b][2], boxes[b][3], boxes[b][4], boxes[b][5],
+                (uint8_t)boxes[b][6]);
+}
+
+void sgt_medium_open(SgMedium *m, int nx, int ny, int nz)
+{
+    const int all[1][7] = {{0, 0, 0, nx - 1, ny - 1, nz - 1, 1}};
+    sgt_medium_boxes(m, nx, ny, nz, all, 1);
+}
+
 void sgt_medium_free(SgMedium *m)
 {
     sg_grid_release(&m->grid);
@@ -132,4 +146,30 @@ uint8_t *sgt_read_file(const char *path, size_t *size)
 void sgt_temp_path(char *out, size_t cap, const char *tag)
 {
     snprintf(out, cap, "/tmp/sg_test_imp_%s_%ld", tag, (long)getpid());
+}
+
+/* Two rooms (x 1..13 and 17..28) with no opening between them; a light
+ * with a skeleton line in each, and a third light sealed inside the wall
+ * (no seed, no node). */
+void sgt_sealed_rooms(SgMedium *medium, SgSkeleton *skeleton)
+{
+    SgMedium m;
+    sgt_medium_init(&m, 30, 12, 5);
+    sgt_box(&m, 1, 1, 1, 13, 10, 3, 1);
+    sgt_box(&m, 17, 1, 1, 28, 10, 3, 1);
+    double l0[3] = {14.0, 6.5, 2.5}, l1[3] = {29.0, 6.5, 2.5}, l2[3] = {15.0, 6.0, 2.0};
+    int s0[3] = {13, 6, 2}, s1[3] = {28, 6, 2};
+    sgt_add_light(&m, l0, s0);
+    sgt_add_light(&m, l1, s1);
+    sgt_add_light(&m, l2, NULL);
+    SgSkeleton s = {0};
+    int a0[3] = {2, 6, 2}, a1[3] = {13, 6, 2}, b0[3] = {17, 6, 2}, b1[3] = {28, 6, 2};
+    uint32_t e0 = sgt_line(&s, SG_CACHE_NONE, a0, a1);
+    uint32_t e1 = sgt_line(&s, SG_CACHE_NONE, b0, b1);
+    s.nodes[e0].kind = SG_NODE_LIGHT;
+    s.nodes[e0].light = 0;
+    s.nodes[e1].kind = SG_NODE_LIGHT;
+    s.nodes[e1].light = 1;
+    *medium = m;
+    *skeleton = s;
 }

@@ -92,9 +92,8 @@ Test(importance_labels, geodesic_not_euclidean)
      * voxel just left of the wall is 3 voxels from Q (right of the wall)
      * and 4 from P, but Q is far around the wall: it belongs to P. */
     SgMedium m;
-    sgt_medium_init(&m, 30, 20, 5);
-    sgt_box(&m, 1, 1, 1, 28, 18, 3, 1);
-    sgt_box(&m, 15, 1, 1, 15, 16, 3, 0);
+    const int boxes[][7] = {{1, 1, 1, 28, 18, 3, 1}, {15, 1, 1, 15, 16, 3, 0}};
+    sgt_medium_boxes(&m, 30, 20, 5, boxes, 2);
     SgSkeleton s = {0};
     uint32_t p = sgt_node(&s, 10, 2, 2, SG_NODE_PLAIN, -1);
     uint32_t q = sgt_node(&s, 17, 2, 2, SG_NODE_PLAIN, -1);
@@ -120,8 +119,7 @@ Test(importance_labels, open_box_follows_euclidean_bisector)
     /* In open space the 26-neighbour metric is within ~8% of Euclidean:
      * voxels clearly closer to one node get that node. */
     SgMedium m;
-    sgt_medium_init(&m, 31, 31, 31);
-    sgt_box(&m, 0, 0, 0, 30, 30, 30, 1);
+    sgt_medium_open(&m, 31, 31, 31);
     SgSkeleton s = {0};
     int c[2][3] = {{6, 15, 15}, {24, 9, 20}};
     sgt_node(&s, c[0][0], c[0][1], c[0][2], SG_NODE_PLAIN, -1);
@@ -230,6 +228,29 @@ static void reference_labels(const SgGrid *g, const SgSkeleton *s, uint32_t *lab
     free(key);
 }
 
+/* sg_importance_label_voxels gives reference_labels' table at each thread
+ * count given; the number of voxels labelled. */
+static size_t labels_match_reference(SgMedium *m, const SgSkeleton *s, const int *threads, int runs)
+{
+    size_t n = sg_grid_count(&m->grid);
+    uint32_t *want = malloc(n * sizeof *want), *got = malloc(n * sizeof *got);
+    reference_labels(&m->grid, s, want);
+    size_t labelled = 0;
+    for (size_t v = 0; v < n; v++)
+        labelled += want[v] != SG_CACHE_NONE;
+    for (int r = 0; r < runs; r++) {
+        SgError err = {0};
+        cr_assert(sg_importance_label_voxels(&m->grid, s, threads[r], got, &err), "%s", err.message);
+        size_t wrong = 0;
+        for (size_t v = 0; v < n; v++)
+            wrong += got[v] != want[v];
+        cr_assert_eq(wrong, 0, "threads %d: %zu voxels differ from the reference", threads[r], wrong);
+    }
+    free(want);
+    free(got);
+    return labelled;
+}
+
 Test(importance_labels, slabs_match_plain_dijkstra_for_any_thread_count)
 {
     /* A serpentine: z-running corridors joined alternately at y = 0 and
@@ -249,22 +270,8 @@ Test(importance_labels, slabs_match_plain_dijkstra_for_any_thread_count)
     for (size_t i = 0; i < sizeof nodes / sizeof nodes[0]; i++)
         sgt_node(&s, nodes[i][0], nodes[i][1], nodes[i][2], SG_NODE_PLAIN, -1);
     sgt_node(&s, 3, 20, 1, SG_NODE_PLAIN, -1); /* same voxel as node 0: never a source */
-    size_t n = sg_grid_count(&m.grid);
-    uint32_t *want = malloc(n * sizeof *want), *got = malloc(n * sizeof *got);
-    reference_labels(&m.grid, &s, want);
-    size_t labelled = 0;
-    for (size_t v = 0; v < n; v++)
-        labelled += want[v] != SG_CACHE_NONE;
-    cr_assert_gt(labelled, 10000);
-    for (int threads = 1; threads <= 5; threads++) {
-        SgError err = {0};
-        cr_assert(sg_importance_label_voxels(&m.grid, &s, threads, got, &err), "%s", err.message);
-        for (size_t v = 0; v < n; v++)
-            cr_assert_eq(got[v], want[v], "threads %d voxel %zu: %u, reference %u", threads, v,
-                         got[v], want[v]);
-    }
-    free(want);
-    free(got);
+    const int threads[] = {1, 2, 3, 4, 5};
+    cr_assert_gt(labels_match_reference(&m, &s, threads, 5), 10000);
     sg_skeleton_release(&s);
     sgt_medium_free(&m);
 }
@@ -275,28 +282,15 @@ Test(importance_labels, ties_across_slabs_match_plain_dijkstra)
      * every bisector, and many bisectors cross slab boundaries, where a
      * later round changes the node of voxels at an unchanged distance. */
     SgMedium m;
-    sgt_medium_init(&m, 16, 16, 96);
-    sgt_box(&m, 0, 0, 0, 15, 15, 95, 1);
-    sgt_box(&m, 0, 7, 30, 11, 8, 33, 0);
-    sgt_box(&m, 4, 0, 60, 15, 11, 61, 0);
+    const int boxes[][7] = {{0, 0, 0, 15, 15, 95, 1}, {0, 7, 30, 11, 8, 33, 0}, {4, 0, 60, 15, 11, 61, 0}};
+    sgt_medium_boxes(&m, 16, 16, 96, boxes, 3);
     SgSkeleton s = {0};
     for (int k = 3; k < 96; k += 12)
         for (int j = 2; j < 16; j += 6)
             for (int i = 1 + (k / 12) % 3; i < 16; i += 7)
                 sgt_node(&s, i, j, k, SG_NODE_PLAIN, -1);
-    size_t n = sg_grid_count(&m.grid);
-    uint32_t *want = malloc(n * sizeof *want), *got = malloc(n * sizeof *got);
-    reference_labels(&m.grid, &s, want);
-    for (int threads = 1; threads <= 12; threads += (threads < 4 ? 1 : 4)) {
-        SgError err = {0};
-        cr_assert(sg_importance_label_voxels(&m.grid, &s, threads, got, &err), "%s", err.message);
-        size_t wrong = 0;
-        for (size_t v = 0; v < n; v++)
-            wrong += got[v] != want[v];
-        cr_assert_eq(wrong, 0, "threads %d: %zu voxels differ from the reference", threads, wrong);
-    }
-    free(want);
-    free(got);
+    const int threads[] = {1, 2, 3, 4, 8, 12};
+    labels_match_reference(&m, &s, threads, 6);
     sg_skeleton_release(&s);
     sgt_medium_free(&m);
 }
@@ -306,8 +300,7 @@ Test(importance_labels, ties_across_slabs_match_plain_dijkstra)
 Test(importance_visibility, blocked_by_one_voxel_and_symmetric)
 {
     SgMedium m;
-    sgt_medium_init(&m, 20, 20, 20);
-    sgt_box(&m, 0, 0, 0, 19, 19, 19, 1);
+    sgt_medium_open(&m, 20, 20, 20);
     int a[3] = {1, 1, 1}, b[3] = {18, 12, 5};
     cr_assert(sg_importance_visible(&m.grid, a, b));
     sgt_box(&m, 10, 7, 3, 10, 7, 3, 0); /* on the segment: x=10 -> y = 1+11*9.5/17 */
@@ -377,8 +370,7 @@ Test(importance_visibility, brick_jumps_agree_with_plain_walk)
     /* Open rooms with scattered solid voxels and slabs: the accelerated walk
      * (jumps through all-medium 4x4x4 bricks) answers like the plain one. */
     SgMedium m;
-    sgt_medium_init(&m, 61, 45, 38);
-    sgt_box(&m, 0, 0, 0, 60, 44, 37, 1);
+    sgt_medium_open(&m, 61, 45, 38);
     SgRng rng;
     sg_rng_seed(&rng, 11, 2);
     for (int i = 0; i < 60; i++) {
@@ -462,10 +454,8 @@ Test(importance_points, two_rooms_point_at_the_door)
      * door at y 2..4; the light on B's far wall. The skeleton runs from A's
      * centre down to the door, through it, up to B's centre and the light. */
     SgMedium m;
-    sgt_medium_init(&m, 44, 24, 5);
-    sgt_box(&m, 1, 1, 1, 19, 22, 3, 1);
-    sgt_box(&m, 22, 1, 1, 42, 22, 3, 1);
-    sgt_box(&m, 20, 2, 1, 21, 4, 3, 1);
+    const int boxes[][7] = {{1, 1, 1, 19, 22, 3, 1}, {22, 1, 1, 42, 22, 3, 1}, {20, 2, 1, 21, 4, 3, 1}};
+    sgt_medium_boxes(&m, 44, 24, 5, boxes, 3);
     double lp[3] = {43.0, 12.5, 2.5};
     int seed[3] = {42, 12, 2};
     sgt_add_light(&m, lp, seed);
@@ -513,22 +503,8 @@ Test(importance_points, sealed_rooms_light_unreachable_from_camera)
     /* Two rooms with no opening (wall x 14..16), a light and a skeleton in each; a third
      * light is sealed inside the wall (no seed, no node). */
     SgMedium m;
-    sgt_medium_init(&m, 30, 12, 5);
-    sgt_box(&m, 1, 1, 1, 13, 10, 3, 1);
-    sgt_box(&m, 17, 1, 1, 28, 10, 3, 1);
-    double l0[3] = {14.0, 6.5, 2.5}, l1[3] = {29.0, 6.5, 2.5}, l2[3] = {15.0, 6.0, 2.0};
-    int s0[3] = {13, 6, 2}, s1[3] = {28, 6, 2};
-    sgt_add_light(&m, l0, s0);
-    sgt_add_light(&m, l1, s1);
-    sgt_add_light(&m, l2, NULL);
-    SgSkeleton s = {0};
-    int a0[3] = {2, 6, 2}, a1[3] = {13, 6, 2}, b0[3] = {17, 6, 2}, b1[3] = {28, 6, 2};
-    uint32_t e0 = sgt_line(&s, SG_CACHE_NONE, a0, a1);
-    uint32_t e1 = sgt_line(&s, SG_CACHE_NONE, b0, b1);
-    s.nodes[e0].kind = SG_NODE_LIGHT;
-    s.nodes[e0].light = 0;
-    s.nodes[e1].kind = SG_NODE_LIGHT;
-    s.nodes[e1].light = 1;
+    SgSkeleton s;
+    sgt_sealed_rooms(&m, &s);
     char path[256];
     SgImportanceCache *c = build_and_open(&m, &s, "sealed", 1, path, sizeof path);
     cr_assert_eq(sg_cache_component_count(c), 2);

@@ -50,22 +50,8 @@ static long file_size(const char *path)
 static void write_sealed_rooms(const char *dir, char *medium_path, char *skeleton_path)
 {
     SgMedium m;
-    sgt_medium_init(&m, 30, 12, 5);
-    sgt_box(&m, 1, 1, 1, 13, 10, 3, 1);
-    sgt_box(&m, 17, 1, 1, 28, 10, 3, 1);
-    double l0[3] = {14.0, 6.5, 2.5}, l1[3] = {29.0, 6.5, 2.5}, l2[3] = {15.0, 6.0, 2.0};
-    int s0[3] = {13, 6, 2}, s1[3] = {28, 6, 2};
-    sgt_add_light(&m, l0, s0);
-    sgt_add_light(&m, l1, s1);
-    sgt_add_light(&m, l2, NULL);
-    SgSkeleton s = {0};
-    int a0[3] = {2, 6, 2}, a1[3] = {13, 6, 2}, b0[3] = {17, 6, 2}, b1[3] = {28, 6, 2};
-    uint32_t e0 = sgt_line(&s, SG_CACHE_NONE, a0, a1);
-    uint32_t e1 = sgt_line(&s, SG_CACHE_NONE, b0, b1);
-    s.nodes[e0].kind = SG_NODE_LIGHT;
-    s.nodes[e0].light = 0;
-    s.nodes[e1].kind = SG_NODE_LIGHT;
-    s.nodes[e1].light = 1;
+    SgSkeleton s;
+    sgt_sealed_rooms(&m, &s);
     sprintf(medium_path, "%s/medium.vdb", dir);
     sprintf(skeleton_path, "%s/skeleton.ply", dir);
     SgError err = {0};
@@ -73,6 +59,28 @@ static void write_sealed_rooms(const char *dir, char *medium_path, char *skeleto
     cr_assert(sg_skeleton_write_ply(&s, skeleton_path, &err), "%s", err.message);
     sg_skeleton_release(&s);
     sgt_medium_free(&m);
+}
+
+/* importance --info CACHE [SCENE] > info, read back. */
+static cJSON *info_json(const char *cache, const char *scene, const char *info)
+{
+    char cmd[16384], err[4096];
+    snprintf(cmd, sizeof cmd, "%s --info %s %s > %s", program, cache, scene ? scene : "", info);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
+    return read_json(info);
+}
+
+/* A scene over the sealed rooms (one triangle; the camera is what counts)
+ * with the camera at `position` (JSON), looking along the rooms. */
+static const char *rooms_scene(const char *dir, const char *name, const char *position)
+{
+    char text[1024];
+    snprintf(text, sizeof text,
+             "{ \"meshes\": [ { \"vertices\": [0,0,0, 30,0,0, 0,12,0], \"triangles\": [0,1,2] } ],\n"
+             "  \"camera\": { \"position\": %s, \"look_at\": [10, 6.5, 2.5], \"fov\": 50 },\n"
+             "  \"image\": { \"width\": 32, \"height\": 24 } }\n",
+             position);
+    return sg_test_write(dir, name, text);
 }
 
 Test(importance_cli, help_and_usage_errors, .init = setup)
@@ -104,9 +112,7 @@ Test(importance_cli, sealed_rooms_build_info_and_scene_litmus, .init = setup)
     cr_assert(sg_test_exists(vectors));
 
     /* Without a scene: lights with a place on the skeleton. */
-    snprintf(cmd, sizeof cmd, "%s --info %s > %s", program, cache, info);
-    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
-    cJSON *j = read_json(info);
+    cJSON *j = info_json(cache, NULL, info);
     cr_assert_eq(json_number(j, "lights_total"), 3);
     cr_assert_eq(json_number(j, "lights_reachable"), 2);
     cr_assert_eq(json_number(j, "nodes"), 12 + 12);
@@ -116,27 +122,13 @@ Test(importance_cli, sealed_rooms_build_info_and_scene_litmus, .init = setup)
     cJSON_Delete(j);
 
     /* With a scene whose camera is in room A: only light 0 reaches it. */
-    const char *scene = sg_test_write(
-        dir, "rooms.json",
-        "{ \"meshes\": [ { \"vertices\": [0,0,0, 30,0,0, 0,12,0], \"triangles\": [0,1,2] } ],\n"
-        "  \"camera\": { \"position\": [5.5, 6.5, 2.5], \"look_at\": [10, 6.5, 2.5], \"fov\": 50 },\n"
-        "  \"image\": { \"width\": 32, \"height\": 24 } }\n");
-    snprintf(cmd, sizeof cmd, "%s --info %s %s > %s", program, cache, scene, info);
-    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
-    j = read_json(info);
+    j = info_json(cache, rooms_scene(dir, "rooms.json", "[5.5, 6.5, 2.5]"), info);
     cr_assert_eq(json_number(j, "lights_total"), 3);
     cr_assert_eq(json_number(j, "lights_reachable"), 1);
     cr_assert(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(j, "camera_in_medium")));
     cJSON_Delete(j);
     /* Camera in room B: only light 1. */
-    scene = sg_test_write(
-        dir, "rooms_b.json",
-        "{ \"meshes\": [ { \"vertices\": [0,0,0, 30,0,0, 0,12,0], \"triangles\": [0,1,2] } ],\n"
-        "  \"camera\": { \"position\": [25.5, 3.5, 1.5], \"look_at\": [10, 6.5, 2.5], \"fov\": 50 },\n"
-        "  \"image\": { \"width\": 32, \"height\": 24 } }\n");
-    snprintf(cmd, sizeof cmd, "%s --info %s %s > %s", program, cache, scene, info);
-    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
-    j = read_json(info);
+    j = info_json(cache, rooms_scene(dir, "rooms_b.json", "[25.5, 3.5, 1.5]"), info);
     cr_assert_eq(json_number(j, "lights_reachable"), 1);
     cJSON_Delete(j);
 }

@@ -7,6 +7,7 @@
 #include <criterion/criterion.h>
 #include <dirent.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -120,6 +121,31 @@ static void remove_dir(const char *dir)
     cr_assert_eq(system(cmd), 0);
 }
 
+/* Most tests' start: four shards (four_shards) in a fresh folder, which it
+ * returns... */
+static float shard_px[4][N]; /* their pixels (each test runs in a process of its own) */
+static const char *four_shards_in_a_folder(char *paths[4])
+{
+    const char *dir = sg_test_tmpdir();
+    four_shards(dir, paths, shard_px);
+    return dir;
+}
+
+/* ...with out = FOLDER/out.exr. */
+static const char *four_shards_and_out(char *paths[4], char out[4096])
+{
+    const char *dir = four_shards_in_a_folder(paths);
+    snprintf(out, 4096, "%s/out.exr", dir);
+    return dir;
+}
+
+/* ...and their end: the paths freed, the folder removed. */
+static void done(const char *dir, char *paths[4])
+{
+    free_paths(paths, 4);
+    remove_dir(dir);
+}
+
 /* The formula, as the test knows it: in double, shards in ascending order,
  * rounded to float. */
 static float expected_value(float px[4][N], const int *shards, int n, int i)
@@ -139,6 +165,19 @@ static int run_merge(const char *args, char *err, size_t size)
     sg_test_program("merge", bin, sizeof bin);
     snprintf(cmd, sizeof cmd, "%s %s", bin, args);
     return sg_test_run(cmd, err, size);
+}
+
+/* bin/merge with the arguments given (printf-style), which must succeed;
+ * its stderr in err. */
+static void merge_ok(char err[2048], const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void merge_ok(char err[2048], const char *fmt, ...)
+{
+    char args[16384];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(args, sizeof args, fmt, ap);
+    va_end(ap);
+    cr_assert_eq(run_merge(args, err, 2048), 0, "%s: %s", args, err);
 }
 
 static float *read_image(const char *path)
@@ -163,27 +202,22 @@ static const char *attribute(const char *path, const char *name)
 
 Test(merge, the_spp_weighted_mean_bit_for_bit)
 {
-    const char *dir = sg_test_tmpdir();
-    char *p[4], args[16384], err[2048], out[4096];
-    static float px[4][N];
-    four_shards(dir, p, px);
-    snprintf(out, sizeof out, "%s/out.exr", dir);
-    snprintf(args, sizeof args, "%s %s %s %s -o %s --quiet", p[2], p[0], p[3], p[1], out);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
+    char *p[4], err[2048], out[4096];
+    const char *dir = four_shards_and_out(p, out);
+    merge_ok(err, "%s %s %s %s -o %s --quiet", p[2], p[0], p[3], p[1], out);
     float *got = read_image(out);
     const int all[4] = {0, 1, 2, 3};
     int wrong = 0, unweighted_same = 0;
     for (int i = 0; i < N; i++) {
-        float want = expected_value(px, all, 4, i);
+        float want = expected_value(shard_px, all, 4, i);
         wrong += memcmp(&got[i], &want, sizeof want) != 0;
-        float plain = (float)(((double)px[0][i] + px[1][i] + px[2][i] + px[3][i]) / 4.0);
+        float plain = (float)(((double)shard_px[0][i] + shard_px[1][i] + shard_px[2][i] + shard_px[3][i]) / 4.0);
         unweighted_same += plain == want;
     }
     cr_assert_eq(wrong, 0, "%d of %d values are not the spp-weighted mean bit for bit", wrong, N);
     cr_assert_lt(unweighted_same, N / 10, "an unweighted mean would pass too: the test could not see the weights");
     free(got);
-    free_paths(p, 4);
-    remove_dir(dir);
+    done(dir, p);
 }
 
 Test(merge, the_order_the_files_are_given_in_does_not_matter)
@@ -210,11 +244,10 @@ Test(merge, the_order_the_files_are_given_in_does_not_matter)
     const int all[4] = {0, 1, 2, 3};
     int order_matters = 0;
     for (int o = 0; o < 3; o++) {
-        char args[16384], err[2048], out[4096];
+        char err[2048], out[4096];
         snprintf(out, sizeof out, "%s/out%d.exr", dir, o);
         const int *q = orders[o];
-        snprintf(args, sizeof args, "%s %s %s %s -o %s --quiet", p[q[0]], p[q[1]], p[q[2]], p[q[3]], out);
-        cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
+        merge_ok(err, "%s %s %s %s -o %s --quiet", p[q[0]], p[q[1]], p[q[2]], p[q[3]], out);
         float *got = read_image(out);
         int wrong = 0;
         for (int i = 0; i < N; i++) {
@@ -238,35 +271,27 @@ Test(merge, the_order_the_files_are_given_in_does_not_matter)
                   sg_merged_rgb(m)[i], want);
     }
     sg_merged_free(m);
-    free_paths(p, 4);
-    remove_dir(dir);
+    done(dir, p);
 }
 
 Test(merge, merging_merged_images_is_the_same_merge)
 {
-    const char *dir = sg_test_tmpdir();
-    static float px[4][N];
     char *p[4], args[16384], err[2048], ab[4096], cd[4096], ac[4096], all[4096], regrouped[4096], direct[4096];
-    four_shards(dir, p, px);
+    const char *dir = four_shards_in_a_folder(p);
     snprintf(ab, sizeof ab, "%s/ab.exr", dir);
     snprintf(cd, sizeof cd, "%s/cd.exr", dir);
     snprintf(ac, sizeof ac, "%s/ac.exr", dir);
     snprintf(all, sizeof all, "%s/all.exr", dir);
     snprintf(regrouped, sizeof regrouped, "%s/regrouped.exr", dir);
     snprintf(direct, sizeof direct, "%s/direct.exr", dir);
-    snprintf(args, sizeof args, "%s %s -o %s --partial --quiet", p[0], p[1], ab);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
-    snprintf(args, sizeof args, "%s %s -o %s --partial --quiet", p[2], p[3], cd);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
+    merge_ok(err, "%s %s -o %s --partial --quiet", p[0], p[1], ab);
+    merge_ok(err, "%s %s -o %s --partial --quiet", p[2], p[3], cd);
     snprintf(args, sizeof args, "%s %s -o %s --partial --quiet", p[2], p[0], ac); /* interleaved: 0,2 */
     cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
     cr_assert_str_eq(attribute(ac, "sg:shards"), "0,2");
-    snprintf(args, sizeof args, "%s %s -o %s --quiet", cd, ab, all);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
-    snprintf(args, sizeof args, "%s %s %s -o %s --quiet", p[3], ac, p[1], regrouped);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
-    snprintf(args, sizeof args, "%s %s %s %s -o %s --quiet", p[0], p[1], p[2], p[3], direct);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
+    merge_ok(err, "%s %s -o %s --quiet", cd, ab, all);
+    merge_ok(err, "%s %s %s -o %s --quiet", p[3], ac, p[1], regrouped);
+    merge_ok(err, "%s %s %s %s -o %s --quiet", p[0], p[1], p[2], p[3], direct);
     float *want = read_image(direct);
     const char *merged[2] = {all, regrouped};
     for (int j = 0; j < 2; j++) {
@@ -292,19 +317,14 @@ Test(merge, merging_merged_images_is_the_same_merge)
     cr_assert_str_eq(attribute(all, "spp"), "16");
     cr_assert_str_eq(attribute(all, "sg:shards"), "0,1,2,3");
     free(want);
-    free_paths(p, 4);
-    remove_dir(dir);
+    done(dir, p);
 }
 
 Test(merge, the_merged_attributes)
 {
-    const char *dir = sg_test_tmpdir();
-    static float px[4][N];
-    char *p[4], args[16384], err[2048], out[4096];
-    four_shards(dir, p, px);
-    snprintf(out, sizeof out, "%s/out.exr", dir);
-    snprintf(args, sizeof args, "%s %s %s %s -o %s", p[1], p[3], p[0], p[2], out);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
+    char *p[4], err[2048], out[4096];
+    const char *dir = four_shards_and_out(p, out);
+    merge_ok(err, "%s %s %s %s -o %s", p[1], p[3], p[0], p[2], out);
     /* summed: spp, seconds (0.25 s a sample), NaN/inf samples (1+2+3+4) */
     cr_assert_str_eq(attribute(out, "spp"), "16");
     cr_assert_str_eq(attribute(out, "seconds"), "4.000");
@@ -337,8 +357,7 @@ Test(merge, the_merged_attributes)
              out);
     cr_assert_str_eq(err, line);
     /* --quiet: nothing */
-    snprintf(args, sizeof args, "%s %s %s %s -o %s --quiet", p[1], p[3], p[0], p[2], out);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
+    merge_ok(err, "%s %s %s %s -o %s --quiet", p[1], p[3], p[0], p[2], out);
     cr_assert_str_eq(err, "");
     /* the same through the library */
     SgError e = {0};
@@ -351,20 +370,15 @@ Test(merge, the_merged_attributes)
     cr_assert_float_eq(sg_merged_seconds(m), 4.0, 1e-9);
     cr_assert_float_eq(sg_merged_exposure(m), 2.0, 0);
     sg_merged_free(m);
-    free_paths(p, 4);
-    remove_dir(dir);
+    done(dir, p);
 }
 
 Test(merge, partial_merges_what_is_there_and_says_so)
 {
-    const char *dir = sg_test_tmpdir();
-    static float px[4][N];
-    char *p[4], args[16384], err[2048], out[4096];
-    four_shards(dir, p, px);
-    snprintf(out, sizeof out, "%s/out.exr", dir);
+    char *p[4], err[2048], out[4096];
+    const char *dir = four_shards_and_out(p, out);
     /* the warning is said with --quiet too, and nothing else */
-    snprintf(args, sizeof args, "%s %s -o %s --partial --quiet", p[2], p[0], out);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
+    merge_ok(err, "%s %s -o %s --partial --quiet", p[2], p[0], out);
     cr_assert_str_eq(err, "merge: merged 2 of 4 shards (missing 1,3)\n");
     cr_assert_str_eq(attribute(out, "sg:shards"), "0,2");
     cr_assert_str_eq(attribute(out, "sg:shard_count"), "4");
@@ -372,34 +386,28 @@ Test(merge, partial_merges_what_is_there_and_says_so)
     float *got = read_image(out);
     const int held[2] = {0, 2};
     for (int i = 0; i < N; i++) {
-        float want = expected_value(px, held, 2, i);
+        float want = expected_value(shard_px, held, 2, i);
         cr_assert(memcmp(&got[i], &want, sizeof want) == 0, "value %d: %.9g, not %.9g", i, got[i], want);
     }
     free(got);
     /* without --quiet: the warning and the summary */
-    snprintf(args, sizeof args, "%s -o %s --partial", p[3], out);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
+    merge_ok(err, "%s -o %s --partial", p[3], out);
     cr_assert(strstr(err, "merge: merged 1 of 4 shards (missing 0,1,2)\n"), "%s", err);
     cr_assert(strstr(err, "1 of 4 shards"), "%s", err);
     cr_assert_eq(sg_test_count_lines(err), 2, "%s", err);
-    free_paths(p, 4);
-    remove_dir(dir);
+    done(dir, p);
 }
 
 Test(merge, the_png_at_the_shards_exposure_unless_told)
 {
-    const char *dir = sg_test_tmpdir();
-    static float px[4][N];
-    char *p[4], args[16384], err[2048], out[4096], png[4096], expect[4096];
-    four_shards(dir, p, px);
-    snprintf(out, sizeof out, "%s/out.exr", dir);
+    char *p[4], err[2048], out[4096], png[4096], expect[4096];
+    const char *dir = four_shards_and_out(p, out);
     snprintf(png, sizeof png, "%s/out.png", dir);
     snprintf(expect, sizeof expect, "%s/expect.png", dir);
     float *merged = NULL;
     float *expected[3] = {NULL};
     const double stops[3] = {2, -1, 0};
-    snprintf(args, sizeof args, "%s %s %s %s -o %s --quiet", p[0], p[1], p[2], p[3], out);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
+    merge_ok(err, "%s %s %s %s -o %s --quiet", p[0], p[1], p[2], p[3], out);
     merged = read_image(out);
     for (int s = 0; s < 3; s++) {
         SgError e = {0};
@@ -408,22 +416,19 @@ Test(merge, the_png_at_the_shards_exposure_unless_told)
     }
     cr_assert(memcmp(expected[0], expected[1], N * sizeof(float)), "the exposures give the same PNG");
     /* no --exposure: the shards' sg:exposure (2) */
-    snprintf(args, sizeof args, "%s %s %s %s -o %s --png %s --quiet", p[0], p[1], p[2], p[3], out, png);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
+    merge_ok(err, "%s %s %s %s -o %s --png %s --quiet", p[0], p[1], p[2], p[3], out, png);
     float *got = read_image(png);
     cr_assert(!memcmp(got, expected[0], N * sizeof(float)), "the PNG is not at the shards' exposure");
     free(got);
     /* --exposure -1 wins */
-    snprintf(args, sizeof args, "%s %s %s %s -o %s --png %s --exposure -1 --quiet", p[0], p[1], p[2], p[3], out,
+    merge_ok(err, "%s %s %s %s -o %s --png %s --exposure -1 --quiet", p[0], p[1], p[2], p[3], out,
              png);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
     got = read_image(png);
     cr_assert(!memcmp(got, expected[1], N * sizeof(float)), "the PNG is not at --exposure -1");
     free(got);
     /* shards that disagree on sg:exposure: 0, and none in the output */
-    char *other = write_shard(dir, "other.exr", 3, (ShardSpec){.exposure = "5"}, px[3]);
-    snprintf(args, sizeof args, "%s %s %s %s -o %s --png %s --quiet", p[0], p[1], p[2], other, out, png);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
+    char *other = write_shard(dir, "other.exr", 3, (ShardSpec){.exposure = "5"}, shard_px[3]);
+    merge_ok(err, "%s %s %s %s -o %s --png %s --quiet", p[0], p[1], p[2], other, out, png);
     got = read_image(png);
     cr_assert(!memcmp(got, expected[2], N * sizeof(float)), "the PNG is not at exposure 0");
     cr_assert_null(attribute(out, "sg:exposure"));
@@ -432,8 +437,7 @@ Test(merge, the_png_at_the_shards_exposure_unless_told)
     free(merged);
     for (int s = 0; s < 3; s++)
         free(expected[s]);
-    free_paths(p, 4);
-    remove_dir(dir);
+    done(dir, p);
 }
 
 /* The temporary files a write leaves while it runs (".out.exr.tmp.PID"). */
@@ -486,10 +490,8 @@ static void refused(const char *dir, const char *files, const char *const *says)
 
 Test(merge, refuses_shards_of_different_renders)
 {
-    const char *dir = sg_test_tmpdir();
-    static float px[4][N];
     char *p[4], files[16384];
-    four_shards(dir, p, px);
+    const char *dir = four_shards_in_a_folder(p);
     const struct {
         ShardSpec spec;
         const char *attribute, *theirs, *mine;
@@ -503,27 +505,24 @@ Test(merge, refuses_shards_of_different_renders)
         {{.width = W + 1}, "size", "16x9", "17x9"},
     };
     for (size_t i = 0; i < sizeof other / sizeof other[0]; i++) {
-        char *o = write_shard(dir, "other.exr", 3, other[i].spec, other[i].spec.width ? NULL : px[3]);
+        char *o = write_shard(dir, "other.exr", 3, other[i].spec, other[i].spec.width ? NULL : shard_px[3]);
         snprintf(files, sizeof files, "%s %s %s %s", p[0], p[1], p[2], o);
         refused(dir, files,
                 SAYS(p[0], o, other[i].attribute, other[i].theirs, other[i].mine, "not shards of one render"));
         free(o);
     }
-    free_paths(p, 4);
-    remove_dir(dir);
+    done(dir, p);
 }
 
 Test(merge, refuses_duplicate_and_missing_shards)
 {
-    const char *dir = sg_test_tmpdir();
-    static float px[4][N];
     char *p[4], files[16384];
-    four_shards(dir, p, px);
+    const char *dir = four_shards_in_a_folder(p);
     /* a file twice */
     snprintf(files, sizeof files, "%s %s %s %s %s", p[0], p[1], p[2], p[3], p[1]);
     refused(dir, files, SAYS("both hold shard 1 of 4", p[1]));
     /* a merged image holding a shard given beside it: both files named */
-    char *both = write_shard(dir, "both.exr", 0, (ShardSpec){.shards = "0,3"}, px[0]);
+    char *both = write_shard(dir, "both.exr", 0, (ShardSpec){.shards = "0,3"}, shard_px[0]);
     snprintf(files, sizeof files, "%s %s %s %s", p[1], both, p[2], p[3]);
     refused(dir, files, SAYS(both, p[3], "both hold shard 3 of 4"));
     free(both);
@@ -532,25 +531,22 @@ Test(merge, refuses_duplicate_and_missing_shards)
     refused(dir, files, SAYS("shards 0,2 of 4 are missing", "--partial merges what is there"));
     snprintf(files, sizeof files, "%s %s %s", p[0], p[1], p[2]);
     refused(dir, files, SAYS("shard 3 of 4 is missing", "--partial"));
-    free_paths(p, 4);
-    remove_dir(dir);
+    done(dir, p);
 }
 
 Test(merge, refuses_what_is_not_a_shard)
 {
-    const char *dir = sg_test_tmpdir();
-    static float px[4][N];
     char *p[4], files[16384], path[4096];
-    four_shards(dir, p, px);
+    const char *dir = four_shards_in_a_folder(p);
     /* a shard index not below the count */
-    char *o = write_shard(dir, "high.exr", 3, (ShardSpec){.shards = "4"}, px[3]);
+    char *o = write_shard(dir, "high.exr", 3, (ShardSpec){.shards = "4"}, shard_px[3]);
     snprintf(files, sizeof files, "%s %s %s %s", p[0], p[1], p[2], o);
     refused(dir, files, SAYS(o, "shard 4, not below sg:shard_count 4"));
     free(o);
     /* spp 0, negative, not a number */
     const char *bad_spp[] = {"0", "-3", "many"};
     for (int i = 0; i < 3; i++) {
-        o = write_shard(dir, "spp.exr", 3, (ShardSpec){.spp = bad_spp[i]}, px[3]);
+        o = write_shard(dir, "spp.exr", 3, (ShardSpec){.spp = bad_spp[i]}, shard_px[3]);
         snprintf(files, sizeof files, "%s %s %s %s", p[0], p[1], p[2], o);
         refused(dir, files, SAYS(o, "spp", bad_spp[i]));
         free(o);
@@ -562,7 +558,7 @@ Test(merge, refuses_what_is_not_a_shard)
     cr_assert(sg_image_write_exr(path, 1, 1, one, NULL, 0, &e), "%s", e.message);
     snprintf(files, sizeof files, "%s %s %s %s", p[0], p[1], p[2], path);
     refused(dir, files, SAYS(path, "not a render shard"));
-    o = write_shard(dir, "norecipe.exr", 3, (ShardSpec){.omit = "sg:recipe"}, px[3]);
+    o = write_shard(dir, "norecipe.exr", 3, (ShardSpec){.omit = "sg:recipe"}, shard_px[3]);
     snprintf(files, sizeof files, "%s %s %s %s", p[0], p[1], p[2], o);
     refused(dir, files, SAYS(o, "not a render shard", "sg:recipe"));
     free(o);
@@ -572,16 +568,13 @@ Test(merge, refuses_what_is_not_a_shard)
     char *junk = sg_test_write(dir, "junk.exr", "not an image");
     snprintf(files, sizeof files, "%s %s %s %s", p[0], p[1], p[2], junk);
     refused(dir, files, SAYS(junk, "cannot read"));
-    free_paths(p, 4);
-    remove_dir(dir);
+    done(dir, p);
 }
 
 Test(merge, a_failed_write_leaves_no_output)
 {
-    const char *dir = sg_test_tmpdir();
-    static float px[4][N];
     char *p[4], args[16384], err[2048], out[4096], png[4096];
-    four_shards(dir, p, px);
+    const char *dir = four_shards_in_a_folder(p);
     /* the EXR cannot be written: the PNG (written first) is not left either */
     snprintf(out, sizeof out, "%s/no/such/dir/out.exr", dir);
     snprintf(png, sizeof png, "%s/out.png", dir);
@@ -599,8 +592,7 @@ Test(merge, a_failed_write_leaves_no_output)
     cr_assert(strstr(err, png), "the message does not name the PNG: %s", err);
     cr_assert(!sg_test_exists(out), "a failed merge left its EXR");
     cr_assert_eq(temporaries(dir), 0, "a failed merge left a temporary file");
-    free_paths(p, 4);
-    remove_dir(dir);
+    done(dir, p);
 }
 
 Test(merge, usage_errors_exit_2)
@@ -617,8 +609,7 @@ Test(merge, usage_errors_exit_2)
         cr_assert(!sg_test_exists(out), "merge %s wrote something", args);
     }
     char help[4096];
-    snprintf(args, sizeof args, "--help > %s/help.txt", dir);
-    cr_assert_eq(run_merge(args, err, sizeof err), 0, "%s", err);
+    merge_ok(err, "--help > %s/help.txt", dir);
     snprintf(help, sizeof help, "%s/help.txt", dir);
     FILE *f = fopen(help, "r");
     cr_assert_not_null(f);

@@ -4,6 +4,7 @@
  * and without Slurm. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -32,6 +33,19 @@ static Image load(const char *path)
     return im;
 }
 
+/* The image DIR/NAME (printf-style name). */
+static Image load_at(const char *dir, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static Image load_at(const char *dir, const char *fmt, ...)
+{
+    char name[256], path[4500];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(name, sizeof name, fmt, ap);
+    va_end(ap);
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    return load(path);
+}
+
 /* Mean of merged - other over pixels and channels, and its standard
  * error from the differences' spread (pixels are independent). */
 static void mean_difference(const Image *a, const Image *b, double *mean, double *se)
@@ -45,6 +59,20 @@ static void mean_difference(const Image *a, const Image *b, double *mean, double
     }
     *mean = s / n;
     *se = sqrt(fmax(0.0, s2 / n - *mean * *mean) / (n - 1));
+}
+
+/* scripts/slurm-render.sh on the corridor with the programs under test and
+ * the options given (printf-style): its exit status, its stderr in err. */
+static int slurm_render(char err[4096], const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static int slurm_render(char err[4096], const char *fmt, ...)
+{
+    char options[8192], cmd[16384];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(options, sizeof options, fmt, ap);
+    va_end(ap);
+    snprintf(cmd, sizeof cmd, "bash scripts/slurm-render.sh " SCENE " --bin %s %s", sg_test_bin_dir(), options);
+    return sg_test_run(cmd, err, 4096);
 }
 
 static void stop_cluster(void)
@@ -80,16 +108,13 @@ static void start_cluster(void)
 /* The farm's merged image is exactly the spp-weighted mean of its shards. */
 static void check_exact_merge(const char *dir, int shards, long total_spp)
 {
-    char path[4200];
-    snprintf(path, sizeof path, "%s/corridor.exr", dir);
-    Image merged = load(path);
+    Image merged = load_at(dir, "corridor.exr");
     cr_assert_eq(merged.spp, total_spp, "merged spp %ld, expected %ld", merged.spp, total_spp);
     size_t n = (size_t)merged.w * merged.h * 3;
     double *sum = calloc(n, sizeof *sum);
     long spp = 0;
     for (int k = 0; k < shards; k++) {
-        snprintf(path, sizeof path, "%s/shards/corridor-%d.exr", dir, k);
-        Image s = load(path);
+        Image s = load_at(dir, "shards/corridor-%d.exr", k);
         cr_assert(s.w == merged.w && s.h == merged.h);
         for (size_t i = 0; i < n; i++)
             sum[i] += (double)s.spp * s.rgb[i];
@@ -113,11 +138,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
     char cmd[16384], err[4096];
 
     /* 1. four shards of a 32 spp render, merged */
-    snprintf(cmd, sizeof cmd,
-             "bash scripts/slurm-render.sh " SCENE " --shards 4 --out %s/farm --bin %s --wait -- --spp 32 "
-             "--size 48x36 --seed 7 >/dev/null",
-             tmp, bin);
-    int status = sg_test_run(cmd, err, sizeof err);
+    int status = slurm_render(err, "--shards 4 --out %s/farm --wait -- --spp 32 --size 48x36 --seed 7 >/dev/null", tmp);
     cr_assert_eq(status, 0, "slurm-render failed (%d): %s", status, err);
     char dir[4200];
     snprintf(dir, sizeof dir, "%s/farm", tmp);
@@ -130,11 +151,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
              "--quiet",
              bin, tmp, tmp);
     cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
-    char path[4200];
-    snprintf(path, sizeof path, "%s/farm/corridor.exr", tmp);
-    Image merged = load(path);
-    snprintf(path, sizeof path, "%s/single.exr", tmp);
-    Image single = load(path);
+    Image merged = load_at(tmp, "farm/corridor.exr"), single = load_at(tmp, "single.exr");
     double mean, se;
     mean_difference(&merged, &single, &mean, &se);
     cr_log_info("farm of 4 against one process: mean difference %.3g +- %.3g", mean, se);
@@ -145,11 +162,8 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
 
     /* 3. a shard cancelled while it runs leaves no file; --resume renders it
      * again, and the merge follows */
-    snprintf(cmd, sizeof cmd,
-             "bash scripts/slurm-render.sh " SCENE " --shards 4 --out %s/farm2 --bin %s -- --spp 4000 --size 48x36 "
-             "--seed 3 >/dev/null",
-             tmp, bin);
-    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
+    cr_assert_eq(slurm_render(err, "--shards 4 --out %s/farm2 -- --spp 4000 --size 48x36 --seed 3 >/dev/null", tmp), 0,
+                 "%s", err);
     char job[64] = "";
     for (int i = 0; i < 400 && !job[0]; i++) { /* shard 0 running */
         FILE *p = popen("squeue -h -n corridor-shards -t RUNNING -o '%i' | grep '_0$'", "r");
@@ -188,6 +202,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
     status = sg_test_run(cmd, err, sizeof err);
     cr_assert_eq(status, 1, "merge of 3 of 4 shards: exit %d (%s)", status, err);
     cr_assert(strstr(err, "missing"), "the refusal does not say what is missing: %s", err);
+    char path[4200];
     snprintf(path, sizeof path, "%s/partial.exr", tmp);
     cr_assert(!sg_test_exists(path), "a refused merge left %s", path);
 
@@ -215,11 +230,8 @@ Test(render_farm, local_shards_are_the_single_render_in_bsdf_mode)
     const char *tmp = sg_test_tmpdir();
     const char *bin = sg_test_bin_dir();
     char cmd[16384], err[4096];
-    snprintf(cmd, sizeof cmd,
-             "bash scripts/slurm-render.sh " SCENE " --shards 3 --out %s/local --bin %s --local -- --sampling bsdf "
-             "--spp 10 --size 48x36 --seed 5 >/dev/null",
-             tmp, bin);
-    int status = sg_test_run(cmd, err, sizeof err);
+    int status = slurm_render(err, "--shards 3 --out %s/local --local -- --sampling bsdf --spp 10 --size 48x36 --seed 5 "
+                                   ">/dev/null", tmp);
     cr_assert_eq(status, 0, "slurm-render --local failed (%d): %s", status, err);
     char dir[4200];
     snprintf(dir, sizeof dir, "%s/local", tmp);
@@ -227,11 +239,7 @@ Test(render_farm, local_shards_are_the_single_render_in_bsdf_mode)
     snprintf(cmd, sizeof cmd, "%s/render " SCENE " --sampling bsdf --spp 10 --size 48x36 --seed 5 -o %s/one.exr --quiet",
              bin, tmp);
     cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
-    char path[4200];
-    snprintf(path, sizeof path, "%s/local/corridor.exr", tmp);
-    Image merged = load(path);
-    snprintf(path, sizeof path, "%s/one.exr", tmp);
-    Image one = load(path);
+    Image merged = load_at(tmp, "local/corridor.exr"), one = load_at(tmp, "one.exr");
     size_t n = (size_t)one.w * one.h * 3;
     double worst = 0;
     for (size_t i = 0; i < n; i++)
@@ -240,6 +248,58 @@ Test(render_farm, local_shards_are_the_single_render_in_bsdf_mode)
     cr_assert(worst < 1e-5, "the shards' passes are not the single render's: relative difference %.3g", worst);
     free(merged.rgb);
     free(one.rgb);
+}
+
+/* A slurm.conf whose controller is not running (nothing listens on port 1
+ * of the loopback): `scontrol ping` says DOWN at once. Where Slurm is not
+ * installed, the script sees no controller either. */
+static void no_controller(const char *tmp)
+{
+    char conf[4200];
+    snprintf(conf, sizeof conf, "%s/slurm.conf", tmp);
+    sg_test_write(tmp, "slurm.conf",
+                  "ClusterName=none\nSlurmctldHost=localhost(127.0.0.1)\nSlurmctldPort=1\n"
+                  "NodeName=localhost CPUs=1\nPartitionName=all Nodes=localhost\n");
+    setenv("SLURM_CONF", conf, 1);
+}
+
+/* Slurm installed but no controller answering (a workstation): the shards
+ * run here, one line says so, and the image is the farm's. */
+Test(render_farm, no_controller_runs_the_shards_here)
+{
+    const char *tmp = sg_test_tmpdir();
+    no_controller(tmp);
+    char err[4096];
+    int status = slurm_render(err, "--shards 3 --out %s/here -- --sampling bsdf --spp 7 --size 24x18 --seed 2 >/dev/null",
+                              tmp);
+    cr_assert_eq(status, 0, "slurm-render without a controller failed (%d): %s", status, err);
+    /* the script's one line, then merge's summary */
+    const char *said = strstr(err, "slurm-render: ");
+    cr_assert(said && !strstr(said + 1, "slurm-render: "), "one line should say where the shards ran: %s", err);
+    cr_assert(strstr(said, "no Slurm controller answers") || strstr(said, "not installed"), "said: %s", err);
+    cr_assert(strstr(said, "running the 3 shards here\n"), "said: %s", err);
+    char dir[4200];
+    snprintf(dir, sizeof dir, "%s/here", tmp);
+    check_exact_merge(dir, 3, 7);
+}
+
+/* --slurm insists on the cluster: without one it fails in one line before
+ * writing anything. */
+Test(render_farm, slurm_without_a_controller_fails_and_writes_nothing)
+{
+    const char *tmp = sg_test_tmpdir();
+    no_controller(tmp);
+    char err[4096], path[4200];
+    int status = slurm_render(err, "--shards 3 --out %s/farm --slurm -- --sampling bsdf --spp 7", tmp);
+    cr_assert_eq(status, 1, "--slurm without a controller: exit %d (%s)", status, err);
+    cr_assert_eq(sg_test_count_lines(err), 1, "not one line: %s", err);
+    cr_assert(strstr(err, "slurm-render: --slurm: "), "said: %s", err);
+    snprintf(path, sizeof path, "%s/farm", tmp);
+    cr_assert(!sg_test_exists(path), "a refused --slurm left %s", path);
+    /* one or the other */
+    status = slurm_render(err, "--shards 3 --out %s/farm --slurm --local", tmp);
+    cr_assert_eq(status, 2, "--slurm --local: exit %d (%s)", status, err);
+    cr_assert(!sg_test_exists(path), "a usage error left %s", path);
 }
 
 Test(render_farm, render_refuses_a_shard_it_cannot_render)

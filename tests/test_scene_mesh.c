@@ -54,6 +54,17 @@ static SgScene *load_ok(const char *path)
     return s;
 }
 
+/* DIR/scene.json: the mesh file under a quad light, loaded. */
+static SgScene *load_lit_mesh(const char *dir, const char *mesh)
+{
+    char text[1024];
+    snprintf(text, sizeof text,
+             "{ \"mesh\": \"%s\", \"lights\": [ { \"type\": \"quad\", "
+             "\"corners\": [[0,0,5],[0,1,5],[1,1,5],[1,0,5]], \"radiance\": [1,1,1] } ] }",
+             mesh);
+    return load_ok(sg_test_write(dir, "scene.json", text));
+}
+
 static const SgMaterial *material_named(const SgScene *s, const char *name)
 {
     for (uint32_t i = 0; i < s->material_count; i++)
@@ -151,10 +162,7 @@ Test(mesh_textures, missing_map_kd_warns_once_and_is_grey)
                   "newmtl a\nKd 0.9 0.1 0.1\nmap_Kd nothere.png\n"
                   "newmtl b\nKd 0.1 0.9 0.1\nmap_Kd nothere.png\n");
     join(obj, sizeof obj, dir, "quad.obj");
-    SgScene *s = load_ok(sg_test_write(dir, "scene.json",
-                                       "{ \"mesh\": \"quad.obj\", \"lights\": [ { \"type\": \"quad\", "
-                                       "\"corners\": [[0,0,5],[0,1,5],[1,1,5],[1,0,5]], "
-                                       "\"radiance\": [1,1,1] } ] }"));
+    SgScene *s = load_lit_mesh(dir, "quad.obj");
     cr_expect_eq(s->warning_count, 1);
     cr_expect(has_warning(s, obj, "nothere.png"), "warning: %s", s->warning_count ? s->warnings[0] : "(none)");
     cr_expect(!strchr(s->warning_count ? s->warnings[0] : "", '\n'), "one line");
@@ -259,10 +267,7 @@ Test(mesh_textures, gltf_base_colour_times_texture)
     char png[4200];
     write_quadrants_png(join(png, sizeof png, dir, "quadrants.png"));
     write_gltf(dir, "tri.gltf", png, false);
-    SgScene *s = load_ok(sg_test_write(dir, "scene.json",
-                                       "{ \"mesh\": \"tri.gltf\", \"lights\": [ { \"type\": \"quad\", "
-                                       "\"corners\": [[0,0,5],[0,1,5],[1,1,5],[1,0,5]], "
-                                       "\"radiance\": [1,1,1] } ] }"));
+    SgScene *s = load_lit_mesh(dir, "tri.gltf");
     cr_expect_eq(s->warning_count, 0, "%s", s->warning_count ? s->warnings[0] : "");
     cr_assert_not_null(s->uvs);
     const float want[3][2] = {{0, 1}, {1, 0.75f}, {0, 0}}; /* at (0,0) (1,0) (0,1) */
@@ -300,10 +305,7 @@ Test(mesh_textures, gltf_embedded_image_warns_and_keeps_the_colour)
     char png[4200], gltf[4200];
     write_quadrants_png(join(png, sizeof png, dir, "quadrants.png"));
     snprintf(gltf, sizeof gltf, "%s", write_gltf(dir, "tri.gltf", png, true));
-    SgScene *s = load_ok(sg_test_write(dir, "scene.json",
-                                       "{ \"mesh\": \"tri.gltf\", \"lights\": [ { \"type\": \"quad\", "
-                                       "\"corners\": [[0,0,5],[0,1,5],[1,1,5],[1,0,5]], "
-                                       "\"radiance\": [1,1,1] } ] }"));
+    SgScene *s = load_lit_mesh(dir, "tri.gltf");
     cr_expect_eq(s->warning_count, 1);
     cr_expect(has_warning(s, gltf, "embedded"), "warning: %s", s->warning_count ? s->warnings[0] : "(none)");
     const SgMaterial *m = material_named(s, "tinted");

@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include "../skeletonize/shapes.h"
@@ -25,18 +24,9 @@ static void tmp_path(char *out, size_t cap, const char *name)
 static const char *run_env = "";
 static int run(const char *args, char *err_text, size_t cap)
 {
-    char errfile[256], cmd[2048];
-    tmp_path(errfile, sizeof errfile, "stderr.txt");
-    snprintf(cmd, sizeof cmd, "%s %s/skeletonize %s 2>%s >/dev/null", run_env, sg_test_bin_dir(), args,
-             errfile);
-    int status = system(cmd);
-    FILE *f = fopen(errfile, "r");
-    size_t n = f ? fread(err_text, 1, cap - 1, f) : 0;
-    err_text[n] = 0;
-    if (f)
-        fclose(f);
-    unlink(errfile);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "%s %s/skeletonize %s >/dev/null", run_env, sg_test_bin_dir(), args);
+    return sg_test_run(cmd, err_text, cap);
 }
 
 static void write_shape(SgShape shape, int scale, const char *path)

@@ -64,6 +64,18 @@ static SgSkeleton sample_skeleton(void)
     return s;
 }
 
+/* The sample skeleton written to a temporary file (temp_name(tag), its
+ * path in path): the file's bytes. */
+static unsigned char *written_sample(const char *tag, char path[256], size_t *size)
+{
+    temp_name(path, 256, tag);
+    SgSkeleton a = sample_skeleton();
+    SgError err = {0};
+    cr_assert(sg_skeleton_write_ply(&a, path, &err), "%s", err.message);
+    sg_skeleton_release(&a);
+    return slurp(path, size);
+}
+
 Test(skeleton_graph, binary_round_trip_is_exact)
 {
     char path[256];
@@ -232,12 +244,9 @@ Test(skeleton_graph, refuses_malformed_ascii)
 Test(skeleton_graph, refuses_every_truncation_of_a_binary_file)
 {
     char path[256];
-    temp_name(path, sizeof path, "trunc");
-    SgSkeleton a = sample_skeleton();
-    SgError err = {0};
-    cr_assert(sg_skeleton_write_ply(&a, path, &err), "%s", err.message);
     size_t size;
-    unsigned char *data = slurp(path, &size);
+    unsigned char *data = written_sample("trunc", path, &size);
+    SgError err = {0};
     /* Every prefix is refused; the copy is exactly the prefix length, so
      * ASan catches any read past it. */
     for (size_t n = 0; n < size; n++) {
@@ -258,18 +267,14 @@ Test(skeleton_graph, refuses_every_truncation_of_a_binary_file)
     cr_assert(strstr(err.message, "truncated") != NULL, "%s", err.message);
     free(data);
     unlink(path);
-    sg_skeleton_release(&a);
 }
 
 Test(skeleton_graph, refuses_corrupted_binary_values)
 {
     char path[256];
-    temp_name(path, sizeof path, "corrupt");
-    SgSkeleton a = sample_skeleton();
-    SgError err = {0};
-    cr_assert(sg_skeleton_write_ply(&a, path, &err), "%s", err.message);
     size_t size;
-    unsigned char *data = slurp(path, &size);
+    unsigned char *data = written_sample("corrupt", path, &size);
+    SgError err = {0};
     size_t body = size - 4 * 37 - 3 * 8;
     /* Edge 0's second index -> 0x7fffffff. */
     unsigned char *bad = malloc(size);
@@ -287,7 +292,6 @@ Test(skeleton_graph, refuses_corrupted_binary_values)
     free(bad);
     free(data);
     unlink(path);
-    sg_skeleton_release(&a);
 }
 
 Test(skeleton_graph, missing_file_is_named)

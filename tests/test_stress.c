@@ -155,40 +155,70 @@ static void light_square(const double c[3], double size, int axis, int sign, dou
     }
 }
 
+/* The six walls of the box [lo, hi] facing inwards (the first `walls` of
+ * them: box_inward's order), of one material. */
+static void add_box(Json *j, const double lo[3], const double hi[3], int walls, const char *material)
+{
+    double box[6][4][3];
+    box_inward(lo, hi, box);
+    add_quads(j, (const double(*)[4][3])box, walls, material);
+}
+
+/* A square light (light_square) of that radiance. */
+static void add_square_light(Json *j, const double c[3], double size, int axis, int sign, double radiance)
+{
+    double l[4][3];
+    light_square(c, size, axis, sign, l);
+    add_light(j, l, radiance);
+}
+
+/* The box [lo, hi] of white walls lit by one square light, at unit scale. */
+static Json lit_box(const double lo[3], const double hi[3], const double c[3], double size, int axis, int sign,
+                    double radiance)
+{
+    Json j = json_new(1, 0);
+    add_box(&j, lo, hi, 6, "white");
+    add_square_light(&j, c, size, axis, sign, radiance);
+    return j;
+}
+
 /* Two rooms [0,2]^3 and [2,4]x[0,2]^2 joined by a door in the wall x = 2
  * (z in [0.7, 1.3], y below 1.2; no door: sealed). The light is on room A's
  * ceiling; the camera in room B sees the door: B is lit only indirectly. */
-static void two_rooms(Json *j, bool door)
+static Json two_rooms(double scale, double shift, bool door)
 {
+    Json j = json_new(scale, shift);
     const double lo[3] = {0, 0, 0}, hi[3] = {4, 2, 2};
-    double box[6][4][3];
-    box_inward(lo, hi, box);
-    add_quads(j, (const double(*)[4][3])box, 6, "white");
+    add_box(&j, lo, hi, 6, "white");
     if (door) {
         const double wall[3][4][3] = {
             {{2, 0, 0}, {2, 2, 0}, {2, 2, 0.7}, {2, 0, 0.7}},
             {{2, 0, 1.3}, {2, 2, 1.3}, {2, 2, 2}, {2, 0, 2}},
             {{2, 1.2, 0.7}, {2, 2, 0.7}, {2, 2, 1.3}, {2, 1.2, 1.3}},
         };
-        add_quads(j, wall, 3, "grey");
+        add_quads(&j, wall, 3, "grey");
     } else {
         const double wall[1][4][3] = {{{2, 0, 0}, {2, 2, 0}, {2, 2, 2}, {2, 0, 2}}};
-        add_quads(j, wall, 1, "grey");
+        add_quads(&j, wall, 1, "grey");
     }
+    return j;
 }
 
 static const double room_b_camera[3] = {3.7, 1.0, 1.0}, room_b_target[3] = {2.0, 0.8, 1.0};
 static const double ceiling_light_centre[3] = {1.0, 1.98, 1.0};
 
+/* json_write with the camera in room B, looking at the door, 32x24. */
+static const char *json_write_room_b(Json *j, const char *dir, const char *name)
+{
+    return json_write(j, dir, name, room_b_camera, room_b_target, 32, 24);
+}
+
 /* The reference scene at a unit and offset. */
 static const char *base_scene(const char *dir, const char *name, double scale, double shift)
 {
-    Json j = json_new(scale, shift);
-    two_rooms(&j, true);
-    double l[4][3];
-    light_square(ceiling_light_centre, 0.5, 1, -1, l);
-    add_light(&j, l, 20);
-    return json_write(&j, dir, name, room_b_camera, room_b_target, 32, 24);
+    Json j = two_rooms(scale, shift, true);
+    add_square_light(&j, ceiling_light_centre, 0.5, 1, -1, 20);
+    return json_write_room_b(&j, dir, name);
 }
 
 /* ---- running the programs ----------------------------------------------- */
@@ -288,6 +318,24 @@ static double mean_std_error(const Result *a, const Result *b)
     return sqrt(s2 / 2.0) / (double)n;
 }
 
+/* The reference scene (base_scene, as TAG.json) rendered with seeds 1 and 2
+ * (TAG, TAG2): the first render; *se the standard error of its mean; the
+ * second render in *second, or freed where second is NULL. */
+static Result reference_renders(const char *dir, const char *tag, int res, int spp, double *se, Result *second)
+{
+    char scene[64], tag2[64];
+    snprintf(scene, sizeof scene, "%s.json", tag);
+    snprintf(tag2, sizeof tag2, "%s2", tag);
+    Result ref = pipeline_ok(dir, base_scene(dir, scene, 1, 0), tag, res, spp, 1);
+    Result ref2 = pipeline_ok(dir, base_scene(dir, scene, 1, 0), tag2, res, spp, 2);
+    *se = mean_std_error(&ref, &ref2);
+    if (second)
+        *second = ref2;
+    else
+        free(ref2.rgb);
+    return ref;
+}
+
 /* Means of two independent-noise estimates agree within k standard errors. */
 static void assert_same_mean(const Result *a, const Result *b, double se, double k, const char *what)
 {
@@ -295,6 +343,15 @@ static void assert_same_mean(const Result *a, const Result *b, double se, double
     cr_log_info("%s: mean %.5f vs %.5f (tolerance %.5f)", what, a->mean, b->mean, tol);
     cr_assert(fabs(a->mean - b->mean) <= tol, "%s: mean %.5f vs %.5f, tolerance %.5f", what, a->mean,
               b->mean, tol);
+}
+
+/* A render against its reference (reference_renders) at 5 standard errors;
+ * both images are freed. */
+static void assert_like_reference(Result *r, Result *ref, double se, const char *what)
+{
+    assert_same_mean(r, ref, se, 5, what);
+    free(r->rgb);
+    free(ref->rgb);
 }
 
 /* Non-zero status; the error is the last line of stderr, names the file
@@ -332,9 +389,9 @@ Test(stress, same_image_at_any_unit_and_far_from_origin, .timeout = 240)
 {
     const char *dir = sg_test_tmpdir();
     const int spp = spp_for_tests(), res = 24;
-    Result ref = pipeline_ok(dir, base_scene(dir, "unit.json", 1, 0), "unit", res, spp, 1);
-    Result ref2 = pipeline_ok(dir, base_scene(dir, "unit.json", 1, 0), "unit2", res, spp, 2);
-    double se = mean_std_error(&ref, &ref2);
+    Result ref2;
+    double se;
+    Result ref = reference_renders(dir, "unit", res, spp, &se, &ref2);
     cr_assert_gt(ref.mean, 0.0, "the reference scene renders black");
     cr_assert_gt(se, 0.0);
     /* the noise estimate must be a small fraction of the signal, or the test
@@ -367,17 +424,14 @@ Test(stress, degenerate_duplicated_flipped_and_cracked_geometry, .timeout = 240)
 {
     const char *dir = sg_test_tmpdir();
     const int spp = spp_for_tests(), res = 24;
-    Result ref = pipeline_ok(dir, base_scene(dir, "clean.json", 1, 0), "clean", res, spp, 1);
-    Result ref2 = pipeline_ok(dir, base_scene(dir, "clean.json", 1, 0), "clean2", res, spp, 2);
-    double se = mean_std_error(&ref, &ref2);
+    double se;
+    Result ref = reference_renders(dir, "clean", res, spp, &se, NULL);
 
     Json j = json_new(1, 0);
     /* the outer box with its +z wall split in two along x = 3, the halves
      * 1e-6 apart: a crack far below a voxel */
     const double lo[3] = {0, 0, 0}, hi[3] = {4, 2, 2};
-    double box[6][4][3];
-    box_inward(lo, hi, box);
-    add_quads(&j, (const double(*)[4][3])box, 5, "white");
+    add_box(&j, lo, hi, 5, "white");
     const double cracked[2][4][3] = {
         {{0, 0, 2}, {0, 2, 2}, {3, 2, 2}, {3, 0, 2}},
         {{3 + 1e-6, 0, 2}, {3 + 1e-6, 2, 2}, {4, 2, 2}, {4, 0, 2}},
@@ -410,17 +464,12 @@ Test(stress, degenerate_duplicated_flipped_and_cracked_geometry, .timeout = 240)
                                  {3, 1, 0.5}, {3, 1 + 2e-9, 0.5}, {3, 1, 0.5 + 2e-9}};
     const int tiny_t[6] = {0, 1, 2, 3, 4, 5};
     add_mesh(&j, tiny_v, 6, tiny_t, 2, "white");
-    double l[4][3];
-    light_square(ceiling_light_centre, 0.5, 1, -1, l);
-    add_light(&j, l, 20);
-    const char *messy = json_write(&j, dir, "messy.json", room_b_camera, room_b_target, 32, 24);
+    add_square_light(&j, ceiling_light_centre, 0.5, 1, -1, 20);
+    const char *messy = json_write_room_b(&j, dir, "messy.json");
     Result r = pipeline_ok(dir, messy, "messy", res, spp, 1);
     /* the same grid, and the same image up to noise */
     cr_assert(strstr(r.voxelize_err, "24x12x12 voxels") != NULL, "%s", r.voxelize_err);
-    assert_same_mean(&r, &ref, se, 5, "messy vs clean");
-    free(r.rgb);
-    free(ref.rgb);
-    free(ref2.rgb);
+    assert_like_reference(&r, &ref, se, "messy vs clean");
 }
 
 /* ---- lights ------------------------------------------------------------- */
@@ -432,39 +481,32 @@ Test(stress, zero_area_lights, .timeout = 240)
     /* the only light has no area: refused, naming the scene */
     const double flat[4][3] = {{1, 1.98, 1}, {1.5, 1.98, 1}, {1.5, 1.98, 1}, {1, 1.98, 1}};
     const double point[4][3] = {{1, 1.98, 1}, {1, 1.98, 1}, {1, 1.98, 1}, {1, 1.98, 1}};
-    Json j = json_new(1, 0);
-    two_rooms(&j, true);
+    Json j = two_rooms(1, 0, true);
     add_light(&j, flat, 20);
     add_light(&j, point, 20);
-    const char *dark = json_write(&j, dir, "zero_light.json", room_b_camera, room_b_target, 32, 24);
+    const char *dark = json_write_room_b(&j, dir, "zero_light.json");
     Result r = pipeline(dir, dark, "zero", res, spp, 1, NULL);
     assert_refused(&r, "voxelize", "zero_light.json", "light");
     cr_assert_not(exists2(dir, "zero.vdb"));
     /* beside a real light they change nothing */
-    Result ref = pipeline_ok(dir, base_scene(dir, "ref.json", 1, 0), "ref", res, spp, 1);
-    Result ref2 = pipeline_ok(dir, base_scene(dir, "ref.json", 1, 0), "ref2", res, spp, 2);
-    double se = mean_std_error(&ref, &ref2);
-    j = json_new(1, 0);
-    two_rooms(&j, true);
+    double se;
+    Result ref = reference_renders(dir, "ref", res, spp, &se, NULL);
+    j = two_rooms(1, 0, true);
     double l[4][3];
     light_square(ceiling_light_centre, 0.5, 1, -1, l);
     add_light(&j, flat, 20);
     add_light(&j, l, 20);
     add_light(&j, point, 20);
-    Result both = pipeline_ok(dir, json_write(&j, dir, "with_zero.json", room_b_camera, room_b_target, 32, 24),
+    Result both = pipeline_ok(dir, json_write_room_b(&j, dir, "with_zero.json"),
                               "with_zero", res, spp, 1);
-    assert_same_mean(&both, &ref, se, 5, "real light + zero-area lights");
-    free(both.rgb);
-    free(ref.rgb);
-    free(ref2.rgb);
+    assert_like_reference(&both, &ref, se, "real light + zero-area lights");
 }
 
 Test(stress, light_flush_with_the_ceiling_and_touching_a_wall, .timeout = 240)
 {
     const char *dir = sg_test_tmpdir();
     const int spp = spp_for_tests(), res = 24;
-    Json j = json_new(1, 0);
-    two_rooms(&j, true);
+    Json j = two_rooms(1, 0, true);
     /* exactly in the ceiling's plane (coplanar, facing down) */
     const double flush_c[3] = {1.0, 2.0, 1.0};
     double flush[4][3];
@@ -476,7 +518,7 @@ Test(stress, light_flush_with_the_ceiling_and_touching_a_wall, .timeout = 240)
     /* in a corner of room B, touching three walls, facing down */
     const double corner[4][3] = {{4, 2, 2}, {3.7, 2, 2}, {3.7, 2, 1.7}, {4, 2, 1.7}};
     add_light(&j, corner, 5);
-    const char *scene = json_write(&j, dir, "touching.json", room_b_camera, room_b_target, 32, 24);
+    const char *scene = json_write_room_b(&j, dir, "touching.json");
     Result r = pipeline_ok(dir, scene, "touching", res, spp, 1);
     cr_assert_gt(r.mean, 0.0);
     cr_assert(strstr(r.voxelize_err, "3 light(s)") != NULL, "%s", r.voxelize_err);
@@ -495,11 +537,10 @@ Test(stress, light_sealed_in_a_closed_box, .timeout = 240)
     const double c[3] = {1.0, 1.3, 1.0};
     double inner[4][3];
     light_square(c, 0.2, 1, -1, inner);
-    Json j = json_new(1, 0);
-    two_rooms(&j, true);
+    Json j = two_rooms(1, 0, true);
     add_quads(&j, (const double(*)[4][3])box, 6, "grey");
     add_light(&j, inner, 20);
-    const char *boxed = json_write(&j, dir, "boxed.json", room_b_camera, room_b_target, 32, 24);
+    const char *boxed = json_write_room_b(&j, dir, "boxed.json");
     Result r = pipeline_ok(dir, boxed, "boxed", res, spp, 1);
     cr_assert_eq(r.mean, 0.0, "light escaped a closed box: mean %g", r.mean);
     cr_assert(strstr(r.voxelize_err, "camera") != NULL, "voxelize does not warn: %s", r.voxelize_err);
@@ -512,24 +553,20 @@ Test(stress, light_sealed_in_a_closed_box, .timeout = 240)
     box_inward(tlo, thi, box);
     const double tc[3] = {1.0, 1.02, 1.0};
     light_square(tc, 0.05, 1, -1, inner);
-    j = json_new(1, 0);
-    two_rooms(&j, true);
+    j = two_rooms(1, 0, true);
     add_quads(&j, (const double(*)[4][3])box, 6, "grey");
     add_light(&j, inner, 20);
-    const char *tiny = json_write(&j, dir, "tiny_box.json", room_b_camera, room_b_target, 32, 24);
+    const char *tiny = json_write_room_b(&j, dir, "tiny_box.json");
     r = pipeline_ok(dir, tiny, "tiny_box", res, spp, 1);
     cr_assert_eq(r.mean, 0.0, "light escaped a closed box: mean %g", r.mean);
     free(r.rgb);
 
     /* beside a free light: the image is lit */
-    j = json_new(1, 0);
-    two_rooms(&j, true);
+    j = two_rooms(1, 0, true);
     add_quads(&j, (const double(*)[4][3])box, 6, "grey");
     add_light(&j, inner, 20);
-    double l[4][3];
-    light_square(ceiling_light_centre, 0.5, 1, -1, l);
-    add_light(&j, l, 20);
-    const char *one_sealed = json_write(&j, dir, "one_sealed.json", room_b_camera, room_b_target, 32, 24);
+    add_square_light(&j, ceiling_light_centre, 0.5, 1, -1, 20);
+    const char *one_sealed = json_write_room_b(&j, dir, "one_sealed.json");
     Result ok = pipeline_ok(dir, one_sealed, "one_sealed", res, spp, 1);
     cr_assert_gt(ok.mean, 0.0);
     free(ok.rgb);
@@ -538,12 +575,9 @@ Test(stress, light_sealed_in_a_closed_box, .timeout = 240)
 Test(stress, camera_in_a_room_no_light_reaches, .timeout = 240)
 {
     const char *dir = sg_test_tmpdir();
-    Json j = json_new(1, 0);
-    two_rooms(&j, false);
-    double l[4][3];
-    light_square(ceiling_light_centre, 0.5, 1, -1, l);
-    add_light(&j, l, 20);
-    const char *scene = json_write(&j, dir, "dark.json", room_b_camera, room_b_target, 32, 24);
+    Json j = two_rooms(1, 0, false);
+    add_square_light(&j, ceiling_light_centre, 0.5, 1, -1, 20);
+    const char *scene = json_write_room_b(&j, dir, "dark.json");
     Result r = pipeline_ok(dir, scene, "dark", 24, spp_for_tests(), 1);
     /* exactly black: no path from this room reaches the light */
     cr_assert_eq(r.mean, 0.0, "mean %g", r.mean);
@@ -553,47 +587,40 @@ Test(stress, camera_in_a_room_no_light_reaches, .timeout = 240)
 
 /* ---- grids -------------------------------------------------------------- */
 
-Test(stress, medium_of_one_voxel, .timeout = 240)
+/* A box lit by a unit square light (light_square's axis and sign), seen
+ * from pos toward at: at resolution res its medium is `voxels` voxels and
+ * the image is not black. */
+static void assert_box_medium(const char *name, const double lo[3], const double hi[3], const double light[3],
+                              int axis, int sign, double radiance, const double pos[3], const double at[3],
+                              int res, int voxels)
 {
     const char *dir = sg_test_tmpdir();
-    /* a 3 x 3 x 3 room at resolution 3: every voxel but the centre one
-     * touches a wall */
-    Json j = json_new(1, 0);
-    const double lo[3] = {0, 0, 0}, hi[3] = {3, 3, 3};
-    double box[6][4][3];
-    box_inward(lo, hi, box);
-    add_quads(&j, (const double(*)[4][3])box, 6, "white");
-    const double c[3] = {1.5, 2.999, 1.5};
-    double l[4][3];
-    light_square(c, 1.0, 1, -1, l);
-    add_light(&j, l, 5);
-    const double pos[3] = {1.5, 1.5, 1.2}, at[3] = {1.5, 1.0, 3};
-    const char *scene = json_write(&j, dir, "one.json", pos, at, 16, 12);
-    Result r = pipeline_ok(dir, scene, "one", 3, spp_for_tests(), 1);
-    cr_assert(strstr(r.voxelize_err, "medium 1 voxels") != NULL, "%s", r.voxelize_err);
+    Json j = lit_box(lo, hi, light, 1.0, axis, sign, radiance);
+    char file[64], summary[64];
+    snprintf(file, sizeof file, "%s.json", name);
+    snprintf(summary, sizeof summary, "medium %d voxels", voxels);
+    const char *scene = json_write(&j, dir, file, pos, at, 16, 12);
+    Result r = pipeline_ok(dir, scene, name, res, spp_for_tests(), 1);
+    cr_assert(strstr(r.voxelize_err, summary) != NULL, "%s", r.voxelize_err);
     cr_assert_gt(r.mean, 0.0);
     free(r.rgb);
 }
 
+Test(stress, medium_of_one_voxel, .timeout = 240)
+{
+    /* a 3 x 3 x 3 room at resolution 3: every voxel but the centre one
+     * touches a wall */
+    const double lo[3] = {0, 0, 0}, hi[3] = {3, 3, 3}, c[3] = {1.5, 2.999, 1.5};
+    const double pos[3] = {1.5, 1.5, 1.2}, at[3] = {1.5, 1.0, 3};
+    assert_box_medium("one", lo, hi, c, 1, -1, 5, pos, at, 3, 1);
+}
+
 Test(stress, corridor_one_voxel_wide, .timeout = 240)
 {
-    const char *dir = sg_test_tmpdir();
     /* [0,20] x [0,3] x [0,3] at resolution 20: the air is 18 x 1 x 1 voxels */
-    Json j = json_new(1, 0);
-    const double lo[3] = {0, 0, 0}, hi[3] = {20, 3, 3};
-    double box[6][4][3];
-    box_inward(lo, hi, box);
-    add_quads(&j, (const double(*)[4][3])box, 6, "white");
-    const double c[3] = {0.001, 1.5, 1.5};
-    double l[4][3];
-    light_square(c, 1.0, 0, +1, l);
-    add_light(&j, l, 50);
+    const double lo[3] = {0, 0, 0}, hi[3] = {20, 3, 3}, c[3] = {0.001, 1.5, 1.5};
     const double pos[3] = {18.5, 1.5, 1.5}, at[3] = {0, 1.5, 1.5};
-    const char *scene = json_write(&j, dir, "corridor.json", pos, at, 16, 12);
-    Result r = pipeline_ok(dir, scene, "corridor", 20, spp_for_tests(), 1);
-    cr_assert(strstr(r.voxelize_err, "medium 18 voxels") != NULL, "%s", r.voxelize_err);
-    cr_assert_gt(r.mean, 0.0);
-    free(r.rgb);
+    assert_box_medium("corridor", lo, hi, c, 0, +1, 50, pos, at, 20, 18);
 }
 
 /* Work larger than the memory available is refused before it allocates,
@@ -614,15 +641,9 @@ Test(stress, larger_than_memory_is_refused_cleanly, .timeout = 240)
     /* the largest resolution on a cube: 4096^3 bytes, 64 GB; run only where
      * the machine has less, so that it must be refused (before allocating) */
     if ((double)sysconf(_SC_PHYS_PAGES) * sysconf(_SC_PAGESIZE) < 60e9) {
-        Json j = json_new(1, 0);
         const double lo[3] = {0, 0, 0}, hi[3] = {2, 2, 2};
-        double box[6][4][3];
-        box_inward(lo, hi, box);
-        add_quads(&j, (const double(*)[4][3])box, 6, "white");
         const double c[3] = {1, 1.99, 1}, pos[3] = {1, 1, 0.3}, at[3] = {1, 1, 2};
-        double l[4][3];
-        light_square(c, 0.5, 1, -1, l);
-        add_light(&j, l, 5);
+        Json j = lit_box(lo, hi, c, 0.5, 1, -1, 5);
         const char *cube = json_write(&j, dir, "cube.json", pos, at, 16, 12);
         snprintf(cmd, sizeof cmd, "%s '%s' -o %s/cube.vdb --resolution 4096", prog("voxelize"), cube, dir);
         cr_assert_eq(sg_test_run(cmd, err, sizeof err), 1, "%s", err);

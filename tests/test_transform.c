@@ -1,5 +1,5 @@
 /* common/transform.h: the one 4x4 transform of the scene front ends
- * (scene.c, pbrt/): products, inverse, rotation, points, normals. */
+ * (scene_json.c, pbrt/): products, inverse, rotation, points, normals. */
 #include <criterion/criterion.h>
 #include <math.h>
 

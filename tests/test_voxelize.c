@@ -12,6 +12,17 @@
 #include "support_files.h"
 #include "voxelize/voxelize.h"
 
+/* A scene of the repository's Cornell box written in a temporary folder
+ * (so naming the mesh by its absolute path): DIR/NAME holding
+ * { "meshes": [ { "file": CORNELL<mesh_members> } ]<scene_members> }. */
+static char *write_cornell(const char *dir, const char *name, const char *mesh_members, const char *scene_members)
+{
+    char json[1024];
+    snprintf(json, sizeof json, "{ \"meshes\": [ { \"file\": \"%s\"%s } ]%s }",
+             sg_test_source_path("data/cornell-box/CornellBox-Original.obj"), mesh_members, scene_members);
+    return sg_test_write(dir, name, json);
+}
+
 /* ---- triangle/box overlap against a brute-force reference --------------- */
 
 /* Clips a convex polygon by the half-space s * x[axis] <= bound. */
@@ -158,13 +169,17 @@ static void light_quad(double x, double y, double z, double size, double q[4][3]
     }
 }
 
-static SgScene *load_text(const char *dir, const char *name, const char *json)
+static SgScene *load_scene(const char *path)
 {
-    char *path = sg_test_write(dir, name, json);
     SgError err = {0};
     SgScene *s = sg_scene_load(path, &err);
     cr_assert_not_null(s, "scene failed to load: %s", err.message);
     return s;
+}
+
+static SgScene *load_text(const char *dir, const char *name, const char *json)
+{
+    return load_scene(sg_test_write(dir, name, json));
 }
 
 static void voxelize_ok(const SgScene *s, int resolution, SgMedium *m, SgVoxelizeStats *st)
@@ -311,14 +326,11 @@ Test(voxelize, same_grid_at_any_unit)
         sg_medium_release(&media[i]);
 
     /* A real scene whose walls lie exactly on voxel faces. */
-    char json[512];
     SgMedium cornell[2];
     for (int i = 0; i < 2; i++) {
-        snprintf(json, sizeof json,
-                 "{ \"meshes\": [ { \"file\": \"%s/data/cornell-box/CornellBox-Original.obj\", "
-                 "\"transform\": { \"scale\": %g } } ] }",
-                 getenv("PWD"), i ? 1e4 : 1e-3);
-        SgScene *s = load_text(dir, "cornell.json", json);
+        char scale[64];
+        snprintf(scale, sizeof scale, ", \"transform\": { \"scale\": %g }", i ? 1e4 : 1e-3);
+        SgScene *s = load_scene(write_cornell(dir, "cornell.json", scale, ""));
         SgVoxelizeStats st;
         voxelize_ok(s, 50, &cornell[i], &st);
         sg_scene_free(s);
@@ -391,18 +403,11 @@ Test(voxelize, scene_grouping_and_hash)
                        1e-9);
     /* Moving the camera does not change the geometry's identity. */
     const char *dir = sg_test_tmpdir();
-    char json[1024];
-    snprintf(json, sizeof json,
-             "{ \"mesh\": \"%s/data/cornell-box/CornellBox-Original.obj\", "
-             "\"camera\": { \"position\": [0.3, 1, 1.5], \"look_at\": [0, 1, 0] } }",
-             getenv("PWD"));
-    SgScene *moved = load_text(dir, "moved.json", json);
+    SgScene *moved = load_scene(write_cornell(
+        dir, "moved.json", "", ", \"camera\": { \"position\": [0.3, 1, 1.5], \"look_at\": [0, 1, 0] }"));
     cr_assert_eq(moved->geometry_hash, s->geometry_hash);
-    snprintf(json, sizeof json,
-             "{ \"meshes\": [ { \"file\": \"%s/data/cornell-box/CornellBox-Original.obj\", "
-             "\"transform\": { \"translate\": [0, 0.001, 0] } } ] }",
-             getenv("PWD"));
-    SgScene *shifted = load_text(dir, "shifted.json", json);
+    SgScene *shifted =
+        load_scene(write_cornell(dir, "shifted.json", ", \"transform\": { \"translate\": [0, 0.001, 0] }", ""));
     cr_assert_neq(shifted->geometry_hash, s->geometry_hash);
     sg_scene_free(s);
     sg_scene_free(moved);
@@ -448,6 +453,17 @@ static void expect_failure(const char *scene, const char *must_contain)
     cr_assert_eq(atoi(listing), 0, "files left in the output directory");
 }
 
+/* A scene (DIR/scene_name) whose one mesh file (DIR/mesh_name) holds
+ * mesh_text: loading it fails with a message holding `cause`. */
+static void expect_mesh_failure(const char *dir, const char *scene_name, const char *mesh_name, const char *mesh_text,
+                                const char *cause)
+{
+    char json[512];
+    sg_test_write(dir, mesh_name, mesh_text);
+    snprintf(json, sizeof json, "{ \"mesh\": \"%s\" }", mesh_name);
+    expect_failure(sg_test_write(dir, scene_name, json), cause);
+}
+
 Test(voxelize, bad_input_gives_one_line_and_no_output)
 {
     const char *dir = sg_test_tmpdir();
@@ -456,24 +472,19 @@ Test(voxelize, bad_input_gives_one_line_and_no_output)
     expect_failure(p, "malformed JSON near line 2");
     p = sg_test_write(dir, "missing-mesh.json", "{ \"mesh\": \"nothere.obj\" }");
     expect_failure(p, "nothere.obj: cannot open mesh");
-    sg_test_write(dir, "junk.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
-                                   "property float x\nproperty float y\nproperty float z\n"
-                                   "element face 1\nproperty list uchar int vertex_indices\n"
-                                   "end_header\n\x01\x02");
-    p = sg_test_write(dir, "junk.json", "{ \"mesh\": \"junk.ply\" }");
-    expect_failure(p, "junk.ply: PLY data truncated");
-    sg_test_write(dir, "junk.stl", "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0\n");
-    p = sg_test_write(dir, "junkstl.json", "{ \"mesh\": \"junk.stl\" }");
-    expect_failure(p, "junk.stl");
-    sg_test_write(dir, "nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
-    p = sg_test_write(dir, "nan.json", "{ \"mesh\": \"nan.obj\" }");
-    expect_failure(p, "non-finite vertex coordinate");
-    sg_test_write(dir, "flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
-    p = sg_test_write(dir, "degenerate.json", "{ \"mesh\": \"flat.obj\" }");
-    expect_failure(p, "all were degenerate");
-    sg_test_write(dir, "tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-    p = sg_test_write(dir, "dark.json", "{ \"mesh\": \"tri.obj\" }");
-    expect_failure(p, "no light");
+    expect_mesh_failure(dir, "junk.json", "junk.ply",
+                        "ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
+                        "property float x\nproperty float y\nproperty float z\n"
+                        "element face 1\nproperty list uchar int vertex_indices\n"
+                        "end_header\n\x01\x02",
+                        "junk.ply: PLY data truncated");
+    expect_mesh_failure(dir, "junkstl.json", "junk.stl",
+                        "solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0\n", "junk.stl");
+    expect_mesh_failure(dir, "nan.json", "nan.obj",
+                        "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n", "non-finite vertex coordinate");
+    expect_mesh_failure(dir, "degenerate.json", "flat.obj",
+                        "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "all were degenerate");
+    expect_mesh_failure(dir, "dark.json", "tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "no light");
     p = sg_test_write(dir, "badcam.json",
                       "{ \"mesh\": \"tri.obj\", \"camera\": { \"position\": [0,0,0] } }");
     expect_failure(p, "camera needs");
@@ -501,13 +512,9 @@ Test(voxelize, failure_keeps_the_previous_output)
 Test(voxelize, camera_in_a_wall_is_reported)
 {
     const char *dir = sg_test_tmpdir();
-    char json[1024];
     /* Camera on the Cornell box's back wall plane. */
-    snprintf(json, sizeof json,
-             "{ \"mesh\": \"%s/data/cornell-box/CornellBox-Original.obj\", "
-             "\"camera\": { \"position\": [0, 1, -1.02], \"look_at\": [0, 1, 0] } }",
-             getenv("PWD"));
-    char *scene = sg_test_write(dir, "wall.json", json);
+    char *scene =
+        write_cornell(dir, "wall.json", "", ", \"camera\": { \"position\": [0, 1, -1.02], \"look_at\": [0, 1, 0] }");
     char prog[4096], cmd[16384], err[4096];
     snprintf(cmd, sizeof cmd, "%s '%s' -o '%s/m.vdb' --resolution 32",
              sg_test_program("voxelize", prog, sizeof prog), scene, dir);

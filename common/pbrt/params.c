@@ -179,30 +179,36 @@ Token pbrt_param_token(const Param *param)
     return t;
 }
 
+/* The parameter `name` when given with a value of `kind`; NULL when absent
+ * (*ok true) or of another kind or empty (*ok false: "must be <what>"). */
+static const Param *single_param(Parser *p, const char *name, ParamKind kind, const char *what, bool *ok)
+{
+    const Param *param = pbrt_find_param(p, name);
+    *ok = true;
+    if (!param)
+        return NULL;
+    Token at = pbrt_param_token(param);
+    if (param->kind != kind || param->count < 1) {
+        *ok = pbrt_fail_at(p, &at, "\"%s %s\" must be %s", param->type, name, what);
+        return NULL;
+    }
+    return param;
+}
+
 bool pbrt_param_float(Parser *p, const char *name, double fallback, double *out)
 {
-    *out = fallback;
-    const Param *param = pbrt_find_param(p, name);
-    if (!param)
-        return true;
-    Token at = pbrt_param_token(param);
-    if (param->kind != PARAM_NUMBERS || param->count < 1)
-        return pbrt_fail_at(p, &at, "\"%s %s\" must be a number", param->type, name);
-    *out = p->numbers[param->first];
-    return true;
+    bool ok;
+    const Param *param = single_param(p, name, PARAM_NUMBERS, "a number", &ok);
+    *out = param ? p->numbers[param->first] : fallback;
+    return ok;
 }
 
 bool pbrt_param_bool(Parser *p, const char *name, bool fallback, bool *out)
 {
-    *out = fallback;
-    const Param *param = pbrt_find_param(p, name);
-    if (!param)
-        return true;
-    Token at = pbrt_param_token(param);
-    if (param->kind != PARAM_BOOLS || param->count < 1)
-        return pbrt_fail_at(p, &at, "\"%s %s\" must be true or false", param->type, name);
-    *out = p->bools[param->first];
-    return true;
+    bool ok;
+    const Param *param = single_param(p, name, PARAM_BOOLS, "true or false", &ok);
+    *out = param ? p->bools[param->first] : fallback;
+    return ok;
 }
 
 /* A string parameter; NULL if absent. */

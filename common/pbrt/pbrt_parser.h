@@ -12,7 +12,10 @@
  * directory of the main file, as pbrt does.
  *
  * This header is private to common/pbrt/: the parser's state and the
- * functions its files share. The public entry point is pbrt_scene.h. */
+ * functions its files share. The public entry point is pbrt_scene.h.
+ * Calls go down the list below, never back up: tokens.c, params.c,
+ * spectra.c, textures.c, materials.c, graphics_state.c, shapes.c, and the
+ * statement loop in loader.c at the top. */
 #ifndef SG_PBRT_PARSER_H
 #define SG_PBRT_PARSER_H
 
@@ -209,7 +212,7 @@ bool pbrt_param_float(Parser *p, const char *name, double fallback, double *out)
 bool pbrt_param_bool(Parser *p, const char *name, bool fallback, bool *out);
 const Token *pbrt_param_string(Parser *p, const char *name);
 
-/* ---- color.c: colours and spectra --------------------------------------- */
+/* ---- spectra.c: colours and spectra ------------------------------------- */
 
 /* A named metal spectrum: its complex index of refraction in RGB. */
 typedef struct NamedMetal {
@@ -239,14 +242,20 @@ bool pbrt_named_material_statement(Parser *p, const Token *statement);
 bool pbrt_current_scene_material(Parser *p, bool emissive, uint32_t *id);
 bool pbrt_area_light_statement(Parser *p, const Token *statement);
 
+/* graphics_state.c: the transform statements (Translate, Scale, Rotate,
+ * LookAt, Transform, ConcatTransform), named coordinate systems, and the
+ * attribute blocks that save and restore the graphics state */
+bool pbrt_transform_statement(Parser *p, const Token *statement);
+bool pbrt_set_coordinate_system(Parser *p, const Token *name, const SgTransform *m);
+bool pbrt_coordinate_system_statement(Parser *p, const Token *statement); /* CoordinateSystem, CoordSysTransform */
+bool pbrt_push_state(Parser *p, const Token *begin);
+/* fails on a block end without its begin; transform_only: TransformEnd */
+bool pbrt_pop_state(Parser *p, const Token *t, bool transform_only);
+
 /* shapes.c */
 bool pbrt_shape_statement(Parser *p, const Token *statement);
 bool pbrt_object_begin(Parser *p, const Token *statement);
 bool pbrt_object_end(Parser *p, const Token *statement);
 bool pbrt_object_instance(Parser *p, const Token *statement);
-
-/* loader.c: attribute blocks */
-bool pbrt_push_state(Parser *p, const Token *begin);
-bool pbrt_pop_state(Parser *p, const Token *t, bool transform_only);
 
 #endif

@@ -250,14 +250,23 @@ static Object *find_object(Parser *p, const Token *name)
     return NULL;
 }
 
+/* The object a statement names (ObjectBegin, ObjectInstance), which may
+ * not stand inside an object's definition. */
+static bool object_statement_name(Parser *p, const Token *statement, Token *name)
+{
+    if (!pbrt_need_string(p, statement, name))
+        return false;
+    if (p->defining)
+        return pbrt_fail_at(p, statement, "%.*s inside ObjectBegin (line %d)", (int)statement->len, statement->s,
+                            p->defining_begin.line);
+    return true;
+}
+
 bool pbrt_object_begin(Parser *p, const Token *statement)
 {
     Token name;
-    if (!pbrt_need_string(p, statement, &name))
+    if (!object_statement_name(p, statement, &name))
         return false;
-    if (p->defining)
-        return pbrt_fail_at(p, statement, "ObjectBegin inside ObjectBegin (line %d)",
-                            p->defining_begin.line);
     if (find_object(p, &name))
         return pbrt_fail_at(p, &name, "object \"%.*s\" is defined twice", (int)name.len, name.s);
     if (!pbrt_push_state(p, statement) ||
@@ -284,11 +293,8 @@ bool pbrt_object_end(Parser *p, const Token *statement)
 bool pbrt_object_instance(Parser *p, const Token *statement)
 {
     Token name;
-    if (!pbrt_need_string(p, statement, &name))
+    if (!object_statement_name(p, statement, &name))
         return false;
-    if (p->defining)
-        return pbrt_fail_at(p, statement, "ObjectInstance inside ObjectBegin (line %d)",
-                            p->defining_begin.line);
     Object *o = find_object(p, &name);
     if (!o)
         return pbrt_fail_at(p, &name, "ObjectInstance \"%.*s\": no such object", (int)name.len,

@@ -1,0 +1,57 @@
+/* The render farm's shard format, shared by the side that writes shards
+ * (render --shard K/N) and the side that reads them (bin/merge): which
+ * passes of the whole render shard K of N holds, how many shards there may
+ * be, and the EXR attributes that make an image a shard (docs/merge.md). */
+#ifndef SG_SHARD_FORMAT_H
+#define SG_SHARD_FORMAT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* At most this many shards to a render (render --shard K/N: N). */
+#define SG_SHARDS_MAX 65536
+
+/* 0 <= shard < shard_count <= SG_SHARDS_MAX. */
+bool sg_shard_valid(long shard, long shard_count);
+
+/* The pass rule. Shard `shard` of `shard_count` holds the whole render's
+ * passes shard, shard + shard_count, shard + 2 shard_count...: its own
+ * pass p (0, 1, 2...) is the whole render's pass sg_shard_pass(shard,
+ * shard_count, p), whose random numbers and pixel positions it takes. So
+ * the shards' passes are disjoint and together are the whole render's. */
+uint64_t sg_shard_pass(int shard, int shard_count, uint64_t p);
+
+/* How many of the first `total_passes` passes of the whole render
+ * (render --spp) shard `shard` of `shard_count` holds: total / count, one
+ * more for the first total % count shards. 0 when the shard has none. */
+int sg_shard_pass_count(int shard, int shard_count, int total_passes);
+
+/* ---- the EXR attributes of a shard ---------------------------------------
+ * Ours all begin with SG_ATTR_PREFIX; "spp", "seconds", "sampling" and
+ * "seed" are plain names, older than the farm. */
+#define SG_ATTR_PREFIX "sg:"
+#define SG_ATTR_SPP "spp"
+#define SG_ATTR_SECONDS "seconds"
+#define SG_ATTR_SAMPLING "sampling"
+#define SG_ATTR_SEED "seed"
+/* the shard indices the image holds, ascending, comma-separated ("0,1,3") */
+#define SG_ATTR_SHARDS "sg:shards"
+/* N of render --shard K/N */
+#define SG_ATTR_SHARD_COUNT "sg:shard_count"
+/* the identities shards of one render agree on (16 hex digits each) */
+#define SG_ATTR_SCENE_HASH "sg:scene_hash"
+#define SG_ATTR_CACHE_HASH "sg:cache_hash"
+#define SG_ATTR_RECIPE "sg:recipe"
+/* summed, weighted by spp, and copied by bin/merge */
+#define SG_ATTR_NONFINITE_SAMPLES "sg:nonfinite_samples"
+#define SG_ATTR_GUIDE_SHARE "sg:guide_share"
+#define SG_ATTR_EXPOSURE "sg:exposure"
+
+#ifdef __cplusplus
+}
+#endif
+#endif
