@@ -229,7 +229,7 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
             errno = 0;
             long k = strtol(v, &end, 10);
             long n = *end == '/' && end > v ? strtol(end + 1, &end, 10) : 0;
-            if (errno || *end || v[0] == '-' || n < 1 || n > SG_SHARDS_MAX || k < 0 || k >= n)
+            if (errno || *end || v[0] == '-' || !sg_shard_valid(k, n))
                 return sg_fail(err, "--shard: '%s' is not K/N with 0 <= K < N <= %d", v, SG_SHARDS_MAX);
             a->shard = k;
             a->shard_count = n;
@@ -389,8 +389,7 @@ int main(int argc, char **argv)
     }
 
     int spp_total = a.spp > 0 ? (int)a.spp : scene->render.spp > 0 ? scene->render.spp : 16;
-    /* a shard's share of the passes: K, K+N, K+2N... below the total */
-    int spp_target = spp_total / o.shard_count + (o.shard < spp_total % o.shard_count);
+    int spp_target = sg_shard_pass_count(o.shard, o.shard_count, spp_total);
     if (spp_target < 1 && a.time <= 0) {
         sg_fail(&err, "%s: %d spp leave shard %d of %d no pass: ask for at least %d", a.scene, spp_total, o.shard,
                 o.shard_count, o.shard_count);
@@ -495,17 +494,17 @@ int main(int argc, char **argv)
     else
         snprintf(roulette, sizeof roulette, "%s", sg_roulette_name(report.roulette));
     SgImageAttribute attrs[] = {
-        {"spp", spp_s},
-        {"seconds", sec_s},
-        {"sampling", mode->name},
-        {"seed", seed_s},
+        {SG_ATTR_SPP, spp_s},
+        {SG_ATTR_SECONDS, sec_s},
+        {SG_ATTR_SAMPLING, mode->name},
+        {SG_ATTR_SEED, seed_s},
         {"sg:max_depth", depth_s},
         {"sg:lobe_exponent", exp_s},
         {"sg:alpha", report.alpha},
         {"sg:roulette", sg_roulette_name(report.roulette)},
         {"sg:branches_per_path", branches_s},
-        {"sg:nonfinite_samples", nonfinite_s},
-        {"sg:guide_share", guide_share_s},
+        {SG_ATTR_NONFINITE_SAMPLES, nonfinite_s},
+        {SG_ATTR_GUIDE_SHARE, guide_share_s},
         {"sg:training_passes", training_s},
         {"sg:training_seconds", training_sec_s},
         {"sg:clamping", "none"},
@@ -513,13 +512,13 @@ int main(int argc, char **argv)
         {"sg:cache", importance.cache ? a.cache : ""},
         {"sg:field", a.field ? a.field : a.field_out ? a.field_out : ""},
         {"sg:training", a.field_out ? "yes" : "no"},
-        {"sg:exposure", exposure_s},
+        {SG_ATTR_EXPOSURE, exposure_s},
         /* for bin/merge */
-        {"sg:shards", shard_s},
-        {"sg:shard_count", shard_count_s},
-        {"sg:scene_hash", id.scene},
-        {"sg:cache_hash", id.cache},
-        {"sg:recipe", id.recipe},
+        {SG_ATTR_SHARDS, shard_s},
+        {SG_ATTR_SHARD_COUNT, shard_count_s},
+        {SG_ATTR_SCENE_HASH, id.scene},
+        {SG_ATTR_CACHE_HASH, id.cache},
+        {SG_ATTR_RECIPE, id.recipe},
     };
     /* The EXR last: it is make's target, so a run cut short before it
      * (a PNG or the curve written, then killed) is still run again. */

@@ -108,7 +108,7 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
         return sg_fail(err, "%s: max depth must be at least 1", path), NULL;
     if (!(o->lobe_exponent >= 0.0f && o->lobe_exponent <= 1e5f))
         return sg_fail(err, "%s: lobe exponent must be in [0, 1e5]", path), NULL;
-    if (!(o->shard_count >= 1 && o->shard_count <= SG_SHARDS_MAX && o->shard >= 0 && o->shard < o->shard_count))
+    if (!sg_shard_valid(o->shard, o->shard_count))
         return sg_fail(err, "%s: shard %d of %d: want 0 <= shard < count <= %d", path, o->shard, o->shard_count,
                        SG_SHARDS_MAX), NULL;
     if (o->roulette != SG_ROULETTE_LEARNED && o->roulette != SG_ROULETTE_ALBEDO)
@@ -279,7 +279,7 @@ void sg_renderer_pass(SgRenderer *r)
 {
     roulette_prepare_pass(r->noise, r->noise_spp, r->pool);
     /* the whole render's pass this one is (this one, unsharded) */
-    uint64_t pass = (uint64_t)r->opt.shard + (uint64_t)r->spp * (uint64_t)r->opt.shard_count;
+    uint64_t pass = sg_shard_pass(r->opt.shard, r->opt.shard_count, (uint64_t)r->spp);
     PassCtx pc = {.r = r, .tiles_x = r->tiles_x, .first_pass = r->spp == 0};
     pixel_sampler_init(&pc.sampler, r->training ? r->opt.seed ^ TRAINING_SEED_SALT : r->opt.seed, pass);
     const PathGuideOps *gops = r->guide->ops;
