@@ -75,6 +75,10 @@ TEST_SRC := $(wildcard tests/test_*.c)
 TEST_SUPPORT_SRC := $(filter-out $(TEST_SRC),$(wildcard tests/*.c))
 TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TEST_SUPPORT_OBJ := $(TEST_SUPPORT_SRC:%.c=$(BUILD)/%.o)
+# support_criterion.o is linked whole into every test (it replaces a libc
+# function); the other helpers come from an archive, so that a test links
+# only what it calls.
+TEST_CRITERION_OBJ := $(BUILD)/tests/support_criterion.o
 
 # Benchmarks: each bench/*.c is a program; bench/run.sh drives them.
 BENCH_SRC := $(wildcard bench/*.c)
@@ -126,9 +130,19 @@ openpgl:
 	@bash scripts/build-openpgl.sh
 	@$(MAKE) --no-print-directory all
 
-$(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_SUPPORT_OBJ) $(STEP_LIBS) $(BUILD)/libcommon.a
+$(BUILD)/libtestsupport.a: $(filter-out $(TEST_CRITERION_OBJ),$(TEST_SUPPORT_OBJ))
 	@mkdir -p $(@D)
-	$(CC) $(LDFLAGS) -o $@ $< $(TEST_SUPPORT_OBJ) $(STEP_LIBS) $(BUILD)/libcommon.a $(LDLIBS)
+	rm -f $@
+	$(AR) rcs $@ $^
+
+# --as-needed: a test binary loads only the shared libraries it calls.
+# Criterion starts a process for every test, and OpenImageIO alone brings
+# some 250 shared objects whose loading cost more CPU than most tests'
+# own work; the suites that never touch an image now load about 20.
+$(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_CRITERION_OBJ) $(BUILD)/libtestsupport.a $(STEP_LIBS) $(BUILD)/libcommon.a
+	@mkdir -p $(@D)
+	$(CC) $(LDFLAGS) -Wl,--as-needed -o $@ $< $(TEST_CRITERION_OBJ) $(BUILD)/libtestsupport.a $(STEP_LIBS) \
+	  $(BUILD)/libcommon.a $(LDLIBS)
 
 $(BUILD)/bench/%: $(BUILD)/bench/%.o $(STEP_LIBS) $(BUILD)/libcommon.a
 	@mkdir -p $(@D)
