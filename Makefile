@@ -84,7 +84,7 @@ TEST_CRITERION_OBJ := $(BUILD)/tests/support_criterion.o
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
-.PHONY: all test check-tests demo scene farm bench bench-build bench-quick bench-long deps bench-deps fuzz fuzz-run clean distclean \
+.PHONY: all test test-programs check-tests demo scene farm bench bench-build bench-quick bench-long deps bench-deps fuzz fuzz-run clean distclean \
         openpgl FORCE
 .DEFAULT_GOAL := all
 
@@ -208,11 +208,15 @@ deps:
 
 # make test: the suites in an optimized build, then again under
 # AddressSanitizer + UBSan (SG_SANITIZED=1 lets heavy tests scale down).
+# The test binaries are built in parallel with the programs (check-tests
+# alone would build them one at a time).
 test: deps
-	@$(MAKE) --no-print-directory -j$$(nproc) all
+	@$(MAKE) --no-print-directory -j$$(nproc) test-programs
 	@$(MAKE) --no-print-directory check-tests
-	@$(MAKE) --no-print-directory -j$$(nproc) SANITIZE=1 all
+	@$(MAKE) --no-print-directory -j$$(nproc) SANITIZE=1 test-programs
 	@SG_SANITIZED=1 $(MAKE) --no-print-directory SANITIZE=1 check-tests
+
+test-programs: $(PROGRAMS) $(TEST_BIN)
 
 check-tests: $(PROGRAMS) $(TEST_BIN)
 	@echo "== tests in $(BUILD)"
