@@ -19,7 +19,8 @@ jobs_max=${SG_TEST_JOBS:-$(nproc 2>/dev/null || echo 2)}
 work=$(mktemp -d "${TMPDIR:-/tmp}/sg-tests.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 
-# Suite i writes $work/i.out, then $work/i.done: its exit status and tenths of seconds.
+# Suite i writes $work/i.out, then $work/i.done: its exit status, tenths of
+# seconds, and the CPU time of its processes (user, system).
 (
   i=0
   for t in "$@"; do
@@ -28,7 +29,9 @@ trap 'rm -rf "$work"' EXIT
       start=$(date +%s%N)
       "$t" >"$work/$i.out" 2>&1
       rc=$?
-      echo "$rc $((($(date +%s%N) - start) / 100000000))" >"$work/$i.tmp" && mv "$work/$i.tmp" "$work/$i.done"
+      times >"$work/$i.times" # its second line: this subshell's children, the suite's processes
+      echo "$rc $((($(date +%s%N) - start) / 100000000)) $(tail -1 "$work/$i.times")" >"$work/$i.tmp"
+      mv "$work/$i.tmp" "$work/$i.done"
     ) &
     i=$((i + 1))
   done
@@ -39,8 +42,8 @@ launcher=$!
 i=0
 for t in "$@"; do
   while [ ! -e "$work/$i.done" ] && kill -0 "$launcher" 2>/dev/null; do sleep 0.2; done
-  read -r rc tenths <"$work/$i.done" 2>/dev/null || { rc=1; tenths=0; }
-  echo "== $(basename "$t") ($((tenths / 10)).$((tenths % 10)) s)"
+  read -r rc tenths user system <"$work/$i.done" 2>/dev/null || { rc=1; tenths=0; user=?; system=?; }
+  echo "== $(basename "$t") ($((tenths / 10)).$((tenths % 10)) s; CPU $user user, $system system)"
   out=$(cat "$work/$i.out" 2>/dev/null)
   printf '%s\n' "$out" | grep -vE '^\[----\] .*: (Assertion Passed|tests/)' || true
   line=$(printf '%s\n' "$out" | grep -E 'Synthesis: Tested' | tail -1)
