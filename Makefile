@@ -78,12 +78,16 @@ TEST_BIN := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 TEST_SUPPORT_OBJ := $(TEST_SUPPORT_SRC:%.c=$(BUILD)/%.o)
 # tests find the repository's data files from any working directory
 $(BUILD)/tests/support_files.o: CPPFLAGS += -DSG_SOURCE_ROOT='"$(CURDIR)"'
+# support_criterion.o is linked whole into every test (it replaces a libc
+# function); the other helpers come from an archive, so that a test links
+# only what it calls.
+TEST_CRITERION_OBJ := $(BUILD)/tests/support_criterion.o
 
 # Benchmarks: each bench/*.c is a program; bench/run.sh drives them.
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
-.PHONY: all test check-tests demo scene farm bench bench-build bench-quick bench-long deps bench-deps fuzz fuzz-run clean distclean \
+.PHONY: all test test-programs check-tests demo scene farm bench bench-build bench-quick bench-long deps bench-deps fuzz fuzz-run clean distclean \
         openpgl FORCE
 .DEFAULT_GOAL := all
 
@@ -129,9 +133,19 @@ openpgl:
 	@bash scripts/build-openpgl.sh
 	@$(MAKE) --no-print-directory all
 
-$(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_SUPPORT_OBJ) $(STEP_LIBS) $(BUILD)/libcommon.a
+$(BUILD)/libtestsupport.a: $(filter-out $(TEST_CRITERION_OBJ),$(TEST_SUPPORT_OBJ))
 	@mkdir -p $(@D)
-	$(CC) $(LDFLAGS) -o $@ $< $(TEST_SUPPORT_OBJ) $(STEP_LIBS) $(BUILD)/libcommon.a $(LDLIBS)
+	rm -f $@
+	$(AR) rcs $@ $^
+
+# --as-needed: a test binary loads only the shared libraries it calls.
+# Criterion starts a process for every test, and OpenImageIO alone brings
+# some 250 shared objects whose loading cost more CPU than most tests'
+# own work; the suites that never touch an image now load about 20.
+$(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_CRITERION_OBJ) $(BUILD)/libtestsupport.a $(STEP_LIBS) $(BUILD)/libcommon.a
+	@mkdir -p $(@D)
+	$(CC) $(LDFLAGS) -Wl,--as-needed -o $@ $< $(TEST_CRITERION_OBJ) $(BUILD)/libtestsupport.a $(STEP_LIBS) \
+	  $(BUILD)/libcommon.a $(LDLIBS)
 
 $(BUILD)/bench/%: $(BUILD)/bench/%.o $(STEP_LIBS) $(BUILD)/libcommon.a
 	@mkdir -p $(@D)
@@ -197,11 +211,15 @@ deps:
 
 # make test: the suites in an optimized build, then again under
 # AddressSanitizer + UBSan (SG_SANITIZED=1 lets heavy tests scale down).
+# The test binaries are built in parallel with the programs (check-tests
+# alone would build them one at a time).
 test: deps
-	@$(MAKE) --no-print-directory -j$$(nproc) all
+	@$(MAKE) --no-print-directory -j$$(nproc) test-programs
 	@$(MAKE) --no-print-directory check-tests
-	@$(MAKE) --no-print-directory -j$$(nproc) SANITIZE=1 all
+	@$(MAKE) --no-print-directory -j$$(nproc) SANITIZE=1 test-programs
 	@SG_SANITIZED=1 $(MAKE) --no-print-directory SANITIZE=1 check-tests
+
+test-programs: $(PROGRAMS) $(TEST_BIN)
 
 check-tests: $(PROGRAMS) $(TEST_BIN)
 	@echo "== tests in $(BUILD)"

@@ -874,7 +874,8 @@ Test(pbrt_render, staircase_mean_brightness, .timeout = 120)
 /* ---- render: a texture seen through its uv ------------------------------- */
 
 /* A quad with a 2 x 1 checkerboard of red and blue over its uv, lit from
- * behind the camera: its two halves render in its two colours. */
+ * behind the camera: its two halves render in its two colours, each on the
+ * side pbrt-v4 puts it. */
 Test(pbrt_render, checkerboard_texture_follows_the_uv)
 {
     SgScene *s = load_ok(
@@ -906,9 +907,14 @@ Test(pbrt_render, checkerboard_texture_follows_the_uv)
             cr_assert(p[1] < 1e-6f, "no green anywhere (%d, %d): %g", x, y, p[1]);
         }
     int half = o.width * o.height / 2;
-    cr_expect((red_left > half * 9 / 10 && blue_right > half * 9 / 10) ||
-                  (blue_left > half * 9 / 10 && red_right > half * 9 / 10),
-              "red %d | %d, blue %d | %d of %d pixels a side", red_left, red_right, blue_left, blue_right, half);
+    /* pbrt-v4's checkerboard gives tex1 where floor(s) + floor(t) is even:
+     * u < 0.5 (uscale 2), the quad's x < 0, is red. The CTM at Camera is
+     * camera-from-world, here Scale -1 1 1: world x < 0 is camera x > 0,
+     * and raster x grows with camera x (ProjectiveCamera's screen-to-raster
+     * keeps x, flips y). So red is on the right, blue on the left. */
+    cr_expect(blue_left > half * 9 / 10 && red_right > half * 9 / 10,
+              "red %d | %d, blue %d | %d of %d pixels a side (expected blue | red)", red_left, red_right, blue_left,
+              blue_right, half);
     free(rgb);
     sg_scene_free(s);
 }
