@@ -480,22 +480,132 @@ static int compare_u64(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-static size_t square_index(const U32Vec *squares, uint32_t cell)
-{
-    size_t lo = 0, hi = squares->n;
-    while (lo < hi) {
-        size_t mid = (lo + hi) / 2;
-        if (squares->a[mid] < cell)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo;
-}
-
 static uint16_t voxel_dist8(const Collapse *c, size_t v)
 {
     return c->dist8[v];
+}
+
+/* The regions of space the squares left bound: lattice vertices (each the
+ * unit cube of space at its lower corner), joined to their 6 neighbours
+ * unless a square lies between them; the far padding layer owns no voxel
+ * and is left out. Labelled by union-find over x-runs, scanning the cells
+ * in memory order (a flood from each square visited the lattice in
+ * breadth-first order, a cache miss per vertex on large grids). The
+ * partition is the same, so the same squares are removed. */
+typedef struct SpaceRuns {
+    size_t row_length, rows_y, rows;
+    uint32_t *start, *end; /* inclusive x of each run */
+    uint32_t *parent;
+    uint32_t *row_first;   /* rows + 1 */
+    size_t count, cap;
+} SpaceRuns;
+
+static void space_runs_release(SpaceRuns *r)
+{
+    free(r->start);
+    free(r->end);
+    free(r->parent);
+    free(r->row_first);
+}
+
+static bool space_runs_push(SpaceRuns *r, uint32_t x0, uint32_t x1)
+{
+    if (r->count == r->cap) {
+        size_t cap = r->cap ? 2 * r->cap : 4096;
+        uint32_t *s = realloc(r->start, cap * sizeof *s);
+        if (s)
+            r->start = s;
+        uint32_t *e = realloc(r->end, cap * sizeof *e);
+        if (e)
+            r->end = e;
+        if (!s || !e || cap >= UINT32_MAX)
+            return false;
+        r->cap = cap;
+    }
+    r->start[r->count] = x0;
+    r->end[r->count] = x1;
+    r->count++;
+    return true;
+}
+
+/* Joins the runs of row b to those of row a (the row below it along axis
+ * `axis`, 1 or 2) wherever a vertex of b is not walled off from the one
+ * under it by a square of normal `axis`. */
+static void space_runs_connect(const Collapse *c, SpaceRuns *r, size_t ra, size_t rb,
+                               size_t b_first_vertex, unsigned wall)
+{
+    uint32_t a = r->row_first[ra], a_end = r->row_first[ra + 1];
+    uint32_t b = r->row_first[rb], b_end = r->row_first[rb + 1];
+    while (a < a_end && b < b_end) {
+        uint32_t lo = r->start[a] > r->start[b] ? r->start[a] : r->start[b];
+        uint32_t hi = r->end[a] < r->end[b] ? r->end[a] : r->end[b];
+        for (uint32_t x = lo; x <= hi && lo <= hi; x++)
+            if (!has(c->cells, b_first_vertex + x, wall)) {
+                sg_set_union(r->parent, a, b);
+                break;
+            }
+        if (r->end[a] < r->end[b])
+            a++;
+        else
+            b++;
+    }
+}
+
+static bool space_runs_build(const Collapse *c, SpaceRuns *r)
+{
+    const SgComplex *cx = c->cx;
+    memset(r, 0, sizeof *r);
+    r->row_length = (size_t)cx->lx - 1; /* without the far padding */
+    r->rows_y = (size_t)cx->ly - 1;
+    r->rows = r->rows_y * ((size_t)cx->lz - 1);
+    r->row_first = malloc((r->rows + 1) * sizeof *r->row_first);
+    if (!r->row_first)
+        return false;
+    for (size_t row = 0; row < r->rows; row++) {
+        r->row_first[row] = (uint32_t)r->count;
+        size_t y = row % r->rows_y, z = row / r->rows_y;
+        const uint8_t *cells = c->cells + y * c->st[1] + z * c->st[2];
+        uint32_t x0 = 0;
+        for (uint32_t x = 1; x < r->row_length; x++)
+            if (cells[x] >> 6 & 1) { /* the yz square at x walls x-1 off from x */
+                if (!space_runs_push(r, x0, x - 1))
+                    return false;
+                x0 = x;
+            }
+        if (!space_runs_push(r, x0, (uint32_t)r->row_length - 1))
+            return false;
+    }
+    r->row_first[r->rows] = (uint32_t)r->count;
+    r->parent = malloc(r->count * sizeof *r->parent);
+    if (!r->parent)
+        return false;
+    for (size_t i = 0; i < r->count; i++)
+        r->parent[i] = (uint32_t)i;
+    for (size_t row = 0; row < r->rows; row++) {
+        size_t y = row % r->rows_y, z = row / r->rows_y;
+        size_t first = y * c->st[1] + z * c->st[2];
+        if (y > 0)
+            space_runs_connect(c, r, row - 1, row, first, 5); /* xz square */
+        if (z > 0)
+            space_runs_connect(c, r, row - r->rows_y, row, first, 3); /* xy square */
+    }
+    return true;
+}
+
+/* The region (root run) of lattice vertex v. */
+static uint32_t space_region(const Collapse *c, SpaceRuns *r, size_t v)
+{
+    size_t x = v % c->st[1], y = v / c->st[1] % ((size_t)c->cx->ly), z = v / c->st[2];
+    size_t row = y + r->rows_y * z;
+    uint32_t lo = r->row_first[row], hi = r->row_first[row + 1];
+    while (lo + 1 < hi) {
+        uint32_t mid = (lo + hi) / 2;
+        if (r->start[mid] <= x)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return sg_set_find(r->parent, lo);
 }
 
 /* The collapse is stuck with squares left: no free face anywhere. The
@@ -519,81 +629,24 @@ static bool break_cavities(Collapse *c)
                 u32_push(c, &squares, (uint32_t)(v * 8 + m));
     }
     size_t n = squares.n;
-    uint32_t *side = malloc(2 * n * sizeof *side);
-    uint64_t *visited = calloc((cx->vertex_count + 63) / 64, sizeof *visited);
-    uint64_t *order = malloc(n * sizeof *order);
-    uint32_t *ring = NULL, *parent = NULL;
-    size_t ring_cap = 1u << 16, head = 0, count = 0;
-    ring = malloc(ring_cap * sizeof *ring);
+    uint32_t *side = malloc(2 * n * sizeof *side + 1);
+    uint64_t *order = malloc(n * sizeof *order + 1);
+    SpaceRuns runs;
     bool ok = false;
-    if (c->oom || !side || !visited || !order || !ring)
+    bool built = space_runs_build(c, &runs);
+    if (c->oom || !side || !order || !built)
         goto done;
-    for (size_t i = 0; i < 2 * n; i++)
-        side[i] = UINT32_MAX;
-    /* lattice vertices on the far padding layer own no voxel: never enter */
-    for (size_t v = 0; v < cx->vertex_count; v++) {
-        int p[3];
-        sg_complex_coords(cx, v, p);
-        if (p[0] == cx->nx + 1 || p[1] == cx->ny + 1 || p[2] == cx->nz + 1)
-            visited[v >> 6] |= 1ull << (v & 63);
-    }
-    uint32_t regions = 0;
+    /* side 0: the vertex below the square along its normal; side 1: above */
     for (size_t i = 0; i < n; i++) {
-        for (int s = 0; s < 2; s++) {
-            if (side[2 * i + s] != UINT32_MAX)
-                continue;
-            size_t w = squares.a[i] >> 3;
-            unsigned normal = 7u ^ (squares.a[i] & 7);
-            int a = normal == 1 ? 0 : normal == 2 ? 1 : 2;
-            size_t start = s == 1 ? w : w - c->st[a]; /* side 1: the voxel above */
-            uint32_t region = regions++;
-            visited[start >> 6] |= 1ull << (start & 63);
-            head = 0, count = 0;
-            ring[count++] = (uint32_t)start;
-            while (count) {
-                size_t u = ring[head];
-                head = (head + 1) & (ring_cap - 1);
-                count--;
-                for (int b = 0; b < 3; b++) {
-                    unsigned sm = 7u ^ (1u << b);
-                    for (int dir = 0; dir < 2; dir++) {
-                        /* dir 0: neighbour u + e_b, wall square at u + e_b, u below it;
-                           dir 1: neighbour u - e_b, wall square at u, u above it */
-                        if (dir == 1 && u < c->st[b])
-                            continue;
-                        size_t nu = dir == 0 ? u + c->st[b] : u - c->st[b];
-                        size_t sq_at = dir == 0 ? nu : u;
-                        if (has(c->cells, sq_at, sm)) {
-                            size_t k = square_index(&squares, (uint32_t)(sq_at * 8 + sm));
-                            side[2 * k + (dir == 0 ? 0 : 1)] = region;
-                            continue;
-                        }
-                        if (nu >= cx->vertex_count || (visited[nu >> 6] >> (nu & 63) & 1))
-                            continue;
-                        visited[nu >> 6] |= 1ull << (nu & 63);
-                        if (count == ring_cap) { /* grow the ring, unwrapping it */
-                            uint32_t *bigger = malloc(2 * ring_cap * sizeof *bigger);
-                            if (!bigger)
-                                goto done;
-                            for (size_t j = 0; j < count; j++)
-                                bigger[j] = ring[(head + j) & (ring_cap - 1)];
-                            free(ring);
-                            ring = bigger;
-                            ring_cap *= 2;
-                            head = 0;
-                        }
-                        ring[(head + count) & (ring_cap - 1)] = (uint32_t)nu;
-                        count++;
-                    }
-                }
-            }
-        }
+        size_t w = squares.a[i] >> 3;
+        unsigned normal = 7u ^ (squares.a[i] & 7);
+        int a = normal == 1 ? 0 : normal == 2 ? 1 : 2;
+        side[2 * i] = space_region(c, &runs, w - c->st[a]);
+        side[2 * i + 1] = space_region(c, &runs, w);
     }
-    parent = malloc((size_t)regions * sizeof *parent);
-    if (!parent)
-        goto done;
-    for (uint32_t r = 0; r < regions; r++)
-        parent[r] = r;
+    /* the regions' own union-find, over root run ids */
+    for (size_t i = 0; i < runs.count; i++)
+        runs.parent[i] = (uint32_t)i;
     for (size_t i = 0; i < n; i++) {
         size_t w = squares.a[i] >> 3;
         unsigned normal = 7u ^ (squares.a[i] & 7);
@@ -606,7 +659,7 @@ static bool break_cavities(Collapse *c)
     uint32_t broken = 0;
     for (size_t j = 0; j < n; j++) {
         size_t i = (size_t)(order[j] & 0xffffffffu);
-        if (!sg_set_union(parent, side[2 * i], side[2 * i + 1]))
+        if (!sg_set_union(runs.parent, side[2 * i], side[2 * i + 1]))
             continue;
         remove_cell(c, squares.a[i]);
         c->squares--;
@@ -629,10 +682,8 @@ static bool break_cavities(Collapse *c)
 done:
     free(squares.a);
     free(side);
-    free(visited);
     free(order);
-    free(ring);
-    free(parent);
+    space_runs_release(&runs);
     if (!ok)
         c->oom = true;
     return ok;
