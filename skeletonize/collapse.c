@@ -56,6 +56,79 @@ typedef struct Worker {
     Sink sink;
 } Worker;
 
+/* The constraint set is a few cells per skeleton node (anchors and kept
+ * edges, 0- and 1-cells), so a small open-addressing set of cell ids
+ * rather than a byte per lattice vertex: no memory per voxel, and the
+ * table stays in cache while the byte array's line was one more miss per
+ * tested face. Cells of dimension 2 and 3 are looked up only if one was
+ * ever constrained. */
+typedef struct CellSet {
+    uint32_t *slot; /* UINT32_MAX: empty */
+    size_t count;
+    int bits;       /* 2^bits slots */
+    bool high_dims; /* a 2- or 3-cell is in the set */
+} CellSet;
+
+static inline size_t cell_slot(const CellSet *s, uint32_t cell)
+{
+    return (size_t)(((uint64_t)cell * 0x9E3779B97F4A7C15ull) >> (64 - s->bits));
+}
+
+static inline bool cell_set_has(const CellSet *s, uint32_t cell)
+{
+    if (!s->high_dims && sg_cell_dim(cell & 7) >= 2)
+        return false;
+    size_t mask = ((size_t)1 << s->bits) - 1;
+    for (size_t i = cell_slot(s, cell);; i = (i + 1) & mask) {
+        uint32_t x = s->slot[i];
+        if (x == cell)
+            return true;
+        if (x == UINT32_MAX)
+            return false;
+    }
+}
+
+static bool cell_set_add(CellSet *s, uint32_t cell)
+{
+    if (2 * (s->count + 1) > ((size_t)1 << s->bits)) {
+        CellSet grown = {NULL, 0, s->bits + 1, s->high_dims};
+        grown.slot = malloc(((size_t)1 << grown.bits) * sizeof *grown.slot);
+        if (!grown.slot)
+            return false;
+        memset(grown.slot, 0xff, ((size_t)1 << grown.bits) * sizeof *grown.slot);
+        for (size_t i = 0; i < ((size_t)1 << s->bits); i++)
+            if (s->slot[i] != UINT32_MAX) {
+                size_t j = cell_slot(&grown, s->slot[i]);
+                while (grown.slot[j] != UINT32_MAX)
+                    j = (j + 1) & (((size_t)1 << grown.bits) - 1);
+                grown.slot[j] = s->slot[i];
+                grown.count++;
+            }
+        free(s->slot);
+        *s = grown;
+    }
+    size_t mask = ((size_t)1 << s->bits) - 1;
+    size_t i = cell_slot(s, cell);
+    while (s->slot[i] != UINT32_MAX && s->slot[i] != cell)
+        i = (i + 1) & mask;
+    if (s->slot[i] == UINT32_MAX)
+        s->count++;
+    s->slot[i] = cell;
+    s->high_dims |= sg_cell_dim(cell & 7) >= 2;
+    return true;
+}
+
+static bool cell_set_init(CellSet *s)
+{
+    s->bits = 10;
+    s->count = 0;
+    s->high_dims = false;
+    s->slot = malloc(((size_t)1 << s->bits) * sizeof *s->slot);
+    if (s->slot)
+        memset(s->slot, 0xff, ((size_t)1 << s->bits) * sizeof *s->slot);
+    return s->slot != NULL;
+}
+
 typedef enum Job { JOB_VERIFY, JOB_EVEN, JOB_ODD, JOB_EXIT } Job;
 
 typedef struct Collapse Collapse;
@@ -72,11 +145,13 @@ typedef struct Helper {
 
 struct Collapse {
     SgComplex *cx;
-    uint8_t *cells, *cons;
+    uint8_t *cells;
+    CellSet cons;       /* the constraint set: lights, camera, kept edges */
     size_t st[3];
     U32Vec queue_a[KINDS], queue_b[KINDS];
     U32Vec *cur, *next; /* this step's and next step's queues */
     U32Vec pairs;       /* f, g, f, g, ... */
+    U32Vec sort_scratch; /* radix sort of a queue */
     EdgeVec live;       /* isolated edges not yet kept */
     EdgeVec kept;       /* isolated edges in the constraint set */
     const uint16_t *dist8, *open8; /* lattice layout: voxel at its lower corner */
@@ -162,7 +237,7 @@ static inline int free_kind(const Collapse *c, uint32_t f, uint32_t *g)
     size_t v = f >> 3;
     unsigned m = f & 7;
     const uint8_t *cells = c->cells;
-    if (!has(cells, v, m) || has(c->cons, v, m))
+    if (!has(cells, v, m) || cell_set_has(&c->cons, f))
         return -1;
     int count = 0, axis = 0, ori = 0;
     size_t gv = 0;
@@ -184,7 +259,7 @@ static inline int free_kind(const Collapse *c, uint32_t f, uint32_t *g)
             gv = w, gm = cm, axis = a, ori = 1;
         }
     }
-    if (count != 1 || has(c->cons, gv, gm))
+    if (count != 1 || cell_set_has(&c->cons, (uint32_t)(gv * 8 + gm)))
         return -1;
     *g = (uint32_t)(gv * 8 + gm);
     return axis * 6 + ori * 3 + (3 - sg_cell_dim(gm));
@@ -411,10 +486,43 @@ static void run_substep_parallel(Collapse *c, U32Vec *q)
     }
 }
 
+/* Sorts a queue by cell id (LSD radix, 11 bits a pass), so that the
+ * sub-step walks the border in memory order: a queue gathers the faces
+ * freed by up to 18 earlier sub-steps, each in its own sweep of the grid,
+ * and on a grid larger than the cache every sweep reloads the lines the
+ * others loaded. The result depends on the queue's set only (header). */
+static void sort_queue(Collapse *c, U32Vec *q)
+{
+    if (q->n < 4096)
+        return;
+    if (!vec_reserve((void **)&c->sort_scratch.a, &c->sort_scratch.cap, q->n, sizeof *q->a))
+        return; /* unsorted is still correct */
+    uint32_t *from = q->a, *to = c->sort_scratch.a;
+    for (int shift = 0; shift < 33; shift += 11) {
+        size_t count[2048 + 1] = {0};
+        for (size_t i = 0; i < q->n; i++)
+            count[(from[i] >> shift & 2047) + 1]++;
+        for (int b = 0; b < 2048; b++)
+            count[b + 1] += count[b];
+        for (size_t i = 0; i < q->n; i++)
+            to[count[from[i] >> shift & 2047]++] = from[i];
+        uint32_t *t = from;
+        from = to;
+        to = t;
+    }
+    /* three passes: the sorted keys are in the scratch; swap the buffers */
+    U32Vec sorted = {from, q->n, from == q->a ? q->cap : c->sort_scratch.cap};
+    if (from != q->a) {
+        c->sort_scratch = (U32Vec){q->a, 0, q->cap};
+        *q = sorted;
+    }
+}
+
 static void run_substep(Collapse *c, int s)
 {
     c->substep = s;
     U32Vec *q = &c->cur[s];
+    sort_queue(c, q);
     if (c->threads > 1 && q->n >= c->parallel_grain) {
         run_substep_parallel(c, q);
     } else {
@@ -462,7 +570,8 @@ static void apply_lifespan_rule(Collapse *c)
         if (!has(c->cells, v, m))
             continue;
         if ((int64_t)(c->step - e.birth) * 8 * 256 > (int64_t)e.open8 * c->filter256) {
-            c->cons[v] |= (uint8_t)(1u << m);
+            if (!cell_set_add(&c->cons, e.cell))
+                c->oom = true;
             e.kept = c->step;
             edge_push(c, &c->kept, e);
             continue;
@@ -731,14 +840,16 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
         c.st[a] = cx->stride[a];
     c.cur = c.queue_a;
     c.next = c.queue_b;
-    c.cons = calloc(cx->vertex_count, 1);
     bool ok = false;
-    if (!c.cons) {
+    if (!cell_set_init(&c.cons)) {
         c.oom = true;
         goto done;
     }
     for (size_t i = 0; i < constrained_count; i++)
-        c.cons[constrained[i] >> 3] |= (uint8_t)(1u << (constrained[i] & 7));
+        if (!cell_set_add(&c.cons, constrained[i])) {
+            c.oom = true;
+            goto done;
+        }
 
     /* worker threads for large sub-steps: slabs of at least SLAB_MIN
      * planes, about 8 per thread for balance */
@@ -889,9 +1000,10 @@ done:
         free(c.queue_b[k].a);
     }
     free(c.pairs.a);
+    free(c.sort_scratch.a);
     free(c.live.a);
     free(c.kept.a);
-    free(c.cons);
+    free(c.cons.slot);
     if (!ok) {
         sg_collapse_result_release(result);
         return sg_fail(err, "collapse: out of memory");
