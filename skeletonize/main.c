@@ -16,7 +16,7 @@ static void usage(FILE *out)
 {
     fprintf(out,
             "usage: skeletonize medium.vdb -o skeleton.ply [--camera-constraint] [--threads N]\n"
-            "                   [--parallel-collapse]\n"
+            "                   [--serial-collapse]\n"
             "\n"
             "Thins the medium (the air light can reach) to its curvilinear skeleton: a\n"
             "graph with the medium's components and tunnels, centred in the air, passing\n"
@@ -29,8 +29,9 @@ static void usage(FILE *out)
             "                       position, voxel, kind, opening radius, lifespan, light)\n"
             "  --camera-constraint  the camera's voxel is a constraint too (kind 2)\n"
             "  --threads N          worker threads (default: every core)\n"
-            "  --parallel-collapse  run the large collapse sub-steps on the threads too\n"
-            "                       (same result; faster only when the cores are idle)\n"
+            "  --serial-collapse    run the collapse on one thread (same result; the\n"
+            "                       default runs its large sub-steps on the threads, which\n"
+            "                       is slower only when other work holds the cores)\n"
             "  -q, --quiet          no summary line\n"
             "  -h, --help           this help\n");
 }
@@ -48,8 +49,10 @@ int main(int argc, char **argv)
             return 0;
         } else if (!strcmp(a, "-o") && i + 1 < argc) {
             out_path = argv[++i];
-        } else if (!strcmp(a, "--parallel-collapse")) {
+        } else if (!strcmp(a, "--parallel-collapse")) { /* the default now */
             options.parallel_grain = SG_SKELETON_PARALLEL_GRAIN;
+        } else if (!strcmp(a, "--serial-collapse")) {
+            options.parallel_grain = 0;
         } else if (!strcmp(a, "--camera-constraint")) {
             options.camera_constraint = true;
         } else if (!strcmp(a, "--threads") && i + 1 < argc) {

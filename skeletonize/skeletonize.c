@@ -16,6 +16,7 @@ void sg_skeleton_options_default(SgSkeletonOptions *opt)
     opt->threads = 0;
     opt->progress = true;
     opt->filter_scale = 1.0;
+    opt->parallel_grain = SG_SKELETON_PARALLEL_GRAIN;
 }
 
 static size_t grid_index3(const SgGrid *g, const int p[3])
