@@ -30,6 +30,7 @@
 
 #include "importance_cache_format.h"
 #include "progress.h"
+#include "memory.h"
 #include "threads.h"
 
 enum { W_FACE = 29, W_EDGE = 41, W_CORNER = 50, RING = 64, MAX_SLABS = 16 };
@@ -132,6 +133,7 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
     }
     L->key = key;
     L->plane = px * py;
+    sg_memory_prefer_huge_pages(key, total * (wide ? sizeof(uint64_t) : sizeof(uint32_t)));
     if (wide) {
         L->shift = 32;
         L->node_mask = 0xffffffffu;

@@ -21,6 +21,7 @@
 #include <string.h>
 
 #include "threads.h"
+#include "memory.h"
 
 typedef struct EdtContext {
     const SgGrid *grid;
@@ -275,6 +276,7 @@ bool sg_distance_opening(const SgGrid *g, int threads, uint16_t **dist8_out,
     c.z_buf = calloc((size_t)c.threads, sizeof *c.z_buf);
     if (!c.d2 || !c.f_buf || !c.out_buf || !c.v_buf || !c.z_buf)
         goto done;
+    sg_memory_prefer_huge_pages(c.d2, n * sizeof *c.d2);
     for (int t = 0; t < c.threads; t++) {
         c.f_buf[t] = malloc((size_t)longest * sizeof(uint32_t));
         c.out_buf[t] = malloc((size_t)longest * sizeof(uint32_t));
@@ -291,6 +293,7 @@ bool sg_distance_opening(const SgGrid *g, int threads, uint16_t **dist8_out,
         c.cand = malloc(n * sizeof *c.cand);
         if (!c.cand)
             goto done;
+        sg_memory_prefer_huge_pages(c.cand, n * sizeof *c.cand);
         size_t p = 0;
         for (int z = 0; z < g->nz; z++)
             for (int y = 0; y < g->ny; y++)
