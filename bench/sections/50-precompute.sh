@@ -45,6 +45,7 @@ echo "- peak MB: the largest resident set of the three steps; cache MB: importan
 sponza=data/sponza/sponza-bench.json
 resolutions=(250 500 1000)
 [ "${SG_QUICK:-0}" = 1 ] && resolutions=(125 250 500)
+[ -n "${SG_SCALING_RESOLUTIONS:-}" ] && read -ra resolutions <<<"$SG_SCALING_RESOLUTIONS" # e.g. "40 80 160"
 echo
 if [ ! -e "$(dirname "$sponza")/$(sed -nE 's/.*"mesh": *"([^"]*)".*/\1/p' "$sponza")" ]; then
   echo "(scaling on Sponza skipped: its mesh, ../shared/scenes/sponza-dabrovic, is not present)"
