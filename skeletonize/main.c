@@ -3,6 +3,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <unistd.h>
 
 #include "cli.h"
 
@@ -31,11 +33,36 @@ static void usage(FILE *out)
             "  --camera-constraint  the camera's voxel is a constraint too (kind 2)\n"
             "  --threads N          worker threads (default: every core)\n"
             "  --serial-collapse    run the collapse on one thread\n"
-            "  --parallel-collapse  run its large sub-steps on the threads even when the\n"
-            "                       load average says other work holds the cores (default:\n"
-            "                       parallel when they are free; the same result either way)\n"
+            "  --parallel-collapse  run its large sub-steps on the threads even when other\n"
+            "                       work holds the cores (default: parallel when they were\n"
+            "                       idle at the start; the same result either way)\n"
             "  -q, --quiet          no summary line\n"
             "  -h, --help           this help\n");
+}
+
+/* Cores idle over the next `ms` milliseconds (from /proc/stat), or -1. */
+static double idle_cores(int ms)
+{
+    unsigned long long a[2][8];
+    for (int t = 0; t < 2; t++) {
+        FILE *f = fopen("/proc/stat", "r");
+        if (!f)
+            return -1;
+        int got = fscanf(f, "cpu %llu %llu %llu %llu %llu %llu %llu %llu", &a[t][0], &a[t][1],
+                         &a[t][2], &a[t][3], &a[t][4], &a[t][5], &a[t][6], &a[t][7]);
+        fclose(f);
+        if (got != 8)
+            return -1;
+        if (t == 0) {
+            struct timespec pause = {0, (long)ms * 1000000L};
+            nanosleep(&pause, NULL);
+        }
+    }
+    unsigned long long total = 0, idle = a[1][3] + a[1][4] - a[0][3] - a[0][4];
+    for (int i = 0; i < 8; i++)
+        total += a[1][i] - a[0][i];
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    return total && cores > 0 ? (double)idle / (double)total * (double)cores : -1;
 }
 
 int main(int argc, char **argv)
@@ -81,21 +108,6 @@ int main(int argc, char **argv)
         return 2;
     }
 
-    /* The parallel collapse meets its threads at a barrier three times a
-     * sub-step (some 50 000 times at resolution 1000): when other work
-     * holds the cores, every meeting waits for a descheduled thread and the
-     * collapse runs several times slower than on one thread (measured at
-     * load 15 on 2 cores: 209 s against 28 s). Unless told, it goes
-     * parallel only when the cores are free. Same result either way. */
-    bool busy = false;
-    if (!collapse_choice && options.parallel_grain) {
-        double load[1];
-        int cores = sg_thread_count(options.threads);
-        busy = getloadavg(load, 1) == 1 && load[0] > cores - 0.5;
-        if (busy)
-            options.parallel_grain = 0;
-    }
-
     SgError err = {0};
     double t0 = sg_seconds();
     SgMedium medium;
@@ -104,6 +116,22 @@ int main(int argc, char **argv)
         return 1;
     }
     double t_read = sg_seconds() - t0;
+    /* The parallel collapse meets its threads at a barrier three times a
+     * sub-step (some 50 000 times at resolution 1000): when other work
+     * holds the cores, every meeting waits for a descheduled thread and the
+     * collapse runs several times slower than on one thread (measured at
+     * load 15 on 2 cores: 209 s against 28 s at Sponza 500). Unless told,
+     * a large medium's collapse goes parallel only when the cores were
+     * idle over a fifth of a second. Same result either way. */
+    bool busy = false;
+    int cores = sg_thread_count(options.threads);
+    if (!collapse_choice && options.parallel_grain && cores > 1 &&
+        sg_grid_count(&medium.grid) >= ((size_t)1 << 24)) {
+        double idle = idle_cores(200);
+        busy = idle >= 0 && idle < cores - 0.5;
+        if (busy)
+            options.parallel_grain = 0;
+    }
     /* Peak about 9 bytes per voxel (distance maps, complex, queues; measured):
      * refuse up front what the machine cannot hold rather than be killed. */
     if (!sg_memory_check(12.0 * (double)sg_grid_count(&medium.grid), in_path,
