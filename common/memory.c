@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
 static uint64_t physical_memory(void)
@@ -48,4 +49,17 @@ bool sg_memory_check(double bytes, const char *name, const char *what, SgError *
         return true;
     return sg_fail(err, "%s%s%s needs %.0f MB of memory, more than the %.0f MB available", name ? name : "",
                    name ? ": " : "", what, bytes / 1048576.0, (double)available / 1048576.0);
+}
+
+void sg_memory_prefer_huge_pages(void *p, size_t bytes)
+{
+    /* only the whole 2 MB pages inside the block; a no-op where the kernel
+     * has no transparent huge pages (or they are off) */
+    const uintptr_t huge = (uintptr_t)2 << 20;
+    if (!p || bytes < 4 * huge)
+        return;
+    uintptr_t lo = ((uintptr_t)p + huge - 1) & ~(huge - 1);
+    uintptr_t hi = ((uintptr_t)p + bytes) & ~(huge - 1);
+    if (hi > lo)
+        (void)madvise((void *)lo, hi - lo, MADV_HUGEPAGE);
 }

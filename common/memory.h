@@ -6,6 +6,7 @@
 #define SG_MEMORY_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "error.h"
@@ -22,6 +23,12 @@ uint64_t sg_memory_available(void);
 /* Fails with "NAME: WHAT needs N MB of memory, more than the M MB
  * available" when bytes exceeds sg_memory_available(). name may be NULL. */
 bool sg_memory_check(double bytes, const char *name, const char *what, SgError *err);
+
+/* Asks for transparent huge pages on a large block just allocated and not
+ * yet written (2 MB pages: the arrays the skeleton's collapse and the
+ * nearest-node propagation read at random, hundreds of MB at resolution
+ * 1000, would otherwise miss the TLB on nearly every access). */
+void sg_memory_prefer_huge_pages(void *p, size_t bytes);
 
 #ifdef __cplusplus
 }

@@ -26,6 +26,7 @@ void sg_thread_pool_run(SgThreadPool *pool, uint64_t count, SgParallelBody body,
 
 /* A pool for one job, threads <= 0 meaning every core. */
 void sg_parallel_for(uint64_t count, int threads, SgParallelBody body, void *ctx);
+/* requested if > 0, else the cores this process may run on (its CPU affinity). */
 int sg_thread_count(int requested);
 
 #endif

@@ -16,7 +16,13 @@
  * per boundary), the voxels that improved seed the next round, and the
  * slabs run again until nothing crosses: usually two or three rounds, the
  * later ones touching only the bands where a node on the other side is
- * nearer. Same fixpoint, so the same bytes for any thread count. */
+ * nearer. Same fixpoint, so the same bytes for any thread count.
+ *
+ * Keys are 32 bits when the node ids leave room for the distances met
+ * (node in the low bits, distance above: the same order as the 64-bit
+ * key, so the same fixpoint): half the memory and half the cache misses
+ * of the propagation, which is bound by them. A distance that would not
+ * fit stops that attempt and the labels are built again with 64-bit keys. */
 #include "labels.h"
 
 #include <stdlib.h>
@@ -24,13 +30,11 @@
 
 #include "importance_cache_format.h"
 #include "progress.h"
+#include "memory.h"
 #include "threads.h"
 
 enum { W_FACE = 29, W_EDGE = 41, W_CORNER = 50, RING = 64, MAX_SLABS = 16 };
 
-/* A blocked cell: distance 0 (never improved), no node. */
-#define KEY_BLOCKED ((uint64_t)SG_CACHE_NONE)
-#define KEY_UNSEEN UINT64_MAX
 
 typedef struct Buffer {
     uint64_t *items;
@@ -57,10 +61,14 @@ typedef struct Slab {
     Buffer ring[RING];  /* Dial's buckets (voxel indices in the low 32 bits) */
     uint64_t relaxed;   /* voxels settled, over all rounds */
     bool failed;
+    bool overflow;      /* a distance did not fit the key */
 } Slab;
 
 typedef struct Labeller {
-    uint64_t *key;
+    void *key;          /* uint32_t or uint64_t per padded voxel */
+    int shift;          /* key = distance << shift | node */
+    uint64_t node_mask; /* node field; all ones: no node */
+    uint32_t distance_limit;
     long off[26];
     uint32_t weight[26];
     size_t plane; /* padded voxels per z plane */
@@ -75,117 +83,47 @@ static int compare_u64(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* Dijkstra inside one slab from its seeds (sorted by distance, fed into the
- * ring as the distance reaches them). */
-static void run_slab(void *ctx, uint64_t index, int thread)
-{
-    (void)thread;
-    Labeller *L = ctx;
-    Slab *s = &L->slabs[index];
-    uint64_t *key = L->key;
-    if (s->seeds.count == 0)
-        return;
-    qsort(s->seeds.items, s->seeds.count, sizeof *s->seeds.items, compare_u64);
-    size_t next_seed = 0, pending = 0;
-    uint32_t d = (uint32_t)(s->seeds.items[0] >> 32);
-    for (;;) {
-        while (next_seed < s->seeds.count && (uint32_t)(s->seeds.items[next_seed] >> 32) == d) {
-            if (!buffer_push(&s->ring[d % RING], (uint32_t)s->seeds.items[next_seed]))
-                s->failed = true;
-            next_seed++;
-            pending++;
-        }
-        if (pending == 0) {
-            if (next_seed == s->seeds.count)
-                break;
-            d = (uint32_t)(s->seeds.items[next_seed] >> 32);
-            continue;
-        }
-        Buffer *b = &s->ring[d % RING];
-        for (size_t q = 0; q < b->count; q++) {
-            uint32_t v = (uint32_t)b->items[q];
-            uint64_t k = key[v];
-            if ((uint32_t)(k >> 32) != d)
-                continue; /* superseded by a shorter path */
-            s->relaxed++;
-            uint64_t label = (uint32_t)k;
-            for (int e = 0; e < 26; e++) {
-                size_t u = (size_t)((long)v + L->off[e]);
-                if (u < s->lo || u >= s->hi)
-                    continue; /* the neighbouring slab's: exchanged later */
-                uint32_t nd = d + L->weight[e];
-                uint64_t want = (uint64_t)nd << 32 | label;
-                uint64_t cur = key[u];
-                if (want < cur) {
-                    key[u] = want;
-                    /* In the first round every reached voxel was queued at
-                     * its distance when it got it: a lower node at the same
-                     * distance needs no new entry. Later rounds start from
-                     * keys set before, so any change is queued. */
-                    if ((uint32_t)(cur >> 32) > nd || !L->first_round) {
-                        if (!buffer_push(&s->ring[nd % RING], u))
-                            s->failed = true;
-                        pending++;
-                    }
-                }
-            }
-        }
-        pending -= b->count;
-        b->count = 0;
-        d++;
-    }
-    s->seeds.count = 0;
-}
-
-/* Relaxes plane `from` into the adjacent plane `to` (z differs by one),
- * seeding `slab` with every voxel that improved. */
-static bool exchange(Labeller *L, size_t from, size_t to, Slab *slab, size_t px)
-{
-    uint64_t *key = L->key;
-    long dz = to > from ? (long)L->plane : -(long)L->plane;
-    bool ok = true;
-    for (size_t v = from; v < from + L->plane; v++) {
-        uint64_t k = key[v];
-        if ((uint32_t)k == SG_CACHE_NONE)
-            continue; /* blocked or not reached */
-        uint32_t d = (uint32_t)(k >> 32);
-        for (int dy = -1; dy <= 1; dy++)
-            for (int dx = -1; dx <= 1; dx++) {
-                long o = dz + dx + (long)px * dy;
-                size_t u = (size_t)((long)v + o);
-                if (u < to || u >= to + L->plane)
-                    continue;
-                uint32_t nd = d + (dx == 0 && dy == 0 ? W_FACE : dx == 0 || dy == 0 ? W_EDGE
-                                                                                    : W_CORNER);
-                uint64_t want = (uint64_t)nd << 32 | (uint32_t)k;
-                if (want < key[u]) {
-                    key[u] = want;
-                    ok = ok && buffer_push(&slab->seeds, (uint64_t)nd << 32 | u);
-                }
-            }
-    }
-    return ok;
-}
+#define KEY_T uint32_t
+#define PASS(name) name##_32
+#include "labels_pass.h"
+#undef KEY_T
+#undef PASS
+#define KEY_T uint64_t
+#define PASS(name) name##_64
+#include "labels_pass.h"
+#undef KEY_T
+#undef PASS
 
 void sg_label_grid_release(SgLabelGrid *g)
 {
     free(g->key);
+    free(g->key32);
     memset(g, 0, sizeof *g);
 }
 
-bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int threads,
-                         SgLabelGrid *out, SgError *err)
+static int bit_width(uint64_t n)
+{
+    int b = 1;
+    while (b < 64 && ((uint64_t)1 << b) < n)
+        b++;
+    return b;
+}
+
+/* One attempt with keys of key_bits (32 or 64). *overflow: a distance did
+ * not fit (32 only); the caller tries again wider. */
+static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int threads,
+                          int key_bits, uint32_t distance_limit, SgLabelGrid *out,
+                          bool *overflow, SgError *err)
 {
     memset(out, 0, sizeof *out);
+    *overflow = false;
+    const bool wide = key_bits == 64;
     /* A one-voxel frame of blocked cells around the grid: no bounds tests
      * in the inner loop. */
     const size_t px = (size_t)grid->nx + 2, py = (size_t)grid->ny + 2, pz = (size_t)grid->nz + 2;
     const size_t total = px * py * pz;
-    if (total >= UINT32_MAX)
-        return sg_fail(err, "grid of %dx%dx%d voxels is too large for the nearest-node table",
-                       grid->nx, grid->ny, grid->nz);
     Labeller *L = calloc(1, sizeof *L);
-    uint64_t *key = malloc(total * sizeof *key);
+    void *key = malloc(total * (wide ? sizeof(uint64_t) : sizeof(uint32_t)));
     uint64_t *plane_medium = calloc(pz, sizeof *plane_medium);
     if (!L || !key || !plane_medium) {
         free(L);
@@ -195,20 +133,25 @@ bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int thr
     }
     L->key = key;
     L->plane = px * py;
+    sg_memory_prefer_huge_pages(key, total * (wide ? sizeof(uint64_t) : sizeof(uint32_t)));
+    if (wide) {
+        L->shift = 32;
+        L->node_mask = 0xffffffffu;
+        L->distance_limit = UINT32_MAX - 64;
+    } else {
+        /* node ids 0 .. count-1 below the all-ones "no node" */
+        L->shift = bit_width((uint64_t)skeleton->node_count + 1);
+        L->node_mask = ((uint64_t)1 << L->shift) - 1;
+        L->distance_limit = (uint32_t)(((uint64_t)1 << (32 - L->shift)) - 2);
+        if (distance_limit && distance_limit < L->distance_limit)
+            L->distance_limit = distance_limit;
+    }
 
     uint64_t medium = 0;
-    for (size_t v = 0; v < total; v++)
-        key[v] = KEY_BLOCKED;
-    for (int k = 0; k < grid->nz; k++)
-        for (int j = 0; j < grid->ny; j++) {
-            const uint8_t *row = grid->voxels + sg_grid_index(grid, 0, j, k);
-            uint64_t *krow = key + 1 + px * ((size_t)(j + 1) + py * (size_t)(k + 1));
-            for (int i = 0; i < grid->nx; i++)
-                if (row[i]) {
-                    krow[i] = KEY_UNSEEN;
-                    plane_medium[k + 1]++;
-                }
-        }
+    if (wide)
+        fill_64(L, grid, px, py, total, plane_medium);
+    else
+        fill_32(L, grid, px, py, total, plane_medium);
     for (size_t z = 0; z < pz; z++)
         medium += plane_medium[z];
     int n = 0;
@@ -253,9 +196,9 @@ bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int thr
         if (!sg_grid_inside(grid, c[0], c[1], c[2]) || !sg_grid_get(grid, c[0], c[1], c[2]))
             continue;
         size_t v = (size_t)(c[0] + 1) + px * ((size_t)(c[1] + 1) + py * (size_t)(c[2] + 1));
-        if (key[v] != KEY_UNSEEN)
-            continue; /* a lower node already stands on this voxel */
-        key[v] = s;
+        /* a lower node may already stand on this voxel */
+        if (!(wide ? seed_64(L, v, s) : seed_32(L, v, s)))
+            continue;
         for (int t = 0; t < slabs; t++)
             if (v >= L->slabs[t].lo && v < L->slabs[t].hi)
                 ok = buffer_push(&L->slabs[t].seeds, v);
@@ -265,13 +208,14 @@ bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int thr
     sg_progress_begin(&progress, "nearest nodes", medium);
     uint32_t rounds = 0;
     uint64_t settled = 0;
-    for (int round = 0; ok; round++) {
+    for (int round = 0; ok && !*overflow; round++) {
         rounds++;
         L->first_round = round == 0;
-        sg_parallel_for((uint64_t)slabs, slabs, run_slab, L);
+        sg_parallel_for((uint64_t)slabs, slabs, wide ? run_slab_64 : run_slab_32, L);
         uint64_t relaxed = 0;
         for (int s = 0; s < slabs; s++) {
             ok = ok && !L->slabs[s].failed;
+            *overflow |= L->slabs[s].overflow;
             relaxed += L->slabs[s].relaxed;
         }
         settled = relaxed;
@@ -279,40 +223,82 @@ bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int thr
         bool more = false;
         for (int s = 0; ok && s + 1 < slabs; s++) {
             size_t last_a = L->slabs[s].hi - L->plane, first_b = L->slabs[s].hi;
-            ok = exchange(L, last_a, first_b, &L->slabs[s + 1], px) &&
-                 exchange(L, first_b, last_a, &L->slabs[s], px);
+            if (wide)
+                ok = exchange_64(L, last_a, first_b, &L->slabs[s + 1], px) &&
+                     exchange_64(L, first_b, last_a, &L->slabs[s], px);
+            else
+                ok = exchange_32(L, last_a, first_b, &L->slabs[s + 1], px) &&
+                     exchange_32(L, first_b, last_a, &L->slabs[s], px);
         }
-        for (int s = 0; s < slabs; s++)
+        for (int s = 0; s < slabs; s++) {
             more |= L->slabs[s].seeds.count > 0;
+            *overflow |= L->slabs[s].overflow;
+        }
         if (!more)
             break;
     }
     sg_progress_end(&progress);
 
+    uint64_t labelled = ok && !*overflow ? (wide ? count_labelled_64(L, total)
+                                                 : count_labelled_32(L, total))
+                                         : 0;
+    uint64_t node_mask = L->node_mask;
     for (int s = 0; s < MAX_SLABS; s++) {
         free(L->slabs[s].seeds.items);
         for (int r = 0; r < RING; r++)
             free(L->slabs[s].ring[r].items);
     }
     free(L);
-    if (!ok) {
+    if (!ok || *overflow) {
         free(key);
-        return sg_fail(err, "out of memory in the nearest-node propagation");
+        return ok || sg_fail(err, "out of memory in the nearest-node propagation");
     }
-    uint64_t labelled = 0;
-    for (size_t v = 0; v < total; v++)
-        labelled += (uint32_t)key[v] != SG_CACHE_NONE;
     out->nx = grid->nx;
     out->ny = grid->ny;
     out->nz = grid->nz;
     out->px = px;
     out->py = py;
-    out->key = key;
+    if (wide)
+        out->key = key;
+    else
+        out->key32 = key;
+    out->node_mask = (uint32_t)node_mask;
     out->medium_voxels = medium;
     out->labelled_voxels = labelled;
     out->rounds = rounds;
     out->settled = settled;
     return true;
+}
+
+bool sg_label_grid_build_keys(const SgGrid *grid, const SgSkeleton *skeleton, int threads,
+                              int key_bits, uint32_t distance_limit, SgLabelGrid *out,
+                              SgError *err)
+{
+    memset(out, 0, sizeof *out);
+    const size_t total = ((size_t)grid->nx + 2) * ((size_t)grid->ny + 2) * ((size_t)grid->nz + 2);
+    if (total >= UINT32_MAX)
+        return sg_fail(err, "grid of %dx%dx%d voxels is too large for the nearest-node table",
+                       grid->nx, grid->ny, grid->nz);
+    /* narrow keys when at least 14 bits are left for the distance (564
+     * voxels of geodesic distance to the nearest node) */
+    bool narrow = key_bits != 64 && bit_width((uint64_t)skeleton->node_count + 1) <= 18;
+    bool overflow = false;
+    if (narrow) {
+        if (!build_attempt(grid, skeleton, threads, 32, distance_limit, out, &overflow, err))
+            return false;
+        if (!overflow)
+            return true;
+    }
+    if (!build_attempt(grid, skeleton, threads, 64, 0, out, &overflow, err))
+        return false;
+    out->widened = narrow;
+    return true;
+}
+
+bool sg_label_grid_build(const SgGrid *grid, const SgSkeleton *skeleton, int threads,
+                         SgLabelGrid *out, SgError *err)
+{
+    return sg_label_grid_build_keys(grid, skeleton, threads, 0, 0, out, err);
 }
 
 bool sg_importance_label_voxels(const SgGrid *grid, const SgSkeleton *skeleton, int threads,

@@ -59,9 +59,13 @@ run_step() {
         if [ "$key" = "$(cat "$dir/geometry.key" 2>/dev/null)" ] && [ -e "$dir/importance.cache" ]; then
           echo "slurm-render: precompute: $dir/importance.cache is up to date"
         else
-          "$bin/voxelize" "$scene" -o "$dir/medium.vdb" --quiet &&
-            "$bin/skeletonize" "$dir/medium.vdb" -o "$dir/skeleton.ply" --quiet &&
-            "$bin/importance" "$dir/medium.vdb" "$dir/skeleton.ply" -o "$dir/importance.cache" --quiet || exit 1
+          # the job has its node to itself (sbatch --exclusive below): every core
+          local cores=()
+          [ -n "${SLURM_CPUS_ON_NODE:-}" ] && cores=(--threads "$SLURM_CPUS_ON_NODE")
+          "$bin/voxelize" "$scene" -o "$dir/medium.vdb" "${cores[@]}" --quiet &&
+            "$bin/skeletonize" "$dir/medium.vdb" -o "$dir/skeleton.ply" "${cores[@]}" --quiet &&
+            "$bin/importance" "$dir/medium.vdb" "$dir/skeleton.ply" -o "$dir/importance.cache" "${cores[@]}" \
+              --quiet || exit 1
           printf '%s\n' "$key" >"$dir/geometry.key"
         fi
       fi
@@ -76,7 +80,9 @@ run_step() {
           *) train_options+=("${render_options[$i]}") ;;
         esac
       done
-      "$bin/render" "$scene" "${cache[@]}" "${train_options[@]}" --field-out "$dir/$name.field" \
+      local threads=()
+      [ -n "${SLURM_CPUS_ON_NODE:-}" ] && threads=(--threads "$SLURM_CPUS_ON_NODE")
+      "$bin/render" "$scene" "${cache[@]}" "${train_options[@]}" "${threads[@]}" --field-out "$dir/$name.field" \
         -o "$dir/$name-training.exr" --quiet || exit 1
       ;;
     shard)
@@ -226,7 +232,7 @@ extra=($extra_sbatch)
 submit() { sbatch --parsable --requeue "${extra[@]}" "$@" | cut -d';' -f1; }
 dependency=()
 if [ -z "$resume" ]; then
-  pre=$(submit --job-name "$name-precompute" --output "$dir/logs/precompute-%j.out" \
+  pre=$(submit --exclusive --job-name "$name-precompute" --output "$dir/logs/precompute-%j.out" \
     --wrap "bash $(printf %q "$self") --step precompute $(printf %q "$dir")") || die "sbatch failed (precompute)"
   [ -n "$pre" ] || die "sbatch gave no job id"
   dependency=(--dependency "afterok:$pre" --kill-on-invalid-dep=yes)

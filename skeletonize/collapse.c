@@ -56,6 +56,79 @@ typedef struct Worker {
     Sink sink;
 } Worker;
 
+/* The constraint set is a few cells per skeleton node (anchors and kept
+ * edges, 0- and 1-cells), so a small open-addressing set of cell ids
+ * rather than a byte per lattice vertex: no memory per voxel, and the
+ * table stays in cache while the byte array's line was one more miss per
+ * tested face. Cells of dimension 2 and 3 are looked up only if one was
+ * ever constrained. */
+typedef struct CellSet {
+    uint32_t *slot; /* UINT32_MAX: empty */
+    size_t count;
+    int bits;       /* 2^bits slots */
+    bool high_dims; /* a 2- or 3-cell is in the set */
+} CellSet;
+
+static inline size_t cell_slot(const CellSet *s, uint32_t cell)
+{
+    return (size_t)(((uint64_t)cell * 0x9E3779B97F4A7C15ull) >> (64 - s->bits));
+}
+
+static inline bool cell_set_has(const CellSet *s, uint32_t cell)
+{
+    if (!s->high_dims && sg_cell_dim(cell & 7) >= 2)
+        return false;
+    size_t mask = ((size_t)1 << s->bits) - 1;
+    for (size_t i = cell_slot(s, cell);; i = (i + 1) & mask) {
+        uint32_t x = s->slot[i];
+        if (x == cell)
+            return true;
+        if (x == UINT32_MAX)
+            return false;
+    }
+}
+
+static bool cell_set_add(CellSet *s, uint32_t cell)
+{
+    if (2 * (s->count + 1) > ((size_t)1 << s->bits)) {
+        CellSet grown = {NULL, 0, s->bits + 1, s->high_dims};
+        grown.slot = malloc(((size_t)1 << grown.bits) * sizeof *grown.slot);
+        if (!grown.slot)
+            return false;
+        memset(grown.slot, 0xff, ((size_t)1 << grown.bits) * sizeof *grown.slot);
+        for (size_t i = 0; i < ((size_t)1 << s->bits); i++)
+            if (s->slot[i] != UINT32_MAX) {
+                size_t j = cell_slot(&grown, s->slot[i]);
+                while (grown.slot[j] != UINT32_MAX)
+                    j = (j + 1) & (((size_t)1 << grown.bits) - 1);
+                grown.slot[j] = s->slot[i];
+                grown.count++;
+            }
+        free(s->slot);
+        *s = grown;
+    }
+    size_t mask = ((size_t)1 << s->bits) - 1;
+    size_t i = cell_slot(s, cell);
+    while (s->slot[i] != UINT32_MAX && s->slot[i] != cell)
+        i = (i + 1) & mask;
+    if (s->slot[i] == UINT32_MAX)
+        s->count++;
+    s->slot[i] = cell;
+    s->high_dims |= sg_cell_dim(cell & 7) >= 2;
+    return true;
+}
+
+static bool cell_set_init(CellSet *s)
+{
+    s->bits = 10;
+    s->count = 0;
+    s->high_dims = false;
+    s->slot = malloc(((size_t)1 << s->bits) * sizeof *s->slot);
+    if (s->slot)
+        memset(s->slot, 0xff, ((size_t)1 << s->bits) * sizeof *s->slot);
+    return s->slot != NULL;
+}
+
 typedef enum Job { JOB_VERIFY, JOB_EVEN, JOB_ODD, JOB_EXIT } Job;
 
 typedef struct Collapse Collapse;
@@ -72,11 +145,13 @@ typedef struct Helper {
 
 struct Collapse {
     SgComplex *cx;
-    uint8_t *cells, *cons;
+    uint8_t *cells;
+    CellSet cons;       /* the constraint set: lights, camera, kept edges */
     size_t st[3];
     U32Vec queue_a[KINDS], queue_b[KINDS];
     U32Vec *cur, *next; /* this step's and next step's queues */
     U32Vec pairs;       /* f, g, f, g, ... */
+    U32Vec sort_scratch; /* radix sort of a queue */
     EdgeVec live;       /* isolated edges not yet kept */
     EdgeVec kept;       /* isolated edges in the constraint set */
     const uint16_t *dist8, *open8; /* lattice layout: voxel at its lower corner */
@@ -162,7 +237,7 @@ static inline int free_kind(const Collapse *c, uint32_t f, uint32_t *g)
     size_t v = f >> 3;
     unsigned m = f & 7;
     const uint8_t *cells = c->cells;
-    if (!has(cells, v, m) || has(c->cons, v, m))
+    if (!has(cells, v, m) || cell_set_has(&c->cons, f))
         return -1;
     int count = 0, axis = 0, ori = 0;
     size_t gv = 0;
@@ -184,7 +259,7 @@ static inline int free_kind(const Collapse *c, uint32_t f, uint32_t *g)
             gv = w, gm = cm, axis = a, ori = 1;
         }
     }
-    if (count != 1 || has(c->cons, gv, gm))
+    if (count != 1 || cell_set_has(&c->cons, (uint32_t)(gv * 8 + gm)))
         return -1;
     *g = (uint32_t)(gv * 8 + gm);
     return axis * 6 + ori * 3 + (3 - sg_cell_dim(gm));
@@ -411,10 +486,43 @@ static void run_substep_parallel(Collapse *c, U32Vec *q)
     }
 }
 
+/* Sorts a queue by cell id (LSD radix, 11 bits a pass), so that the
+ * sub-step walks the border in memory order: a queue gathers the faces
+ * freed by up to 18 earlier sub-steps, each in its own sweep of the grid,
+ * and on a grid larger than the cache every sweep reloads the lines the
+ * others loaded. The result depends on the queue's set only (header). */
+static void sort_queue(Collapse *c, U32Vec *q)
+{
+    if (q->n < 4096)
+        return;
+    if (!vec_reserve((void **)&c->sort_scratch.a, &c->sort_scratch.cap, q->n, sizeof *q->a))
+        return; /* unsorted is still correct */
+    uint32_t *from = q->a, *to = c->sort_scratch.a;
+    for (int shift = 0; shift < 33; shift += 11) {
+        size_t count[2048 + 1] = {0};
+        for (size_t i = 0; i < q->n; i++)
+            count[(from[i] >> shift & 2047) + 1]++;
+        for (int b = 0; b < 2048; b++)
+            count[b + 1] += count[b];
+        for (size_t i = 0; i < q->n; i++)
+            to[count[from[i] >> shift & 2047]++] = from[i];
+        uint32_t *t = from;
+        from = to;
+        to = t;
+    }
+    /* three passes: the sorted keys are in the scratch; swap the buffers */
+    U32Vec sorted = {from, q->n, from == q->a ? q->cap : c->sort_scratch.cap};
+    if (from != q->a) {
+        c->sort_scratch = (U32Vec){q->a, 0, q->cap};
+        *q = sorted;
+    }
+}
+
 static void run_substep(Collapse *c, int s)
 {
     c->substep = s;
     U32Vec *q = &c->cur[s];
+    sort_queue(c, q);
     if (c->threads > 1 && q->n >= c->parallel_grain) {
         run_substep_parallel(c, q);
     } else {
@@ -462,7 +570,8 @@ static void apply_lifespan_rule(Collapse *c)
         if (!has(c->cells, v, m))
             continue;
         if ((int64_t)(c->step - e.birth) * 8 * 256 > (int64_t)e.open8 * c->filter256) {
-            c->cons[v] |= (uint8_t)(1u << m);
+            if (!cell_set_add(&c->cons, e.cell))
+                c->oom = true;
             e.kept = c->step;
             edge_push(c, &c->kept, e);
             continue;
@@ -480,22 +589,132 @@ static int compare_u64(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-static size_t square_index(const U32Vec *squares, uint32_t cell)
-{
-    size_t lo = 0, hi = squares->n;
-    while (lo < hi) {
-        size_t mid = (lo + hi) / 2;
-        if (squares->a[mid] < cell)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo;
-}
-
 static uint16_t voxel_dist8(const Collapse *c, size_t v)
 {
     return c->dist8[v];
+}
+
+/* The regions of space the squares left bound: lattice vertices (each the
+ * unit cube of space at its lower corner), joined to their 6 neighbours
+ * unless a square lies between them; the far padding layer owns no voxel
+ * and is left out. Labelled by union-find over x-runs, scanning the cells
+ * in memory order (a flood from each square visited the lattice in
+ * breadth-first order, a cache miss per vertex on large grids). The
+ * partition is the same, so the same squares are removed. */
+typedef struct SpaceRuns {
+    size_t row_length, rows_y, rows;
+    uint32_t *start, *end; /* inclusive x of each run */
+    uint32_t *parent;
+    uint32_t *row_first;   /* rows + 1 */
+    size_t count, cap;
+} SpaceRuns;
+
+static void space_runs_release(SpaceRuns *r)
+{
+    free(r->start);
+    free(r->end);
+    free(r->parent);
+    free(r->row_first);
+}
+
+static bool space_runs_push(SpaceRuns *r, uint32_t x0, uint32_t x1)
+{
+    if (r->count == r->cap) {
+        size_t cap = r->cap ? 2 * r->cap : 4096;
+        uint32_t *s = realloc(r->start, cap * sizeof *s);
+        if (s)
+            r->start = s;
+        uint32_t *e = realloc(r->end, cap * sizeof *e);
+        if (e)
+            r->end = e;
+        if (!s || !e || cap >= UINT32_MAX)
+            return false;
+        r->cap = cap;
+    }
+    r->start[r->count] = x0;
+    r->end[r->count] = x1;
+    r->count++;
+    return true;
+}
+
+/* Joins the runs of row b to those of row a (the row below it along axis
+ * `axis`, 1 or 2) wherever a vertex of b is not walled off from the one
+ * under it by a square of normal `axis`. */
+static void space_runs_connect(const Collapse *c, SpaceRuns *r, size_t ra, size_t rb,
+                               size_t b_first_vertex, unsigned wall)
+{
+    uint32_t a = r->row_first[ra], a_end = r->row_first[ra + 1];
+    uint32_t b = r->row_first[rb], b_end = r->row_first[rb + 1];
+    while (a < a_end && b < b_end) {
+        uint32_t lo = r->start[a] > r->start[b] ? r->start[a] : r->start[b];
+        uint32_t hi = r->end[a] < r->end[b] ? r->end[a] : r->end[b];
+        for (uint32_t x = lo; x <= hi && lo <= hi; x++)
+            if (!has(c->cells, b_first_vertex + x, wall)) {
+                sg_set_union(r->parent, a, b);
+                break;
+            }
+        if (r->end[a] < r->end[b])
+            a++;
+        else
+            b++;
+    }
+}
+
+static bool space_runs_build(const Collapse *c, SpaceRuns *r)
+{
+    const SgComplex *cx = c->cx;
+    memset(r, 0, sizeof *r);
+    r->row_length = (size_t)cx->lx - 1; /* without the far padding */
+    r->rows_y = (size_t)cx->ly - 1;
+    r->rows = r->rows_y * ((size_t)cx->lz - 1);
+    r->row_first = malloc((r->rows + 1) * sizeof *r->row_first);
+    if (!r->row_first)
+        return false;
+    for (size_t row = 0; row < r->rows; row++) {
+        r->row_first[row] = (uint32_t)r->count;
+        size_t y = row % r->rows_y, z = row / r->rows_y;
+        const uint8_t *cells = c->cells + y * c->st[1] + z * c->st[2];
+        uint32_t x0 = 0;
+        for (uint32_t x = 1; x < r->row_length; x++)
+            if (cells[x] >> 6 & 1) { /* the yz square at x walls x-1 off from x */
+                if (!space_runs_push(r, x0, x - 1))
+                    return false;
+                x0 = x;
+            }
+        if (!space_runs_push(r, x0, (uint32_t)r->row_length - 1))
+            return false;
+    }
+    r->row_first[r->rows] = (uint32_t)r->count;
+    r->parent = malloc(r->count * sizeof *r->parent);
+    if (!r->parent)
+        return false;
+    for (size_t i = 0; i < r->count; i++)
+        r->parent[i] = (uint32_t)i;
+    for (size_t row = 0; row < r->rows; row++) {
+        size_t y = row % r->rows_y, z = row / r->rows_y;
+        size_t first = y * c->st[1] + z * c->st[2];
+        if (y > 0)
+            space_runs_connect(c, r, row - 1, row, first, 5); /* xz square */
+        if (z > 0)
+            space_runs_connect(c, r, row - r->rows_y, row, first, 3); /* xy square */
+    }
+    return true;
+}
+
+/* The region (root run) of lattice vertex v. */
+static uint32_t space_region(const Collapse *c, SpaceRuns *r, size_t v)
+{
+    size_t x = v % c->st[1], y = v / c->st[1] % ((size_t)c->cx->ly), z = v / c->st[2];
+    size_t row = y + r->rows_y * z;
+    uint32_t lo = r->row_first[row], hi = r->row_first[row + 1];
+    while (lo + 1 < hi) {
+        uint32_t mid = (lo + hi) / 2;
+        if (r->start[mid] <= x)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return sg_set_find(r->parent, lo);
 }
 
 /* The collapse is stuck with squares left: no free face anywhere. The
@@ -519,81 +738,24 @@ static bool break_cavities(Collapse *c)
                 u32_push(c, &squares, (uint32_t)(v * 8 + m));
     }
     size_t n = squares.n;
-    uint32_t *side = malloc(2 * n * sizeof *side);
-    uint64_t *visited = calloc((cx->vertex_count + 63) / 64, sizeof *visited);
-    uint64_t *order = malloc(n * sizeof *order);
-    uint32_t *ring = NULL, *parent = NULL;
-    size_t ring_cap = 1u << 16, head = 0, count = 0;
-    ring = malloc(ring_cap * sizeof *ring);
+    uint32_t *side = malloc(2 * n * sizeof *side + 1);
+    uint64_t *order = malloc(n * sizeof *order + 1);
+    SpaceRuns runs;
     bool ok = false;
-    if (c->oom || !side || !visited || !order || !ring)
+    bool built = space_runs_build(c, &runs);
+    if (c->oom || !side || !order || !built)
         goto done;
-    for (size_t i = 0; i < 2 * n; i++)
-        side[i] = UINT32_MAX;
-    /* lattice vertices on the far padding layer own no voxel: never enter */
-    for (size_t v = 0; v < cx->vertex_count; v++) {
-        int p[3];
-        sg_complex_coords(cx, v, p);
-        if (p[0] == cx->nx + 1 || p[1] == cx->ny + 1 || p[2] == cx->nz + 1)
-            visited[v >> 6] |= 1ull << (v & 63);
-    }
-    uint32_t regions = 0;
+    /* side 0: the vertex below the square along its normal; side 1: above */
     for (size_t i = 0; i < n; i++) {
-        for (int s = 0; s < 2; s++) {
-            if (side[2 * i + s] != UINT32_MAX)
-                continue;
-            size_t w = squares.a[i] >> 3;
-            unsigned normal = 7u ^ (squares.a[i] & 7);
-            int a = normal == 1 ? 0 : normal == 2 ? 1 : 2;
-            size_t start = s == 1 ? w : w - c->st[a]; /* side 1: the voxel above */
-            uint32_t region = regions++;
-            visited[start >> 6] |= 1ull << (start & 63);
-            head = 0, count = 0;
-            ring[count++] = (uint32_t)start;
-            while (count) {
-                size_t u = ring[head];
-                head = (head + 1) & (ring_cap - 1);
-                count--;
-                for (int b = 0; b < 3; b++) {
-                    unsigned sm = 7u ^ (1u << b);
-                    for (int dir = 0; dir < 2; dir++) {
-                        /* dir 0: neighbour u + e_b, wall square at u + e_b, u below it;
-                           dir 1: neighbour u - e_b, wall square at u, u above it */
-                        if (dir == 1 && u < c->st[b])
-                            continue;
-                        size_t nu = dir == 0 ? u + c->st[b] : u - c->st[b];
-                        size_t sq_at = dir == 0 ? nu : u;
-                        if (has(c->cells, sq_at, sm)) {
-                            size_t k = square_index(&squares, (uint32_t)(sq_at * 8 + sm));
-                            side[2 * k + (dir == 0 ? 0 : 1)] = region;
-                            continue;
-                        }
-                        if (nu >= cx->vertex_count || (visited[nu >> 6] >> (nu & 63) & 1))
-                            continue;
-                        visited[nu >> 6] |= 1ull << (nu & 63);
-                        if (count == ring_cap) { /* grow the ring, unwrapping it */
-                            uint32_t *bigger = malloc(2 * ring_cap * sizeof *bigger);
-                            if (!bigger)
-                                goto done;
-                            for (size_t j = 0; j < count; j++)
-                                bigger[j] = ring[(head + j) & (ring_cap - 1)];
-                            free(ring);
-                            ring = bigger;
-                            ring_cap *= 2;
-                            head = 0;
-                        }
-                        ring[(head + count) & (ring_cap - 1)] = (uint32_t)nu;
-                        count++;
-                    }
-                }
-            }
-        }
+        size_t w = squares.a[i] >> 3;
+        unsigned normal = 7u ^ (squares.a[i] & 7);
+        int a = normal == 1 ? 0 : normal == 2 ? 1 : 2;
+        side[2 * i] = space_region(c, &runs, w - c->st[a]);
+        side[2 * i + 1] = space_region(c, &runs, w);
     }
-    parent = malloc((size_t)regions * sizeof *parent);
-    if (!parent)
-        goto done;
-    for (uint32_t r = 0; r < regions; r++)
-        parent[r] = r;
+    /* the regions' own union-find, over root run ids */
+    for (size_t i = 0; i < runs.count; i++)
+        runs.parent[i] = (uint32_t)i;
     for (size_t i = 0; i < n; i++) {
         size_t w = squares.a[i] >> 3;
         unsigned normal = 7u ^ (squares.a[i] & 7);
@@ -606,7 +768,7 @@ static bool break_cavities(Collapse *c)
     uint32_t broken = 0;
     for (size_t j = 0; j < n; j++) {
         size_t i = (size_t)(order[j] & 0xffffffffu);
-        if (!sg_set_union(parent, side[2 * i], side[2 * i + 1]))
+        if (!sg_set_union(runs.parent, side[2 * i], side[2 * i + 1]))
             continue;
         remove_cell(c, squares.a[i]);
         c->squares--;
@@ -629,10 +791,8 @@ static bool break_cavities(Collapse *c)
 done:
     free(squares.a);
     free(side);
-    free(visited);
     free(order);
-    free(ring);
-    free(parent);
+    space_runs_release(&runs);
     if (!ok)
         c->oom = true;
     return ok;
@@ -680,14 +840,16 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
         c.st[a] = cx->stride[a];
     c.cur = c.queue_a;
     c.next = c.queue_b;
-    c.cons = calloc(cx->vertex_count, 1);
     bool ok = false;
-    if (!c.cons) {
+    if (!cell_set_init(&c.cons)) {
         c.oom = true;
         goto done;
     }
     for (size_t i = 0; i < constrained_count; i++)
-        c.cons[constrained[i] >> 3] |= (uint8_t)(1u << (constrained[i] & 7));
+        if (!cell_set_add(&c.cons, constrained[i])) {
+            c.oom = true;
+            goto done;
+        }
 
     /* worker threads for large sub-steps: slabs of at least SLAB_MIN
      * planes, about 8 per thread for balance */
@@ -838,9 +1000,10 @@ done:
         free(c.queue_b[k].a);
     }
     free(c.pairs.a);
+    free(c.sort_scratch.a);
     free(c.live.a);
     free(c.kept.a);
-    free(c.cons);
+    free(c.cons.slot);
     if (!ok) {
         sg_collapse_result_release(result);
         return sg_fail(err, "collapse: out of memory");

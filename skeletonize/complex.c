@@ -1,5 +1,6 @@
 #include "complex.h"
 
+#include "memory.h"
 #include <stdlib.h>
 #include <string.h>
 
@@ -88,6 +89,7 @@ bool sg_complex_build(SgComplex *cx, const SgGrid *g, int threads, SgError *err)
     cx->cells = calloc(cx->vertex_count, 1);
     if (!cx->cells)
         return sg_fail(err, "cubical complex: out of memory (%zu MB)", cx->vertex_count >> 20);
+    sg_memory_prefer_huge_pages(cx->cells, cx->vertex_count);
     BuildContext b = {.cx = cx, .grid = g};
     for (unsigned c = 0; c < 256; c++)
         b.table[c] = sg_complex_cells_of_config(c);

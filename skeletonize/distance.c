@@ -21,10 +21,12 @@
 #include <string.h>
 
 #include "threads.h"
+#include "memory.h"
 
 typedef struct EdtContext {
     const SgGrid *grid;
     uint32_t *d2;
+    uint16_t *d2_16; /* d2 shrunk to 16 bits for the opening, when it fits */
     int threads;
     /* per-thread scratch: f, out (uint32), v (int), z (double) of the longest axis */
     uint32_t **f_buf, **out_buf;
@@ -152,6 +154,11 @@ static inline uint32_t pack(const EdtContext *c, int x, int y, int z)
     return (uint32_t)x | (uint32_t)y << c->bx | (uint32_t)z << (c->bx + c->by);
 }
 
+static inline uint32_t squared_distance(const EdtContext *c, size_t v)
+{
+    return c->d2_16 ? c->d2_16[v] : c->d2[v];
+}
+
 /* Offer ball centre cq (packed) to voxel p at (x,y,z): taken when larger
  * than p's current ball and containing p. */
 static inline void offer(const EdtContext *c, size_t p, int x, int y, int z, uint32_t cq)
@@ -166,8 +173,8 @@ static inline void offer(const EdtContext *c, size_t p, int x, int y, int z, uin
     int px = (int)(cp & ((1u << c->bx) - 1));
     int py = (int)(cp >> c->bx & ((1u << c->by) - 1));
     int pz = (int)(cp >> (c->bx + c->by));
-    uint32_t rq = c->d2[(size_t)qx + (size_t)g->nx * ((size_t)qy + (size_t)g->ny * (size_t)qz)];
-    uint32_t rp = c->d2[(size_t)px + (size_t)g->nx * ((size_t)py + (size_t)g->ny * (size_t)pz)];
+    uint32_t rq = squared_distance(c, (size_t)qx + (size_t)g->nx * ((size_t)qy + (size_t)g->ny * (size_t)qz));
+    uint32_t rp = squared_distance(c, (size_t)px + (size_t)g->nx * ((size_t)py + (size_t)g->ny * (size_t)pz));
     if (rq <= rp)
         return;
     int64_t dx = x - qx, dy = y - qy, dz = z - qz;
@@ -184,10 +191,10 @@ static void open_x(void *vctx, uint64_t z, int thread)
     for (int y = 0; y < g->ny; y++) {
         size_t row = nx * ((size_t)y + (size_t)g->ny * z);
         for (int x = 1; x < g->nx; x++)
-            if (c->d2[row + x] && c->d2[row + x - 1])
+            if (c->grid->voxels[row + x] && c->grid->voxels[row + x - 1])
                 offer(c, row + x, x, y, (int)z, c->cand[row + x - 1]);
         for (int x = g->nx - 2; x >= 0; x--)
-            if (c->d2[row + x] && c->d2[row + x + 1])
+            if (c->grid->voxels[row + x] && c->grid->voxels[row + x + 1])
                 offer(c, row + x, x, y, (int)z, c->cand[row + x + 1]);
     }
 }
@@ -203,13 +210,13 @@ static void open_y(void *vctx, uint64_t z, int thread)
     for (int y = 1; y < g->ny; y++)
         for (int x = 0; x < g->nx; x++) {
             size_t p = slice + x + nx * (size_t)y;
-            if (c->d2[p] && c->d2[p - nx])
+            if (c->grid->voxels[p] && c->grid->voxels[p - nx])
                 offer(c, p, x, y, (int)z, c->cand[p - nx]);
         }
     for (int y = g->ny - 2; y >= 0; y--)
         for (int x = 0; x < g->nx; x++) {
             size_t p = slice + x + nx * (size_t)y;
-            if (c->d2[p] && c->d2[p + nx])
+            if (c->grid->voxels[p] && c->grid->voxels[p + nx])
                 offer(c, p, x, y, (int)z, c->cand[p + nx]);
         }
 }
@@ -224,13 +231,13 @@ static void open_z(void *vctx, uint64_t y, int thread)
     for (int z = 1; z < g->nz; z++)
         for (int x = 0; x < g->nx; x++) {
             size_t p = row + x + plane * (size_t)z;
-            if (c->d2[p] && c->d2[p - plane])
+            if (c->grid->voxels[p] && c->grid->voxels[p - plane])
                 offer(c, p, x, (int)y, z, c->cand[p - plane]);
         }
     for (int z = g->nz - 2; z >= 0; z--)
         for (int x = 0; x < g->nx; x++) {
             size_t p = row + x + plane * (size_t)z;
-            if (c->d2[p] && c->d2[p + plane])
+            if (c->grid->voxels[p] && c->grid->voxels[p + plane])
                 offer(c, p, x, (int)y, z, c->cand[p + plane]);
         }
 }
@@ -275,6 +282,7 @@ bool sg_distance_opening(const SgGrid *g, int threads, uint16_t **dist8_out,
     c.z_buf = calloc((size_t)c.threads, sizeof *c.z_buf);
     if (!c.d2 || !c.f_buf || !c.out_buf || !c.v_buf || !c.z_buf)
         goto done;
+    sg_memory_prefer_huge_pages(c.d2, n * sizeof *c.d2);
     for (int t = 0; t < c.threads; t++) {
         c.f_buf[t] = malloc((size_t)longest * sizeof(uint32_t));
         c.out_buf[t] = malloc((size_t)longest * sizeof(uint32_t));
@@ -287,10 +295,29 @@ bool sg_distance_opening(const SgGrid *g, int threads, uint16_t **dist8_out,
     sg_parallel_for((uint64_t)g->nz, c.threads, edt_y, &c);
     sg_parallel_for((uint64_t)g->ny, c.threads, edt_z, &c);
 
+    /* The opening needs the exact squared distances at ball centres; the
+     * medium test reads the grid (d2 > 0 exactly on the medium). When every
+     * squared distance fits 16 bits (distances under 256 voxels), they are
+     * shrunk in place first: the opening's peak is then 7 bytes a voxel
+     * (grid, d2, ball centres) instead of 9. */
+    uint32_t largest = 0;
+    for (size_t i = 0; i < n; i++)
+        largest = c.d2[i] > largest ? c.d2[i] : largest;
+    if (largest < 65536) {
+        uint16_t *d16 = (uint16_t *)(void *)c.d2;
+        for (size_t i = 0; i < n; i++) {
+            uint16_t v = (uint16_t)c.d2[i];
+            memcpy(d16 + i, &v, sizeof v);
+        }
+        void *shrunk = realloc(c.d2, n * sizeof(uint16_t));
+        c.d2_16 = shrunk ? shrunk : (void *)c.d2;
+        c.d2 = NULL;
+    }
     if (open8_out) {
         c.cand = malloc(n * sizeof *c.cand);
         if (!c.cand)
             goto done;
+        sg_memory_prefer_huge_pages(c.cand, n * sizeof *c.cand);
         size_t p = 0;
         for (int z = 0; z < g->nz; z++)
             for (int y = 0; y < g->ny; y++)
@@ -310,21 +337,26 @@ bool sg_distance_opening(const SgGrid *g, int threads, uint16_t **dist8_out,
             size_t q = (cq & ((1u << c.bx) - 1)) +
                        (size_t)g->nx * ((cq >> c.bx & ((1u << c.by) - 1)) +
                                         (size_t)g->ny * (cq >> (c.bx + c.by)));
-            uint16_t v = c.d2[i] ? to_eighths(c.d2[q]) : 0;
+            uint16_t v = g->voxels[i] ? to_eighths(squared_distance(&c, q)) : 0;
             memcpy(open8 + i, &v, sizeof v);
         }
         void *shrunk = realloc(c.cand, n * sizeof(uint16_t));
         *open8_out = shrunk ? shrunk : (void *)c.cand;
         c.cand = NULL;
     }
-    uint16_t *dist8 = (uint16_t *)(void *)c.d2;
+    uint16_t *dist8 = c.d2_16 ? c.d2_16 : (uint16_t *)(void *)c.d2;
     for (size_t i = 0; i < n; i++) {
-        uint16_t v = to_eighths(c.d2[i]);
+        uint16_t v = to_eighths(squared_distance(&c, i));
         memcpy(dist8 + i, &v, sizeof v);
     }
-    void *shrunk = realloc(c.d2, n * sizeof(uint16_t));
-    *dist8_out = shrunk ? shrunk : (void *)c.d2;
+    if (c.d2_16) {
+        *dist8_out = c.d2_16;
+    } else {
+        void *shrunk = realloc(c.d2, n * sizeof(uint16_t));
+        *dist8_out = shrunk ? shrunk : (void *)c.d2;
+    }
     c.d2 = NULL;
+    c.d2_16 = NULL;
     ok = true;
 done:
     for (int t = 0; t < c.threads && c.f_buf; t++) {
@@ -338,6 +370,7 @@ done:
     free(c.v_buf);
     free(c.z_buf);
     free(c.d2);
+    free(c.d2_16);
     free(c.cand);
     if (!ok)
         return sg_fail(err, "distance transform: out of memory for %dx%dx%d voxels", g->nx,

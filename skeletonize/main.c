@@ -3,6 +3,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <unistd.h>
 
 #include "cli.h"
 
@@ -11,12 +13,13 @@
 #include "progress.h"
 #include "skeleton_graph.h"
 #include "skeletonize.h"
+#include "threads.h"
 
 static void usage(FILE *out)
 {
     fprintf(out,
             "usage: skeletonize medium.vdb -o skeleton.ply [--camera-constraint] [--threads N]\n"
-            "                   [--parallel-collapse]\n"
+            "                   [--serial-collapse]\n"
             "\n"
             "Thins the medium (the air light can reach) to its curvilinear skeleton: a\n"
             "graph with the medium's components and tunnels, centred in the air, passing\n"
@@ -29,10 +32,37 @@ static void usage(FILE *out)
             "                       position, voxel, kind, opening radius, lifespan, light)\n"
             "  --camera-constraint  the camera's voxel is a constraint too (kind 2)\n"
             "  --threads N          worker threads (default: every core)\n"
-            "  --parallel-collapse  run the large collapse sub-steps on the threads too\n"
-            "                       (same result; faster only when the cores are idle)\n"
+            "  --serial-collapse    run the collapse on one thread\n"
+            "  --parallel-collapse  run its large sub-steps on the threads even when other\n"
+            "                       work holds the cores (default: parallel when they were\n"
+            "                       idle at the start; the same result either way)\n"
             "  -q, --quiet          no summary line\n"
             "  -h, --help           this help\n");
+}
+
+/* Cores idle over the next `ms` milliseconds (from /proc/stat), or -1. */
+static double idle_cores(int ms)
+{
+    unsigned long long a[2][8];
+    for (int t = 0; t < 2; t++) {
+        FILE *f = fopen("/proc/stat", "r");
+        if (!f)
+            return -1;
+        int got = fscanf(f, "cpu %llu %llu %llu %llu %llu %llu %llu %llu", &a[t][0], &a[t][1],
+                         &a[t][2], &a[t][3], &a[t][4], &a[t][5], &a[t][6], &a[t][7]);
+        fclose(f);
+        if (got != 8)
+            return -1;
+        if (t == 0) {
+            struct timespec pause = {0, (long)ms * 1000000L};
+            nanosleep(&pause, NULL);
+        }
+    }
+    unsigned long long total = 0, idle = a[1][3] + a[1][4] - a[0][3] - a[0][4];
+    for (int i = 0; i < 8; i++)
+        total += a[1][i] - a[0][i];
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    return total && cores > 0 ? (double)idle / (double)total * (double)cores : -1;
 }
 
 int main(int argc, char **argv)
@@ -40,7 +70,7 @@ int main(int argc, char **argv)
     const char *in_path = NULL, *out_path = NULL;
     SgSkeletonOptions options;
     sg_skeleton_options_default(&options);
-    bool quiet = false;
+    bool quiet = false, collapse_choice = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
@@ -50,6 +80,10 @@ int main(int argc, char **argv)
             out_path = argv[++i];
         } else if (!strcmp(a, "--parallel-collapse")) {
             options.parallel_grain = SG_SKELETON_PARALLEL_GRAIN;
+            collapse_choice = true;
+        } else if (!strcmp(a, "--serial-collapse")) {
+            options.parallel_grain = 0;
+            collapse_choice = true;
         } else if (!strcmp(a, "--camera-constraint")) {
             options.camera_constraint = true;
         } else if (!strcmp(a, "--threads") && i + 1 < argc) {
@@ -82,6 +116,22 @@ int main(int argc, char **argv)
         return 1;
     }
     double t_read = sg_seconds() - t0;
+    /* The parallel collapse meets its threads at a barrier three times a
+     * sub-step (some 50 000 times at resolution 1000): when other work
+     * holds the cores, every meeting waits for a descheduled thread and the
+     * collapse runs several times slower than on one thread (measured at
+     * load 15 on 2 cores: 209 s against 28 s at Sponza 500). Unless told,
+     * a large medium's collapse goes parallel only when the cores were
+     * idle over a fifth of a second. Same result either way. */
+    bool busy = false;
+    int cores = sg_thread_count(options.threads);
+    if (!collapse_choice && options.parallel_grain && cores > 1 &&
+        sg_grid_count(&medium.grid) >= ((size_t)1 << 24)) {
+        double idle = idle_cores(200);
+        busy = idle >= 0 && idle < cores - 0.5;
+        if (busy)
+            options.parallel_grain = 0;
+    }
     /* Peak about 9 bytes per voxel (distance maps, complex, queues; measured):
      * refuse up front what the machine cannot hold rather than be killed. */
     if (!sg_memory_check(12.0 * (double)sg_grid_count(&medium.grid), in_path,
@@ -110,11 +160,12 @@ int main(int argc, char **argv)
         fprintf(stderr,
                 "skeletonize: %" PRIu64 " medium voxels -> %u nodes, %u edges, %" PRId64
                 " loops, %u components, %u cavities broken%s; %u constraints, %u steps, "
-                "centredness %.3f; read %.2f s, distance %.2f s, collapse %.2f s, total %.2f s\n",
+                "centredness %.3f; read %.2f s, distance %.2f s, collapse %.2f s%s, total %.2f s\n",
                 stats.medium_voxels, stats.nodes, stats.edges, stats.loops, stats.components,
                 stats.cavities_broken, stats.forced_breaks ? " (+ forced breaks)" : "",
                 stats.constraints, stats.steps, stats.mean_centredness, t_read,
-                stats.seconds_distance, stats.seconds_collapse, sg_seconds() - t0);
+                stats.seconds_distance, stats.seconds_collapse,
+                busy ? " (one thread: the cores are busy)" : "", sg_seconds() - t0);
     }
     sg_skeleton_release(&skeleton);
     sg_medium_release(&medium);

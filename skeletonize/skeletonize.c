@@ -7,6 +7,7 @@
 
 #include "collapse.h"
 #include "complex.h"
+#include "memory.h"
 #include "progress.h"
 #include "union_find.h"
 
@@ -16,6 +17,7 @@ void sg_skeleton_options_default(SgSkeletonOptions *opt)
     opt->threads = 0;
     opt->progress = true;
     opt->filter_scale = 1.0;
+    opt->parallel_grain = SG_SKELETON_PARALLEL_GRAIN;
 }
 
 static size_t grid_index3(const SgGrid *g, const int p[3])
@@ -33,6 +35,7 @@ static bool to_lattice(const SgComplex *cx, const SgGrid *g, uint16_t **values, 
     uint16_t *lat = calloc(cx->vertex_count, sizeof *lat);
     if (!lat)
         return sg_fail(err, "skeleton: out of memory");
+    sg_memory_prefer_huge_pages(lat, cx->vertex_count * sizeof *lat);
     for (int k = 0; k < g->nz; k++)
         for (int j = 0; j < g->ny; j++)
             memcpy(lat + sg_complex_vertex(cx, 0, j, k), *values + sg_grid_index(g, 0, j, k),

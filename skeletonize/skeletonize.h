@@ -50,13 +50,13 @@ typedef struct SgSkeletonOptions {
     bool camera_constraint; /* the camera's voxel joins the constraint set */
     int threads;            /* <= 0: every core */
     bool progress;          /* progress line on a terminal (stderr) */
-    uint32_t parallel_grain; /* 0 (default): the collapse runs on one thread;
-                               n > 0: its sub-steps with at least n queued
-                               faces run on the threads (same result). On this
-                               2-core machine, busy with other work, that was
-                               slower (barriers wait for a descheduled thread),
-                               hence off by default; SG_SKELETON_PARALLEL_GRAIN
-                               is the suggested value when cores are idle */
+    uint32_t parallel_grain; /* n > 0: the collapse's sub-steps with at least
+                               n queued faces run on the threads (same result;
+                               default SG_SKELETON_PARALLEL_GRAIN); 0: the
+                               collapse runs on one thread. On a machine busy
+                               with other work the parallel sub-steps can be
+                               slower (barriers wait for a descheduled
+                               thread): skeletonize --serial-collapse */
     double filter_scale;    /* the lifespan rule keeps an edge when
                                lifespan > filter_scale x opening; 1 is [Cha10]'s
                                parameter-free rule (default), 0 keeps every

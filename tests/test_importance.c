@@ -10,6 +10,7 @@
 
 #include "../importance/graph.h"
 #include "../importance/importance.h"
+#include "../importance/labels.h"
 #include "importance_cache.h"
 #include "importance_cache_format.h"
 #include "rng.h"
@@ -291,6 +292,59 @@ Test(importance_labels, ties_across_slabs_match_plain_dijkstra)
                 sgt_node(&s, i, j, k, SG_NODE_PLAIN, -1);
     const int threads[] = {1, 2, 3, 4, 8, 12};
     labels_match_reference(&m, &s, threads, 6);
+    sg_skeleton_release(&s);
+    sgt_medium_free(&m);
+}
+
+/* 32-bit keys (the default when node ids leave room), 64-bit keys, and a
+ * 32-bit attempt whose distances overflow and falls back to 64-bit keys: the
+ * same labels as the reference, for 1 and 3 threads. */
+static void labels_of(const SgGrid *g, const SgLabelGrid *l, uint32_t *out)
+{
+    for (int k = 0; k < g->nz; k++)
+        for (int j = 0; j < g->ny; j++)
+            for (int i = 0; i < g->nx; i++)
+                out[sg_grid_index(g, i, j, k)] = sg_label_at(l, i, j, k);
+}
+
+Test(importance_labels, key_widths_and_overflow_fallback_agree)
+{
+    SgMedium m;
+    sgt_medium_init(&m, 24, 40, 48);
+    for (int k = 1; k < 47; k += 4) {
+        sgt_box(&m, 1, 1, k, 22, 38, k + 1, 1);
+        int j = (k / 4) % 2 ? 1 : 36;
+        sgt_box(&m, 1, j, k + 2, 22, j + 2, k + 3, 1);
+    }
+    SgSkeleton s = {0};
+    sgt_node(&s, 3, 20, 1, SG_NODE_PLAIN, -1);
+    sgt_node(&s, 20, 3, 45, SG_NODE_PLAIN, -1);
+    sgt_node(&s, 12, 30, 21, SG_NODE_PLAIN, -1);
+    size_t n = sg_grid_count(&m.grid);
+    uint32_t *want = malloc(n * sizeof *want), *got = malloc(n * sizeof *got);
+    reference_labels(&m.grid, &s, want);
+    struct { int key_bits; uint32_t limit; bool narrow, widened; } cases[] = {
+        {0, 0, true, false},    /* automatic: 3 nodes, 32-bit keys */
+        {64, 0, false, false},  /* forced wide */
+        {0, 300, false, true},  /* 32-bit keys up to 300 (~10 voxels): overflow, retried */
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++)
+        for (int threads = 1; threads <= 3; threads += 2) {
+            SgLabelGrid l;
+            SgError err = {0};
+            cr_assert(sg_label_grid_build_keys(&m.grid, &s, threads, cases[c].key_bits,
+                                               cases[c].limit, &l, &err), "%s", err.message);
+            cr_expect_eq(l.key32 != NULL, cases[c].narrow, "case %zu: 32-bit keys", c);
+            cr_expect_eq(l.widened, cases[c].widened, "case %zu: widened", c);
+            labels_of(&m.grid, &l, got);
+            size_t wrong = 0;
+            for (size_t v = 0; v < n; v++)
+                wrong += got[v] != want[v];
+            cr_expect_eq(wrong, 0, "case %zu, threads %d: %zu voxels differ", c, threads, wrong);
+            sg_label_grid_release(&l);
+        }
+    free(want);
+    free(got);
     sg_skeleton_release(&s);
     sgt_medium_free(&m);
 }

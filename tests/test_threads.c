@@ -1,6 +1,7 @@
 /* The thread pool: every index of every job runs exactly once, on a
  * thread index within the pool, job after job on the same workers. */
 #include <criterion/criterion.h>
+#include <sched.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 
@@ -72,4 +73,24 @@ Test(threads, parallel_for_is_a_one_job_pool)
         sg_parallel_for(0, threads, sum_index, &sum);
         cr_assert_eq(atomic_load(&sum), 0);
     }
+}
+
+/* "Every core" means the cores the process may run on: a job confined to
+ * one core (taskset, a Slurm allocation) gets one thread, not the machine's. */
+Test(threads, every_core_means_the_allowed_cores)
+{
+    cpu_set_t allowed;
+    cr_assert_eq(sched_getaffinity(0, sizeof allowed, &allowed), 0);
+    cr_expect_eq(sg_thread_count(0), CPU_COUNT(&allowed));
+    cr_expect_eq(sg_thread_count(3), 3);
+    int first = 0;
+    while (!CPU_ISSET(first, &allowed))
+        first++;
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(first, &one);
+    cr_assert_eq(sched_setaffinity(0, sizeof one, &one), 0);
+    cr_expect_eq(sg_thread_count(0), 1);
+    cr_expect_eq(sg_thread_count(-1), 1);
+    sched_setaffinity(0, sizeof allowed, &allowed);
 }
