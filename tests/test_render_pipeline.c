@@ -11,7 +11,7 @@
 #include <string.h>
 
 #include "importance_cache.h"
-#include "render/cache_guide.h"
+#include "render/guides/importance_file.h"
 #include "render/renderer.h"
 #include "scene.h"
 #include "support_files.h"
@@ -49,7 +49,7 @@ static const char *precompute(const char *scene, const char *dir)
 }
 
 /* Mean over seeds of the image mean, and its standard error. Rendered here
- * as bin/render renders (its default options, sg_cache_guide_open, the
+ * as bin/render renders (its default options, sg_importance_file_open, the
  * skeleton rule's exponent 4; seeds 1000 + k, 80x60), not by 32 runs of
  * it: each run loaded some 260 shared objects and the scene again, which
  * cost more than its render (bin/render's own options are test_render_cli's
@@ -64,10 +64,10 @@ static void image_means(const SgScene *scene, const char *scene_path, const char
     o.sampling = mode;
     if (mode == SG_SAMPLING_SKELETON)
         o.lobe_exponent = 4.0f;
-    SgCacheGuide guide = {0};
+    SgImportanceFile guide = {0};
     SgError e = {0};
     if (mode != SG_SAMPLING_BSDF)
-        cr_assert(sg_cache_guide_open(&guide, cache, scene, scene_path, &o.guide, &e), "%s", e.message);
+        cr_assert(sg_importance_file_open(&guide, cache, scene, scene_path, &o.importance, &e), "%s", e.message);
     float *rgb = malloc(sizeof(float) * 3 * 80 * 60);
     cr_assert_not_null(rgb);
     double s = 0, ss = 0;
@@ -87,7 +87,7 @@ static void image_means(const SgScene *scene, const char *scene_path, const char
         ss += m * m;
     }
     free(rgb);
-    sg_cache_guide_close(&guide);
+    sg_importance_file_close(&guide);
     *mean = s / seeds;
     *se = sqrt(fmax(0.0, ss / seeds - *mean * *mean) / (seeds - 1));
 }
