@@ -77,15 +77,35 @@ static int cmd_size(int argc, char **argv, SgError *err)
     return 0;
 }
 
-/* Two images of one size into rgb[0], rgb[1] (the caller frees both). */
-static bool read_pair(const char *a, const char *b, int *w, int *h, float *rgb[2], SgError *err)
+/* Two images of one size: `reference` NULL, the errors of a against b;
+ * else a and b are two independent halves, their mean is written to
+ * `reference` and their own error printed. */
+static int compare(const char *a, const char *b, double exposure, const char *reference, SgError *err)
 {
-    int wb, hb;
-    if (!sg_image_read(a, w, h, &rgb[0], err) || !sg_image_read(b, &wb, &hb, &rgb[1], err))
-        return false;
-    if (wb != *w || hb != *h)
-        return sg_fail(err, "%s: is %dx%d, %s is %dx%d", b, wb, hb, a, *w, *h);
-    return true;
+    int w, h, wb, hb, status = 1;
+    float *rgb[2] = {NULL, NULL};
+    if (!sg_image_read(a, &w, &h, &rgb[0], err) || !sg_image_read(b, &wb, &hb, &rgb[1], err))
+        goto done;
+    if (wb != w || hb != h) {
+        sg_fail(err, "%s: is %dx%d, %s is %dx%d", b, wb, hb, a, w, h);
+        goto done;
+    }
+    size_t n = (size_t)w * h * 3;
+    double relmse, mse8, mse;
+    if (reference) { /* the mean goes into the first half's buffer */
+        sg_reference_from_halves(rgb[0], rgb[1], n, (float)exp2(exposure), rgb[0], &relmse, &mse8, &mse);
+        SgImageAttribute attrs[] = {{"sg:reference", "mean of two independent bsdf halves"}};
+        if (!sg_image_write_exr(reference, w, h, rgb[0], attrs, 1, err))
+            goto done;
+    } else {
+        sg_image_errors(rgb[0], rgb[1], n, (float)exp2(exposure), &relmse, &mse8, &mse);
+    }
+    printf("relmse %.6g mse8 %.6g mse %.6g\n", relmse, mse8, mse);
+    status = 0;
+done:
+    free(rgb[0]);
+    free(rgb[1]);
+    return status;
 }
 
 /* ---- reference ----------------------------------------------------------- */
@@ -108,24 +128,7 @@ static int cmd_reference(int argc, char **argv, SgError *err)
     }
     if (nh != 2 || !out)
         return sg_fail(err, "reference: want HALF_A.exr HALF_B.exr -o REF.exr"), 1;
-    int w, h;
-    float *rgb[2] = {NULL, NULL};
-    int status = 1;
-    if (!read_pair(halves[0], halves[1], &w, &h, rgb, err))
-        goto done;
-    size_t n = (size_t)w * h * 3;
-    double relmse, mse8, mse;
-    /* the mean goes into the first half's buffer */
-    sg_reference_from_halves(rgb[0], rgb[1], n, (float)exp2(exposure), rgb[0], &relmse, &mse8, &mse);
-    SgImageAttribute attrs[] = {{"sg:reference", "mean of two independent bsdf halves"}};
-    if (!sg_image_write_exr(out, w, h, rgb[0], attrs, 1, err))
-        goto done;
-    printf("relmse %.6g mse8 %.6g mse %.6g\n", relmse, mse8, mse);
-    status = 0;
-done:
-    free(rgb[0]);
-    free(rgb[1]);
-    return status;
+    return compare(halves[0], halves[1], exposure, out, err);
 }
 
 /* ---- error --------------------------------------------------------------- */
@@ -135,19 +138,7 @@ static int cmd_error(int argc, char **argv, SgError *err)
     double exposure;
     if (argc != 6 || strcmp(argv[4], "--exposure") || !parse_double(argv[5], &exposure))
         return sg_fail(err, "error: want IMAGE.exr REF.exr --exposure STOPS"), 1;
-    int w, h;
-    float *rgb[2] = {NULL, NULL};
-    int status = 1;
-    if (!read_pair(argv[2], argv[3], &w, &h, rgb, err))
-        goto done;
-    double relmse, mse8, mse;
-    sg_image_errors(rgb[0], rgb[1], (size_t)w * h * 3, (float)exp2(exposure), &relmse, &mse8, &mse);
-    printf("relmse %.6g mse8 %.6g mse %.6g\n", relmse, mse8, mse);
-    status = 0;
-done:
-    free(rgb[0]);
-    free(rgb[1]);
-    return status;
+    return compare(argv[2], argv[3], exposure, NULL, err);
 }
 
 /* ---- strip --------------------------------------------------------------- */

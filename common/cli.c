@@ -2,7 +2,9 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 bool sg_parse_long(const char *text, long lo, long hi, long *out)
 {
@@ -34,3 +36,25 @@ bool sg_parse_double(const char *text, double lo, double hi, double *out)
     *out = v;
     return true;
 }
+
+SgCliArg sg_cli_step_option(const char *program, int argc, char **argv, int *i, int *threads, bool *quiet)
+{
+    const char *a = argv[*i];
+    if (!strcmp(a, "--threads") && *i + 1 < argc) {
+        if (!sg_parse_int(argv[++*i], 1, 1024, threads)) {
+            fprintf(stderr, "%s: --threads takes a whole number in [1, 1024]\n", program);
+            return SG_CLI_BAD;
+        }
+        return SG_CLI_TAKEN;
+    }
+    if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
+        *quiet = true;
+        return SG_CLI_TAKEN;
+    }
+    if (a[0] == '-' && a[1]) {
+        fprintf(stderr, "%s: unknown or incomplete option '%s' (see --help)\n", program, a);
+        return SG_CLI_BAD;
+    }
+    return SG_CLI_POSITIONAL;
+}
+

@@ -111,11 +111,6 @@ int main(int argc, char **argv)
             out_path = argv[++i];
         } else if (!strcmp(a, "--vectors") && i + 1 < argc) {
             options.vectors_path = argv[++i];
-        } else if (!strcmp(a, "--threads") && i + 1 < argc) {
-            if (!sg_parse_int(argv[++i], 1, 1024, &options.threads)) {
-                fprintf(stderr, "importance: --threads takes a whole number in [1, 1024]\n");
-                return 2;
-            }
         } else if (!strcmp(a, "--run-tolerance") && i + 1 < argc) {
             double t;
             if (!sg_parse_double(argv[++i], 0, 1, &t) || t <= 0) {
@@ -126,16 +121,16 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--info") && i + 1 < argc) {
             want_info = true;
             info_path = argv[++i];
-        } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
-            quiet = true;
-        } else if (a[0] == '-' && a[1]) {
-            fprintf(stderr, "importance: unknown or incomplete option '%s' (see --help)\n", a);
-            return 2;
-        } else if (input_count < 2) {
-            inputs[input_count++] = a;
         } else {
-            fprintf(stderr, "importance: too many arguments (see --help)\n");
-            return 2;
+            SgCliArg kind = sg_cli_step_option("importance", argc, argv, &i, &options.threads, &quiet);
+            if (kind == SG_CLI_BAD)
+                return 2;
+            if (kind == SG_CLI_POSITIONAL && input_count == 2) {
+                fprintf(stderr, "importance: too many arguments (see --help)\n");
+                return 2;
+            }
+            if (kind == SG_CLI_POSITIONAL)
+                inputs[input_count++] = a;
         }
     }
     if (want_info) {

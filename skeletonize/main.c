@@ -86,21 +86,16 @@ int main(int argc, char **argv)
             collapse_choice = true;
         } else if (!strcmp(a, "--camera-constraint")) {
             options.camera_constraint = true;
-        } else if (!strcmp(a, "--threads") && i + 1 < argc) {
-            if (!sg_parse_int(argv[++i], 1, 1024, &options.threads)) {
-                fprintf(stderr, "skeletonize: --threads takes a whole number in [1, 1024]\n");
+        } else {
+            SgCliArg kind = sg_cli_step_option("skeletonize", argc, argv, &i, &options.threads, &quiet);
+            if (kind == SG_CLI_BAD)
+                return 2;
+            if (kind == SG_CLI_POSITIONAL && in_path) {
+                fprintf(stderr, "skeletonize: more than one input given (%s)\n", a);
                 return 2;
             }
-        } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
-            quiet = true;
-        } else if (a[0] == '-' && a[1]) {
-            fprintf(stderr, "skeletonize: unknown option %s (see --help)\n", a);
-            return 2;
-        } else if (!in_path) {
-            in_path = a;
-        } else {
-            fprintf(stderr, "skeletonize: more than one input given (%s)\n", a);
-            return 2;
+            if (kind == SG_CLI_POSITIONAL)
+                in_path = a;
         }
     }
     if (!in_path || !out_path) {

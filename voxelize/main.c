@@ -49,23 +49,18 @@ int main(int argc, char **argv)
                 fprintf(stderr, "voxelize: --resolution takes a whole number in [1, 4096]\n");
                 return 2;
             }
-        } else if (!strcmp(a, "--threads") && i + 1 < argc) {
-            if (!sg_parse_int(argv[++i], 1, 1024, &options.threads)) {
-                fprintf(stderr, "voxelize: --threads takes a whole number in [1, 1024]\n");
-                return 2;
-            }
         } else if (!strcmp(a, "--key")) {
             key = true;
-        } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
-            quiet = true;
-        } else if (a[0] == '-' && a[1]) {
-            fprintf(stderr, "voxelize: unknown option %s (see --help)\n", a);
-            return 2;
-        } else if (!scene_path) {
-            scene_path = a;
         } else {
-            fprintf(stderr, "voxelize: more than one scene given (%s)\n", a);
-            return 2;
+            SgCliArg kind = sg_cli_step_option("voxelize", argc, argv, &i, &options.threads, &quiet);
+            if (kind == SG_CLI_BAD)
+                return 2;
+            if (kind == SG_CLI_POSITIONAL && scene_path) {
+                fprintf(stderr, "voxelize: more than one scene given (%s)\n", a);
+                return 2;
+            }
+            if (kind == SG_CLI_POSITIONAL)
+                scene_path = a;
         }
     }
     if (!scene_path || (!out_path && !key)) {
