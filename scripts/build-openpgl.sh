@@ -14,7 +14,7 @@ cd "$(dirname "$0")/.."
 if [ -n "${OPENPGL_DIR:-}" ]; then
   if [ -e "$OPENPGL_DIR/include/openpgl/openpgl.h" ]; then
     if ! grep -qs '^#define OPENPGL_RADIANCE_CACHES' "$OPENPGL_DIR/include/openpgl/defines.h"; then
-      echo "build-openpgl: $OPENPGL_DIR was built without OPENPGL_EF_RADIANCE_CACHES: openpgl's guided roulette is off (render says so)" >&2
+      echo "build-openpgl: $OPENPGL_DIR was built without OPENPGL_EF_RADIANCE_CACHES: openpgl's guided roulette is off (the albedo roulette runs)" >&2
     fi
     exit 0
   fi
