@@ -27,6 +27,7 @@ typedef struct PathState {
     bool specular_bounce; /* the last bounce was drawn by its BSDF alone: emission counts fully */
     float prev_pdf;
     Vec3 prev_p;
+    Vec3 guide_estimate; /* the guide's slot for its roulette (PathGuideOps.survival) */
 } PathState;
 
 /* A diffuse or glossy vertex, as far as drawing its bounce needs. */
@@ -232,7 +233,7 @@ static bool take_bounce(const PathGuide *guide, BounceVertex *v, PathState *ps, 
         guide->ops->record_bounce(v->seg, wi, pdf, weight, false, 1.0f, v->m->roughness);
     ps->d = wi;
     ps->o = v->origin;
-    ps->prev_pdf = pdf;
+    ps->prev_pdf = v->g.mis_pdf >= 0.0f ? v->g.mis_pdf : pdf;
     ps->prev_p = v->p;
     ps->specular_bounce = false;
     return true;
@@ -268,9 +269,14 @@ static bool vertex_roulette(Path *p, const BounceVertex *v, PendingRecord *pr, b
                                                        pr ? (int)(pr - p->pending) : p->pending_count, pr != NULL};
             p->branches += rv.branches - 1;
         }
-    } else if (p->depth >= ROULETTE_DEPTH) {
+    } else {
+        const PathGuide *g = p->it->guide;
+        float q = g->ops->survival ? g->ops->survival(&v->g, ps->beta, &ps->guide_estimate) : -1.0f;
+        if (p->depth < ROULETTE_DEPTH)
+            return true;
         *decided = true;
-        if (!roulette_albedo(p->it->guide, &ps->beta, &ps->rr_beta, rng, v->seg)) {
+        if (!(q >= 0.0f ? roulette_survive(g, q, &ps->beta, &ps->rr_beta, rng, v->seg)
+                        : roulette_albedo(g, &ps->beta, &ps->rr_beta, rng, v->seg))) {
             if (pr) /* the guide hears of a bounce cut before it was drawn */
                 *pr = (PendingRecord){.v = v->g, .beta = pr->beta, .radiance = p->radiance, .cut = true};
             return false;
@@ -301,6 +307,7 @@ static bool scatter(Path *p, const Hit *h, const Material *m, Vec3 wo, Vec3 n, b
     v.g.learn = false;
     v.g.rms = -1.0f;
     v.g.by_guide = false;
+    v.g.mis_pdf = -1.0f;
     /* n is the winding normal or its opposite: the other bin of the pair */
     GuideHit gh = {.p = h->p, .n = n, .m = m, .thread = pc->thread,
                    .normal_bin = it->geo->tris[h->tri].normal_bin ^ (front ? 0u : 1u),
@@ -406,7 +413,7 @@ Vec3 integrator_trace(const Integrator *it, Vec3 o, Vec3 d, const PathCtx *pc, V
     Path p;
     p.it = it;
     p.pc = pc;
-    p.ps = (PathState){o, d, v3(1, 1, 1), v3(1, 1, 1), true /* the camera ray counts as one */, 0.0f, o};
+    p.ps = (PathState){o, d, v3(1, 1, 1), v3(1, 1, 1), true /* the camera ray counts as one */, 0.0f, o, v3(0, 0, 0)};
     p.radiance = v3(0, 0, 0);
     p.seen = seen;
     p.depth = 0;

@@ -24,7 +24,7 @@ static const char *usage_head =
     "              [--png image.png] [--exposure STOPS] [--reference ref.exr --log curve.csv]\n"
     "              [--max-depth N] [--exponent P] [--alpha A] [--roulette learned|albedo]\n"
     "              [--size WxH] [--shard K/N] [--texture-cache MB] [--quiet]\n"
-    "              [--field FIELD | --field-out FIELD [--training-passes N]]\n"
+    "              [--field FIELD | --field-out FIELD [--training-passes N]] [--openpgl-mode ris|mis]\n"
     "       render --describe [MODE]\n"
     "\n"
     "Path traces SCENE (.json or pbrt-v4 .pbrt; Embree 3) with next-event estimation and MIS.\n"
@@ -50,7 +50,11 @@ static const char *usage_tail =
     "  --roulette R      how paths are cut short: learned (default, where the mode learns what\n"
     "                    bounces bring back: guided with a learned alpha; by expected\n"
     "                    contribution against the pixel's, docs/render.md) or albedo\n"
-    "                    (survival = product of albedos after 2 bounces, as bsdf)\n"
+    "                    (survival = product of albedos after 2 bounces, as bsdf); openpgl:\n"
+    "                    learned is Open PGL's guided roulette where it is built with radiance caches\n"
+    "  --openpgl-mode M  openpgl: ris (default, Cycles' default: BSDF and guide candidates\n"
+    "                    resampled, glossy lobes guided above roughness 0.05) or mis (Cycles'\n"
+    "                    older one-sample mixture, diffuse lobes only)\n"
     "  --size WxH        image size (default: the scene's image size, else 320x240)\n"
     "  --shard K/N       render only shard K (0 <= K < N) of the render split into N: its\n"
     "                    passes K, K+N, K+2N... of --spp in all (with --time: for that long);\n"
@@ -129,6 +133,7 @@ typedef struct Args {
     long training_passes;
     SgSampling sampling; /* sg_sampling_default, unless --sampling says */
     SgRoulette roulette;
+    SgOpenPglMode openpgl_mode;
     long spp;
     double time;
     uint64_t seed;
@@ -170,6 +175,11 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
             NEED_VALUE();
             if (!sg_roulette_parse(v, &a->roulette))
                 return sg_fail(err, "--roulette: '%s' is not learned or albedo", v);
+        } else if (!strcmp(s, "--openpgl-mode")) {
+            NEED_VALUE();
+            if (strcmp(v, "ris") && strcmp(v, "mis"))
+                return sg_fail(err, "--openpgl-mode: '%s' is not ris or mis", v);
+            a->openpgl_mode = strcmp(v, "mis") ? SG_OPENPGL_RIS : SG_OPENPGL_MIS;
         }
         else if (!strcmp(s, "-o") || !strcmp(s, "--output")) { NEED_VALUE(); a->output = v; }
         else if (!strcmp(s, "--png")) { NEED_VALUE(); a->png = v; }
@@ -310,9 +320,11 @@ static void shard_identity(const SgScene *scene, const SgRenderOptions *o, const
         snprintf(id->cache, sizeof id->cache, "none");
     char recipe[4500]; /* the options and a field's path */
     int n = snprintf(recipe, sizeof recipe, "size %dx%d sampling %s seed %" PRIu64 " depth %d exponent %.9g alpha %.9g "
-                     "roulette %s shards %d%s%s", o->width, o->height, sg_sampling_name(o->sampling), o->seed,
+                     "roulette %s shards %d%s%s%s%s", o->width, o->height, sg_sampling_name(o->sampling), o->seed,
                      o->max_depth, o->lobe_exponent, o->alpha, sg_roulette_name(o->roulette), o->shard_count,
-                     field ? " field " : "", field ? field : "");
+                     field ? " field " : "", field ? field : "",
+                     o->sampling == SG_SAMPLING_OPENPGL ? " openpgl-mode " : "",
+                     o->sampling == SG_SAMPLING_OPENPGL ? sg_openpgl_mode_name(o->openpgl_mode) : "");
     if (n < 0 || (size_t)n >= sizeof recipe)
         n = (int)strlen(recipe);
     snprintf(id->recipe, sizeof id->recipe, "%016" PRIx64, sg_hash_bytes(SG_HASH_INIT, recipe, (size_t)n));
@@ -372,6 +384,7 @@ int main(int argc, char **argv)
         o.alpha = (float)a.alpha;
     o.sampling = a.sampling;
     o.roulette = a.roulette;
+    o.openpgl_mode = a.openpgl_mode;
     o.shard = (int)a.shard;
     o.shard_count = (int)a.shard_count;
     o.texture_cache_mb = a.texture_cache_mb;

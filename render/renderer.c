@@ -415,6 +415,10 @@ static void field_identity(const SgRenderer *r, FieldIdentity *id)
         snprintf(alpha, sizeof alpha, "%.9g", o->alpha);
     snprintf(id->recipe, sizeof id->recipe, "%dx%d, max depth %d, exponent %.9g, alpha %s, roulette %s", o->width,
              o->height, o->max_depth, o->lobe_exponent, alpha, sg_roulette_name(o->roulette));
+    if (o->sampling == SG_SAMPLING_OPENPGL) { /* the mode draws the paths the field learns from */
+        size_t n = strlen(id->recipe);
+        snprintf(id->recipe + n, sizeof id->recipe - n, ", openpgl %s", sg_openpgl_mode_name(o->openpgl_mode));
+    }
 }
 
 bool sg_renderer_write_field(const SgRenderer *r, const char *path, SgError *err)

@@ -101,6 +101,15 @@ typedef enum SgRoulette {
 const char *sg_roulette_name(SgRoulette r);
 bool sg_roulette_parse(const char *name, SgRoulette *r);
 
+/* openpgl: how the guide's distribution and the BSDF share a bounce, as
+ * Cycles' guiding_directional_sampling_type: RIS (Cycles' default; zero,
+ * what options start as) resamples a BSDF and a guide candidate, glossy
+ * lobes too; MIS, Cycles' older mode, mixes them by one-sample MIS at
+ * diffuse lobes only. */
+typedef enum SgOpenPglMode { SG_OPENPGL_RIS, SG_OPENPGL_MIS } SgOpenPglMode;
+
+static inline const char *sg_openpgl_mode_name(SgOpenPglMode m) { return m == SG_OPENPGL_MIS ? "mis" : "ris"; }
+
 typedef struct SgRenderOptions {
     int width, height;
     int max_depth;        /* maximum path length in segments from the camera */
@@ -124,6 +133,7 @@ typedef struct SgRenderOptions {
     /* modes that learn: the passes their training takes (sg_renderer_train,
      * and rendering on the clock without a field); 0: the mode's default */
     int training_passes;
+    SgOpenPglMode openpgl_mode; /* openpgl: RIS or MIS (default RIS, Cycles') */
 } SgRenderOptions;
 
 /* Defaults: image size and depth from the scene (320x240, 8 when not

@@ -4,7 +4,11 @@
 
 bool roulette_albedo(const PathGuide *g, Vec3 *beta, Vec3 *rr_beta, SgRng *rng, GuideSegment *seg)
 {
-    float q = sg_minf(0.95f, v3_max_component(*rr_beta));
+    return roulette_survive(g, sg_minf(0.95f, v3_max_component(*rr_beta)), beta, rr_beta, rng, seg);
+}
+
+bool roulette_survive(const PathGuide *g, float q, Vec3 *beta, Vec3 *rr_beta, SgRng *rng, GuideSegment *seg)
+{
     if (seg) /* a learned field learns what survivors carry */
         g->ops->record_survival(seg, q);
     if (!(sg_rng_float(rng) < q))

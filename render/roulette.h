@@ -63,6 +63,8 @@
  * a survivor's beta and rr_beta are divided by the survival probability.
  * `seg`: the vertex's record for a guide that learns what survivors carry. */
 bool roulette_albedo(const PathGuide *g, Vec3 *beta, Vec3 *rr_beta, SgRng *rng, GuideSegment *seg);
+/* The same with the survival probability q a guide gave (PathGuideOps.survival). */
+bool roulette_survive(const PathGuide *g, float q, Vec3 *beta, Vec3 *rr_beta, SgRng *rng, GuideSegment *seg);
 
 /* The learned roulette's verdict on a bounce worth `worth` (|beta| rms /
  * the pixel's deviation) at vertex `depth`: how many branches go on (0: the

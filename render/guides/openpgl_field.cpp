@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #ifdef SG_HAVE_OPENPGL
+#include <openpgl/cpp/RussianRoulette.h>
 #include <openpgl/openpgl.h>
 
 namespace {
@@ -277,6 +278,34 @@ extern "C" float sg_pgl_guide_pdf(SgPglField *f, int thread, Vec3 wi)
     return pglSurfaceSamplingDistributionPDF(f->threads[(size_t)thread].distribution, vec(wi));
 }
 
+extern "C" float sg_pgl_guide_radiance_pdf(SgPglField *f, int thread, Vec3 wi)
+{
+    return pglSurfaceSamplingDistributionIncomingRadiancePDF(f->threads[(size_t)thread].distribution, vec(wi));
+}
+
+#ifdef OPENPGL_RADIANCE_CACHES
+extern "C" bool sg_pgl_has_radiance_caches(void) { return true; }
+
+extern "C" bool sg_pgl_guide_irradiance(SgPglField *f, int thread, Vec3 n, bool mis, Vec3 *e)
+{
+    pgl_vec3f r = pglSurfaceSamplingDistributionIrradiance(f->threads[(size_t)thread].distribution, vec(n), mis);
+    *e = v3(r.x, r.y, r.z);
+    return true;
+}
+#else
+extern "C" bool sg_pgl_has_radiance_caches(void) { return false; }
+extern "C" bool sg_pgl_guide_irradiance(SgPglField *, int, Vec3, bool, Vec3 *e)
+{
+    *e = v3(0, 0, 0);
+    return false;
+}
+#endif
+
+extern "C" float sg_pgl_guided_survival(Vec3 beta, Vec3 adjoint, Vec3 estimate, float min_survival)
+{
+    return openpgl::cpp::util::GuidedRussianRoulette(vec(beta), vec(adjoint), vec(estimate), min_survival, 1.0f);
+}
+
 #else /* built without Open PGL: every entry point fails or does nothing */
 
 extern "C" bool sg_pgl_available(void) { return false; }
@@ -316,5 +345,13 @@ extern "C" Vec3 sg_pgl_guide_sample(SgPglField *, int, float, float, float *pdf)
     return v3(0, 0, 1);
 }
 extern "C" float sg_pgl_guide_pdf(SgPglField *, int, Vec3) { return 0.0f; }
+extern "C" float sg_pgl_guide_radiance_pdf(SgPglField *, int, Vec3) { return 0.0f; }
+extern "C" bool sg_pgl_has_radiance_caches(void) { return false; }
+extern "C" bool sg_pgl_guide_irradiance(SgPglField *, int, Vec3, bool, Vec3 *e)
+{
+    *e = v3(0, 0, 0);
+    return false;
+}
+extern "C" float sg_pgl_guided_survival(Vec3, Vec3, Vec3, float) { return 1.0f; }
 
 #endif

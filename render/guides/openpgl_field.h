@@ -78,6 +78,23 @@ bool sg_pgl_guide_at(SgPglField *f, int thread, Vec3 p, Vec3 n, float u);
 /* A direction from the prepared distribution (its pdf in *pdf), and the pdf of any. */
 Vec3 sg_pgl_guide_sample(SgPglField *f, int thread, float u1, float u2, float *pdf);
 float sg_pgl_guide_pdf(SgPglField *f, int thread, Vec3 wi);
+/* The density of the prepared distribution before its cosine product: the
+ * incoming radiance's, normalized (Cycles' RIS target). */
+float sg_pgl_guide_radiance_pdf(SgPglField *f, int thread, Vec3 wi);
+
+/* ---- radiance caches (Open PGL built with OPENPGL_EF_RADIANCE_CACHES) ---- */
+
+/* Whether this build's Open PGL keeps radiance caches. */
+bool sg_pgl_has_radiance_caches(void);
+/* The prepared distribution's irradiance around n (mis: weighted as the
+ * paths' MIS weighed it, what a bounce collects beside the light sample);
+ * false without caches. */
+bool sg_pgl_guide_irradiance(SgPglField *f, int thread, Vec3 n, bool mis, Vec3 *e);
+/* Open PGL's guided (adjoint-driven) Russian roulette: the survival
+ * probability, in [min_survival, 1], of a path of throughput beta whose
+ * continuation is expected to bring `adjoint` per unit throughput, its
+ * pixel `estimate` in all. */
+float sg_pgl_guided_survival(Vec3 beta, Vec3 adjoint, Vec3 estimate, float min_survival);
 
 #ifdef __cplusplus
 }

@@ -17,6 +17,7 @@
  *   vertex_begin    at a diffuse or glossy vertex, before the light
  *                   sample's shadow ray (a cache query can load meanwhile)
  *   vertex_end      after it, told whether the vertex is directly lit
+ *   survival        optional: its roulette's verdict on the bounce
  *   pdf, sample     the bounce's density (also for next-event estimation's
  *                   MIS weight) and a direction drawn from it
  *   learn           when the path's branch has ended: what a bounce of
@@ -83,6 +84,10 @@ typedef struct GuideVertex {
                         * roulette's input); < 0 unknown */
     /* set by sample */
     bool by_guide;     /* the guide, not the BSDF's sampler, drew the direction */
+    float mis_pdf;     /* >= 0: the density the bounce's MIS against the lights
+                        * weighs by, where it is not the one drawn from (RIS:
+                        * pdf() of the direction); < 0 (as the integrator
+                        * starts it): sample's pdf */
     _Alignas(16) unsigned char state[GUIDE_VERTEX_STATE];
 } GuideVertex;
 
@@ -130,6 +135,15 @@ typedef struct PathGuideOps {
      * surface: the integrator ends the path below it); sets by_guide */
     Vec3 (*sample)(GuideVertex *v, const float u[3], float *pdf);
     void (*learn)(PathGuide *g, int tile, const GuideVertex *v, const BounceOutcome *o);
+    /* Optional, the guide's own roulette (Open PGL's guided roulette) where
+     * the learned one does not run: at each diffuse or glossy vertex, after
+     * its light sample, the bounce's survival probability in (0, 1] for a
+     * path of throughput beta, or < 0 where the guide has none (the albedo
+     * roulette decides). `estimate`: the path's own slot (zero at its start,
+     * copied where it splits) for what the guide expects the path to bring
+     * its pixel, set from its first vertices. Used from vertex ROULETTE_DEPTH
+     * (render/roulette.h) on. */
+    float (*survival)(const GuideVertex *v, Vec3 beta, Vec3 *estimate);
 
     /* recording passes: every vertex of the path in order, then its end */
     GuideSegment *(*record_vertex)(PathGuide *g, int thread, Vec3 p, Vec3 wo, Vec3 n);
