@@ -59,7 +59,11 @@ scenes=(
 )
 modes=(bsdf skeleton guided guided-albedo openpgl)
 # a column's render options: its mode, and what sets it apart
-declare -A mode_options=([guided-albedo]="--sampling guided --roulette albedo")
+# openpgl races at its best as measured (docs/render.md, "The peer at its
+# best"): the MIS mode with Open PGL's guided roulette, where the library
+# has its radiance caches (make openpgl builds it so)
+declare -A mode_options=([guided-albedo]="--sampling guided --roulette albedo"
+                         [openpgl]="--sampling openpgl --openpgl-mode mis")
 options_of() { echo "${mode_options[$1]:---sampling $1}"; }
 
 note() { [ -t 2 ] && printf '\r\033[Kconvergence: %s' "$*" >&2; return 0; }
