@@ -82,6 +82,10 @@ $(BUILD)/tests/support_files.o: CPPFLAGS += -DSG_SOURCE_ROOT='"$(CURDIR)"'
 # function); the other helpers come from an archive, so that a test links
 # only what it calls.
 TEST_CRITERION_OBJ := $(BUILD)/tests/support_criterion.o
+# Not instrumented: AddressSanitizer calls dl_iterate_phdr while it starts,
+# before instrumented code may run.
+$(TEST_CRITERION_OBJ): SANFLAGS :=
+$(TEST_BIN): $(TEST_CRITERION_OBJ) # named here, so that make keeps it and remakes it
 
 # Benchmarks: each bench/*.c is a program; bench/run.sh drives them.
 BENCH_SRC := $(wildcard bench/*.c)
