@@ -212,11 +212,14 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
     snprintf(dir, sizeof dir, "%s/farm2", tmp);
     check_exact_merge(dir, 4, 4000);
 
-    /* the rerun shard is the shard: the same pixels as rendering it here */
+    /* the rerun shard is the shard: the same pixels as rendering it here
+     * (guided learns: every shard renders with the field the precompute
+     * job trained) */
     snprintf(cmd, sizeof cmd,
-             "%s/render " SCENE " --cache %s/farm2/importance.cache --spp 4000 --size 48x36 --seed 3 --shard 0/4 "
+             "%s/render " SCENE " --cache %s/farm2/importance.cache --field %s/farm2/corridor.field --spp 4000 "
+             "--size 48x36 --seed 3 --shard 0/4 "
              "-o %s/shard0.exr --quiet && idiff -q -fail 0 -warn 0 %s/shard0.exr %s/farm2/shards/corridor-0.exr",
-             bin, tmp, tmp, tmp, tmp);
+             bin, tmp, tmp, tmp, tmp, tmp);
     status = sg_test_run(cmd, err, sizeof err);
     cr_assert_eq(status, 0, "shard 0 rendered again differs (%d): %s", status, err);
     stop_cluster();
