@@ -37,24 +37,35 @@ bool sg_parse_double(const char *text, double lo, double hi, double *out)
     return true;
 }
 
-SgCliArg sg_cli_step_option(const char *program, int argc, char **argv, int *i, int *threads, bool *quiet)
+SgCliArg sg_cli_step_argument(SgStepArguments *s, int argc, char **argv, int *i)
 {
     const char *a = argv[*i];
-    if (!strcmp(a, "--threads") && *i + 1 < argc) {
-        if (!sg_parse_int(argv[++*i], 1, 1024, threads)) {
-            fprintf(stderr, "%s: --threads takes a whole number in [1, 1024]\n", program);
-            return SG_CLI_BAD;
-        }
+    if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+        s->usage(stdout);
+        return SG_CLI_HELP;
+    }
+    if (!strcmp(a, "-o") && *i + 1 < argc) {
+        s->out_path = argv[++*i];
         return SG_CLI_TAKEN;
     }
+    if (!strcmp(a, "--threads") && *i + 1 < argc) {
+        if (sg_parse_int(argv[++*i], 1, 1024, &s->threads))
+            return SG_CLI_TAKEN;
+        fprintf(stderr, "%s: --threads takes a whole number in [1, 1024]\n", s->program);
+        return SG_CLI_BAD;
+    }
     if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
-        *quiet = true;
+        s->quiet = true;
         return SG_CLI_TAKEN;
     }
     if (a[0] == '-' && a[1]) {
-        fprintf(stderr, "%s: unknown or incomplete option '%s' (see --help)\n", program, a);
+        fprintf(stderr, "%s: unknown or incomplete option '%s' (see --help)\n", s->program, a);
         return SG_CLI_BAD;
     }
-    return SG_CLI_POSITIONAL;
+    if (s->input_count == s->max_inputs) {
+        fprintf(stderr, "%s: more inputs than the %d it takes (%s; see --help)\n", s->program, s->max_inputs, a);
+        return SG_CLI_BAD;
+    }
+    s->inputs[s->input_count++] = a;
+    return SG_CLI_TAKEN;
 }
-

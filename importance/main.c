@@ -97,19 +97,13 @@ static int info(const char *cache_path, const char *scene_path)
 
 int main(int argc, char **argv)
 {
-    const char *inputs[2] = {NULL, NULL};
-    int input_count = 0;
-    const char *out_path = NULL, *info_path = NULL;
+    const char *info_path = NULL;
     SgImportanceOptions options = {0};
-    bool quiet = false, want_info = false;
+    bool want_info = false;
+    SgStepArguments args = {.program = "importance", .usage = usage, .max_inputs = 2};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            usage(stdout);
-            return 0;
-        } else if (!strcmp(a, "-o") && i + 1 < argc) {
-            out_path = argv[++i];
-        } else if (!strcmp(a, "--vectors") && i + 1 < argc) {
+        if (!strcmp(a, "--vectors") && i + 1 < argc) {
             options.vectors_path = argv[++i];
         } else if (!strcmp(a, "--run-tolerance") && i + 1 < argc) {
             double t;
@@ -122,17 +116,15 @@ int main(int argc, char **argv)
             want_info = true;
             info_path = argv[++i];
         } else {
-            SgCliArg kind = sg_cli_step_option("importance", argc, argv, &i, &options.threads, &quiet);
-            if (kind == SG_CLI_BAD)
-                return 2;
-            if (kind == SG_CLI_POSITIONAL && input_count == 2) {
-                fprintf(stderr, "importance: too many arguments (see --help)\n");
-                return 2;
-            }
-            if (kind == SG_CLI_POSITIONAL)
-                inputs[input_count++] = a;
+            SgCliArg got = sg_cli_step_argument(&args, argc, argv, &i);
+            if (got != SG_CLI_TAKEN)
+                return got == SG_CLI_HELP ? 0 : 2;
         }
     }
+    const char *const *inputs = args.inputs, *out_path = args.out_path;
+    int input_count = args.input_count;
+    bool quiet = args.quiet;
+    options.threads = args.threads;
     if (want_info) {
         if (input_count > 1 || out_path) {
             fprintf(stderr, "importance: --info takes a cache and an optional scene only\n");

@@ -67,18 +67,13 @@ static double idle_cores(int ms)
 
 int main(int argc, char **argv)
 {
-    const char *in_path = NULL, *out_path = NULL;
     SgSkeletonOptions options;
     sg_skeleton_options_default(&options);
-    bool quiet = false, collapse_choice = false;
+    bool collapse_choice = false;
+    SgStepArguments args = {.program = "skeletonize", .usage = usage, .threads = options.threads, .max_inputs = 1};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            usage(stdout);
-            return 0;
-        } else if (!strcmp(a, "-o") && i + 1 < argc) {
-            out_path = argv[++i];
-        } else if (!strcmp(a, "--parallel-collapse")) {
+        if (!strcmp(a, "--parallel-collapse")) {
             options.parallel_grain = SG_SKELETON_PARALLEL_GRAIN;
             collapse_choice = true;
         } else if (!strcmp(a, "--serial-collapse")) {
@@ -87,17 +82,14 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--camera-constraint")) {
             options.camera_constraint = true;
         } else {
-            SgCliArg kind = sg_cli_step_option("skeletonize", argc, argv, &i, &options.threads, &quiet);
-            if (kind == SG_CLI_BAD)
-                return 2;
-            if (kind == SG_CLI_POSITIONAL && in_path) {
-                fprintf(stderr, "skeletonize: more than one input given (%s)\n", a);
-                return 2;
-            }
-            if (kind == SG_CLI_POSITIONAL)
-                in_path = a;
+            SgCliArg got = sg_cli_step_argument(&args, argc, argv, &i);
+            if (got != SG_CLI_TAKEN)
+                return got == SG_CLI_HELP ? 0 : 2;
         }
     }
+    const char *in_path = args.inputs[0], *out_path = args.out_path;
+    bool quiet = args.quiet;
+    options.threads = args.threads;
     if (!in_path || !out_path) {
         usage(stderr);
         return 2;

@@ -34,17 +34,12 @@ static void usage(FILE *out)
 
 int main(int argc, char **argv)
 {
-    const char *scene_path = NULL, *out_path = NULL;
     SgVoxelizeOptions options = {0};
-    bool key = false, quiet = false;
+    bool key = false;
+    SgStepArguments args = {.program = "voxelize", .usage = usage, .max_inputs = 1};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
-        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            usage(stdout);
-            return 0;
-        } else if (!strcmp(a, "-o") && i + 1 < argc) {
-            out_path = argv[++i];
-        } else if (!strcmp(a, "--resolution") && i + 1 < argc) {
+        if (!strcmp(a, "--resolution") && i + 1 < argc) {
             if (!sg_parse_int(argv[++i], 1, 4096, &options.resolution)) {
                 fprintf(stderr, "voxelize: --resolution takes a whole number in [1, 4096]\n");
                 return 2;
@@ -52,17 +47,14 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "--key")) {
             key = true;
         } else {
-            SgCliArg kind = sg_cli_step_option("voxelize", argc, argv, &i, &options.threads, &quiet);
-            if (kind == SG_CLI_BAD)
-                return 2;
-            if (kind == SG_CLI_POSITIONAL && scene_path) {
-                fprintf(stderr, "voxelize: more than one scene given (%s)\n", a);
-                return 2;
-            }
-            if (kind == SG_CLI_POSITIONAL)
-                scene_path = a;
+            SgCliArg got = sg_cli_step_argument(&args, argc, argv, &i);
+            if (got != SG_CLI_TAKEN)
+                return got == SG_CLI_HELP ? 0 : 2;
         }
     }
+    const char *scene_path = args.inputs[0], *out_path = args.out_path;
+    bool quiet = args.quiet;
+    options.threads = args.threads;
     if (!scene_path || (!out_path && !key)) {
         usage(stderr);
         return 2;
