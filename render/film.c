@@ -1,6 +1,7 @@
 #include "film.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 bool film_init(Film *f, int width, int height)
 {
@@ -18,6 +19,13 @@ void film_free(Film *f)
     free(f->last);
     f->sum = NULL;
     f->last = NULL;
+}
+
+void film_clear(Film *f)
+{
+    size_t values = (size_t)f->width * f->height * 3;
+    memset(f->sum, 0, values * sizeof *f->sum);
+    memset(f->last, 0, values * sizeof *f->last);
 }
 
 void film_image(const Film *f, int spp, float *rgb)

@@ -34,6 +34,9 @@ static inline bool film_add(Film *f, size_t pix, Vec3 *L)
     return finite;
 }
 
+/* Every pixel back to no sample. */
+void film_clear(Film *f);
+
 /* The mean of `spp` passes, linear RGB, width * height * 3 floats. */
 void film_image(const Film *f, int spp, float *rgb);
 

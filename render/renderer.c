@@ -384,9 +384,7 @@ void sg_renderer_freeze(SgRenderer *r)
 {
     if (r->guide->ops->freeze)
         r->guide->ops->freeze(r->guide);
-    size_t values = (size_t)r->opt.width * r->opt.height * 3;
-    memset(r->film.sum, 0, values * sizeof *r->film.sum);
-    memset(r->film.last, 0, values * sizeof *r->film.last);
+    film_clear(&r->film);
     r->spp = 0;
     atomic_store(&r->nonfinite, 0);
     atomic_store(&r->rays, 0);
