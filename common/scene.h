@@ -100,6 +100,46 @@ typedef struct SgLight {
     uint32_t triangle_count;
 } SgLight;
 
+/* A light that is not a surface (pbrt-v4's LightSource statement, or the
+ * JSON scene's sky, sun, point and spot): the renderer samples it directly;
+ * area lights are SgLight. Radiometric values are RGB, scale applied. */
+typedef enum SgLightSourceKind {
+    SG_LIGHT_POINT,    /* intensity from a point, the same every way */
+    SG_LIGHT_SPOT,     /* a point whose intensity falls off smoothly from
+                        * cos_falloff_start to nothing at cos_cone (pbrt-v4) */
+    SG_LIGHT_DISTANT,  /* the sun: light from one direction (or a cone of
+                        * angular_radius), irradiance `rgb` on a plane facing it */
+    SG_LIGHT_INFINITE, /* the sky: radiance `rgb` from every direction,
+                        * times an environment image where one is given */
+} SgLightSourceKind;
+
+/* How an environment image covers the sphere of directions (light space, z up). */
+typedef enum SgEnvironmentLayout {
+    SG_ENVIRONMENT_BY_SHAPE,   /* a square image is equal-area, a 2:1 one lat-long */
+    SG_ENVIRONMENT_EQUAL_AREA, /* pbrt-v4's equal-area square (octahedral) map */
+    SG_ENVIRONMENT_LATLONG,    /* the usual 2:1 map: u the azimuth, v from +z down to -z */
+} SgEnvironmentLayout;
+
+typedef struct SgLightSource {
+    SgLightSourceKind kind;
+    /* point, spot: intensity (radiance times area, per steradian);
+     * distant: irradiance on a plane facing it; infinite: radiance
+     * (multiplying the image's texels where there is an image) */
+    float rgb[3];
+    double position[3];   /* point, spot (world) */
+    double direction[3];  /* unit, the way the light travels: spot's axis, the sun's rays */
+    double cos_cone, cos_falloff_start; /* spot */
+    double angular_radius; /* distant: radians of the sun's disk; 0: a delta direction */
+    char *image_path;     /* infinite: the environment image, or NULL: constant */
+    SgEnvironmentLayout layout;
+    /* infinite with an image: the irradiance of an upward-facing plane the
+     * image is scaled to (pbrt-v4's "illuminance"); 0: as it is */
+    double illuminance;
+    double light_to_world[3][3]; /* infinite: rotation from light space (z up) to world */
+    bool has_portal;      /* infinite: a window the sky is seen through (pbrt-v4's "portal") */
+    double portal[4][3];
+} SgLightSource;
+
 typedef struct SgCamera {
     double position[3];
     double look_at[3];
@@ -134,6 +174,10 @@ typedef struct SgScene {
     uint32_t light_count;
     SgLight *lights;
     uint32_t *light_triangles; /* triangle ids grouped by light */
+
+    /* Point, spot, distant and infinite lights, in the order read. */
+    uint32_t light_source_count;
+    SgLightSource *light_sources;
 
     bool has_camera;
     SgCamera camera;

@@ -306,6 +306,26 @@ static void compute_bounds_and_hash(SgScene *s)
     }
     for (uint32_t k = 0; k < s->light_count; k++)
         h = sg_hash_bytes(h, s->lights[k].radiance, sizeof s->lights[k].radiance);
+    /* lights that are not surfaces, field by field (no padding bytes); a
+     * scene without any keeps the hash it always had */
+    for (uint32_t k = 0; k < s->light_source_count; k++) {
+        const SgLightSource *l = &s->light_sources[k];
+        uint32_t kind = (uint32_t)l->kind, layout = (uint32_t)l->layout, portal = l->has_portal;
+        h = sg_hash_bytes(h, &kind, sizeof kind);
+        h = sg_hash_bytes(h, l->rgb, sizeof l->rgb);
+        h = sg_hash_bytes(h, l->position, sizeof l->position);
+        h = sg_hash_bytes(h, l->direction, sizeof l->direction);
+        h = sg_hash_bytes(h, &l->cos_cone, sizeof l->cos_cone);
+        h = sg_hash_bytes(h, &l->cos_falloff_start, sizeof l->cos_falloff_start);
+        h = sg_hash_bytes(h, &l->angular_radius, sizeof l->angular_radius);
+        if (l->image_path)
+            h = sg_hash_bytes(h, l->image_path, strlen(l->image_path));
+        h = sg_hash_bytes(h, &layout, sizeof layout);
+        h = sg_hash_bytes(h, l->light_to_world, sizeof l->light_to_world);
+        h = sg_hash_bytes(h, &portal, sizeof portal);
+        if (l->has_portal)
+            h = sg_hash_bytes(h, l->portal, sizeof l->portal);
+    }
     s->geometry_hash = h;
 }
 
@@ -336,6 +356,9 @@ void sg_scene_free(SgScene *s)
     free(s->uvs);
     free(s->lights);
     free(s->light_triangles);
+    for (uint32_t i = 0; i < s->light_source_count; i++)
+        free(s->light_sources[i].image_path);
+    free(s->light_sources);
     for (uint32_t i = 0; i < s->warning_count; i++)
         free(s->warnings[i]);
     free(s->warnings);
@@ -392,4 +415,23 @@ void sg_scene_print_warnings(const SgScene *s, const char *program, FILE *out)
 {
     for (uint32_t i = 0; s && i < s->warning_count; i++)
         fprintf(out, "%s: warning: %s\n", program, s->warnings[i]);
+}
+
+bool sg_builder_add_light_source(SgSceneBuilder *b, const SgLightSource *light, SgError *err)
+{
+    SgScene *s = b->scene;
+    for (int c = 0; c < 3; c++)
+        if (!(isfinite(light->rgb[c]) && light->rgb[c] >= 0.0f))
+            return sg_fail(err, "%s: a light's radiance must be finite and not negative", b->path);
+    SgLightSource *grown = realloc(s->light_sources, (s->light_source_count + 1) * sizeof *grown);
+    if (!grown)
+        return sg_fail(err, "%s: out of memory", b->path);
+    s->light_sources = grown;
+    SgLightSource *l = &grown[s->light_source_count];
+    *l = *light;
+    l->image_path = NULL;
+    if (light->image_path && !(l->image_path = strdup(light->image_path)))
+        return sg_fail(err, "%s: out of memory", b->path);
+    s->light_source_count++;
+    return true;
 }

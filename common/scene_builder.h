@@ -52,6 +52,10 @@ bool sg_builder_set_uvs(SgSceneBuilder *b, uint32_t first, uint32_t count, const
 /* Appends a texture (its path copied); *id its index. */
 bool sg_builder_add_texture(SgSceneBuilder *b, const SgTexture *t, uint32_t *id, SgError *err);
 
+/* Appends a point, spot, distant or infinite light (its image path copied);
+ * fails on a negative or non-finite radiance. */
+bool sg_builder_add_light_source(SgSceneBuilder *b, const SgLightSource *light, SgError *err);
+
 /* Groups lights, computes bounds and hash, records the degenerate count.
  * The caller has checked that there are triangles. */
 bool sg_builder_finish(SgSceneBuilder *b, SgError *err);

@@ -430,6 +430,138 @@ static bool load_meshes(Builder *b, const cJSON *root, SgError *err)
     return ok;
 }
 
+/* A unit vector member (required when `need`); false with the cause. */
+static bool member_direction(const char *path, const cJSON *obj, const char *owner, const char *name, bool need,
+                             double out[3], SgError *err)
+{
+    bool present;
+    if (!member_vec3(path, obj, owner, name, out, &present, err))
+        return false;
+    if (!present && need)
+        return sg_fail(err, "%s: %s.%s is missing", path, owner, name);
+    double len = d3_length(out);
+    if (!(len > 0))
+        return sg_fail(err, "%s: %s.%s must not be zero", path, owner, name);
+    for (int a = 0; a < 3; a++)
+        out[a] /= len;
+    return true;
+}
+
+/* A colour member that must be there, times the optional "scale". */
+static bool member_light_colour(const char *path, const cJSON *obj, const char *owner, const char *name,
+                                float out[3], SgError *err)
+{
+    if (!cJSON_GetObjectItemCaseSensitive(obj, name))
+        return sg_fail(err, "%s: %s.%s is missing", path, owner, name);
+    double scale = 1;
+    if (!member_color(path, obj, owner, name, out, err) || !member_number(path, obj, owner, "scale", 0, 1e30, &scale, err))
+        return false;
+    for (int c = 0; c < 3; c++)
+        out[c] = (float)(out[c] * scale);
+    return true;
+}
+
+/* The sky: "radiance" (times "image" where given), "up" the map's pole. */
+static bool sky_light(Builder *b, const cJSON *light, const char *owner, SgLightSource *l, char *image,
+                      size_t image_size, SgError *err)
+{
+    const char *path = b->json_path;
+    l->kind = SG_LIGHT_INFINITE;
+    l->rgb[0] = l->rgb[1] = l->rgb[2] = 1;
+    const cJSON *file = cJSON_GetObjectItemCaseSensitive(light, "image");
+    if (file) {
+        if (!cJSON_IsString(file) || !file->valuestring[0])
+            return sg_fail(err, "%s: %s.image must be a file name", path, owner);
+        int n = file->valuestring[0] == '/' ? snprintf(image, image_size, "%s", file->valuestring)
+                                            : snprintf(image, image_size, "%s%s", b->base_dir, file->valuestring);
+        if (n < 0 || (size_t)n >= image_size)
+            return sg_fail(err, "%s: %s.image: file name too long", path, owner);
+        l->image_path = image;
+        double scale = 1;
+        if (!member_color(path, light, owner, "radiance", l->rgb, err) ||
+            !member_number(path, light, owner, "scale", 0, 1e30, &scale, err) ||
+            !member_number(path, light, owner, "illuminance", 0, 1e30, &l->illuminance, err))
+            return false;
+        for (int c = 0; c < 3; c++)
+            l->rgb[c] = (float)(l->rgb[c] * scale);
+        const char *layout = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(light, "layout"));
+        if (layout && !strcmp(layout, "equal-area"))
+            l->layout = SG_ENVIRONMENT_EQUAL_AREA;
+        else if (layout && !strcmp(layout, "latlong"))
+            l->layout = SG_ENVIRONMENT_LATLONG;
+        else if (layout)
+            return sg_fail(err, "%s: %s.layout must be \"equal-area\" or \"latlong\"", path, owner);
+    } else if (!member_light_colour(path, light, owner, "radiance", l->rgb, err)) {
+        return false;
+    }
+    double up[3] = {0, 1, 0}, x[3], y[3];
+    if (!member_direction(path, light, owner, "up", false, up, err))
+        return false;
+    /* the map's x axis: the world axis least along up, made perpendicular */
+    int a = fabs(up[0]) <= fabs(up[1]) && fabs(up[0]) <= fabs(up[2]) ? 0 : fabs(up[1]) <= fabs(up[2]) ? 1 : 2;
+    double axis[3] = {a == 0, a == 1, a == 2};
+    d3_cross(up, axis, y);
+    double len = d3_length(y);
+    for (int c = 0; c < 3; c++)
+        y[c] /= len;
+    d3_cross(y, up, x);
+    for (int r = 0; r < 3; r++) {
+        l->light_to_world[r][0] = x[r];
+        l->light_to_world[r][1] = y[r];
+        l->light_to_world[r][2] = up[r];
+    }
+    const cJSON *portal = cJSON_GetObjectItemCaseSensitive(light, "portal");
+    if (portal) {
+        if (!cJSON_IsArray(portal) || cJSON_GetArraySize(portal) != 4)
+            return sg_fail(err, "%s: %s.portal must hold 4 points", path, owner);
+        for (int k = 0; k < 4; k++)
+            if (!json_vec3(cJSON_GetArrayItem(portal, k), l->portal[k]))
+                return sg_fail(err, "%s: %s.portal[%d] must be 3 finite numbers", path, owner, k);
+        l->has_portal = true;
+    }
+    return true;
+}
+
+/* "sky", "sun", "point" and "spot" (README, "Scene format"). */
+static bool light_source(Builder *b, const cJSON *light, const char *owner, const char *type, SgError *err)
+{
+    const char *path = b->json_path;
+    SgLightSource l;
+    memset(&l, 0, sizeof l);
+    char image[4096];
+    if (!strcmp(type, "sky")) {
+        if (!sky_light(b, light, owner, &l, image, sizeof image, err))
+            return false;
+    } else if (!strcmp(type, "sun")) {
+        double radius_deg = 0;
+        l.kind = SG_LIGHT_DISTANT;
+        if (!member_light_colour(path, light, owner, "irradiance", l.rgb, err) ||
+            !member_direction(path, light, owner, "direction", true, l.direction, err) ||
+            !member_number(path, light, owner, "angular_radius", 0, 90, &radius_deg, err))
+            return false;
+        l.angular_radius = radius_deg * M_PI / 180;
+    } else {
+        bool spot = !strcmp(type, "spot");
+        l.kind = spot ? SG_LIGHT_SPOT : SG_LIGHT_POINT;
+        bool has_position;
+        if (!member_light_colour(path, light, owner, "intensity", l.rgb, err) ||
+            !member_vec3(path, light, owner, "position", l.position, &has_position, err))
+            return false;
+        if (!has_position)
+            return sg_fail(err, "%s: %s.position is missing", path, owner);
+        if (spot) {
+            double cone = 30, delta = 5;
+            if (!member_direction(path, light, owner, "direction", true, l.direction, err) ||
+                !member_number(path, light, owner, "cone_angle", 1e-3, 180, &cone, err) ||
+                !member_number(path, light, owner, "cone_delta_angle", 0, cone, &delta, err))
+                return false;
+            l.cos_cone = cos(cone * M_PI / 180);
+            l.cos_falloff_start = cos((cone - delta) * M_PI / 180);
+        }
+    }
+    return sg_builder_add_light_source(&b->core, &l, err);
+}
+
 static bool load_lights(Builder *b, const cJSON *root, SgError *err)
 {
     const cJSON *lights = cJSON_GetObjectItemCaseSensitive(root, "lights");
@@ -444,8 +576,14 @@ static bool load_lights(Builder *b, const cJSON *root, SgError *err)
         char owner[32];
         snprintf(owner, sizeof owner, "lights[%d]", index++);
         const char *type = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(light, "type"));
+        if (type && (!strcmp(type, "sky") || !strcmp(type, "sun") || !strcmp(type, "point") || !strcmp(type, "spot"))) {
+            if (!light_source(b, light, owner, type, err))
+                return false;
+            continue;
+        }
         if (!type || strcmp(type, "quad"))
-            return sg_fail(err, "%s: %s.type must be \"quad\"", b->json_path, owner);
+            return sg_fail(err, "%s: %s.type must be \"quad\", \"sky\", \"sun\", \"point\" or \"spot\"",
+                           b->json_path, owner);
         const cJSON *corners = cJSON_GetObjectItemCaseSensitive(light, "corners");
         if (!cJSON_IsArray(corners) || cJSON_GetArraySize(corners) != 4)
             return sg_fail(err, "%s: %s.corners must hold 4 points", b->json_path, owner);

@@ -131,6 +131,23 @@ static void add_emission(Path *p, const Hit *h, const Material *m, float cos_o, 
         it->guide->ops->record_emission(seg, m->emission, w);
 }
 
+/* A ray that left the scene: the sky's and the sun disk's radiance, MIS
+ * weighted against the light samples of the vertex before. The guide
+ * records it as emission seen far along the ray. */
+static void add_escaped(Path *p)
+{
+    const Integrator *it = p->it;
+    Vec3 le = light_set_escaped(it->lights, p->ps.d, p->ps.specular_bounce ? -1.0f : p->ps.prev_pdf);
+    p->radiance = v3_add(p->radiance, v3_mul(p->ps.beta, le));
+    if (p->pc->record) {
+        Vec3 far = v3_add(p->ps.o, v3_scale(p->ps.d, 1e3f * it->geo->scale));
+        Vec3 back = v3_scale(p->ps.d, -1.0f);
+        GuideSegment *seg = it->guide->ops->record_vertex(it->guide, p->pc->thread, far, back, back);
+        if (seg)
+            it->guide->ops->record_emission(seg, le, 1.0f);
+    }
+}
+
 /* A mirror's, smooth conductor's or glass's bounce, drawn from its BSDF
  * alone (bsdf.h); false where the path ends. */
 static bool specular_bounce(Path *p, const Material *m, const Hit *h, Vec3 wo, Vec3 n, bool entering,
@@ -167,7 +184,47 @@ typedef struct LightSample {
     Vec3 c;           /* f cos Le / pdf, 0 where the point gives nothing */
     Vec3 wi;
     float pdf, cos_x; /* pdf 0: no contribution */
+    bool delta;       /* a point, spot or sun without a disk: no MIS weight */
 } LightSample;
+
+/* Next-event estimation toward a point, spot, distant or infinite light
+ * (index among the sources). A delta light's sample has pdf 0 here: it
+ * takes no MIS weight, which the caller gives where pdf > 0. */
+static LightSample sample_light_source(const Integrator *it, const BounceVertex *v, uint32_t source,
+                                       bool lit_below_horizon, float u1, float u2, PathStats *st)
+{
+    LightSample ls = {0};
+    LightSourcePoint lp;
+    /* the light as seen from the surface point itself: from the offset
+     * origin a point light would be nearer by the offset (0.2 % brighter
+     * at a scene's size / 65536 from a lamp 1.5 away) */
+    if (!light_source_sample(it->lights, source, v->p, u1, u2, &lp))
+        return ls;
+    float cos_x = v3_dot(lp.wi, v->g.bsdf.lobe.n);
+    if (!(cos_x > 0.0f || lit_below_horizon))
+        return ls;
+    st->rays++;
+    Vec3 shadow = lp.wi;
+    float reach = INFINITY;
+    if (!isinf(lp.dist)) {
+        Vec3 to = v3_sub(v3_add(v->p, v3_scale(lp.wi, lp.dist)), v->origin);
+        reach = v3_length(to);
+        shadow = v3_scale(to, 1.0f / reach);
+        reach *= 1.0f - 1e-4f;
+    }
+    if (occluded(it->geo, v->origin, shadow, reach))
+        return ls;
+    ls.lit = true;
+    if (cos_x > 0.0f && lp.pdf > 0.0f) {
+        Vec3 f = bsdf_eval(&v->g.bsdf, lp.wi);
+        ls.c = v3_scale(v3_mul(f, lp.le), cos_x / lp.pdf);
+        ls.wi = lp.wi;
+        ls.cos_x = cos_x;
+        ls.pdf = lp.pdf;
+        ls.delta = lp.delta;
+    }
+    return ls;
+}
 
 static LightSample sample_light(const Integrator *it, const BounceVertex *v, bool lit_below_horizon, SgRng *rng,
                                 PathStats *st)
@@ -175,11 +232,14 @@ static LightSample sample_light(const Integrator *it, const BounceVertex *v, boo
     LightSample ls = {0};
     float ul = sg_rng_float(rng), ut = sg_rng_float(rng);
     float ua = sg_rng_float(rng), ub = sg_rng_float(rng);
-    uint32_t t;
+    uint32_t t, light;
     Vec3 y;
     const Geometry *geo = it->geo;
-    if (!light_set_sample(it->lights, geo->vertices, geo->indices, ul, ut, ua, ub, &t, &y))
+    if (!light_set_pick(it->lights, ul, &light))
         return ls;
+    if (light >= it->lights->count)
+        return sample_light_source(it, v, light - it->lights->count, lit_below_horizon, ua, ub, st);
+    light_set_sample_area(it->lights, light, geo->vertices, geo->indices, ut, ua, ub, &t, &y);
     Vec3 n = v->g.bsdf.lobe.n;
     Vec3 to = v3_sub(y, v->origin);
     float dist2 = v3_dot(to, to);
@@ -325,7 +385,7 @@ static bool scatter(Path *p, const Hit *h, const Material *m, Vec3 wo, Vec3 n, b
     if (gops->vertex_end)
         gops->vertex_end(guide, &gh, ls.lit, pc->rng, &v.g);
     if (ls.pdf > 0.0f) {
-        float w = power_heuristic(ls.pdf, gops->pdf(&v.g, ls.wi, ls.cos_x));
+        float w = ls.delta ? 1.0f : power_heuristic(ls.pdf, gops->pdf(&v.g, ls.wi, ls.cos_x));
         Vec3 c = v3_scale(ls.c, w);
         p->radiance = v3_add(p->radiance, v3_mul(p->ps.beta, c));
         if (seg)
@@ -350,8 +410,13 @@ static bool path_vertex(Path *p)
     const PathCtx *pc = p->pc;
     Hit h = intersect(it->geo, p->ps.o, p->ps.d, INFINITY);
     pc->st->rays++;
-    if (!h.found)
+    if (!h.found) {
+        if (it->lights->has_escaping)
+            add_escaped(p);
+        if (p->depth == 0)
+            *p->seen = p->radiance;
         return false;
+    }
     Vec3 ng = it->geo->tris[h.tri].normal;
     float cos_o = v3_dot(p->ps.d, ng);
     bool front = cos_o < 0.0f;

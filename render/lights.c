@@ -1,22 +1,243 @@
 #include "lights.h"
 
+#include <math.h>
 #include <stdlib.h>
 
-bool light_set_init(LightSet *ls, const SgScene *s, const Vec3 *vertices, const Material *materials,
-                    const double *follow_weight, const char *path, SgError *err)
+#include "sampling.h"
+
+/* ---- light sources ------------------------------------------------------------ */
+
+static inline float power_heuristic(float a, float b)
 {
-    ls->count = s->light_count;
-    if (!ls->count)
+    float a2 = a * a, b2 = b * b;
+    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
+
+static Vec3 vec3_of(const double d[3]) { return v3((float)d[0], (float)d[1], (float)d[2]); }
+
+/* pbrt-v4's smooth spot falloff: 0 outside the cone, 1 inside its core. */
+static float spot_falloff(const LightSource *l, float cos_theta)
+{
+    if (l->cos_falloff_start <= l->cos_cone)
+        return cos_theta >= l->cos_cone ? 1.0f : 0.0f;
+    float t = (cos_theta - l->cos_cone) / (l->cos_falloff_start - l->cos_cone);
+    t = fminf(fmaxf(t, 0.0f), 1.0f);
+    return t * t * (3.0f - 2.0f * t);
+}
+
+/* Whether unit w points into the sun's disk: by the sine, which keeps its
+ * precision for a disk of a quarter degree where the cosine has none. */
+static bool in_sun_disk(const LightSource *l, Vec3 w)
+{
+    Vec3 axis = v3_scale(l->direction, -1.0f);
+    Vec3 c = v3_cross(w, axis);
+    return v3_dot(w, axis) > 0.0f && v3_dot(c, c) <= l->sun_sin2 * (1.0f + 1e-5f);
+}
+
+/* The source's power over pi (the area lights' unit: area times
+ * luminance), in a scene of bounding radius `radius`. */
+static double source_power(const LightSource *l, double radius)
+{
+    double lum = luminance(l->rgb);
+    switch (l->kind) {
+    case SG_LIGHT_POINT:
+        return 4.0 * lum;
+    case SG_LIGHT_SPOT:
+        return 2.0 * lum * (1.0 - 0.5 * ((double)l->cos_falloff_start + l->cos_cone));
+    case SG_LIGHT_DISTANT: /* the irradiance over the scene's disk */
+        if (l->cos_radius < 1.0f)
+            lum *= M_PI * l->sun_sin2; /* radiance to irradiance */
+        return lum * radius * radius;
+    case SG_LIGHT_INFINITE:
+        return 4.0 * M_PI * radius * radius * (l->map ? luminance(l->map->mean) : lum);
+    }
+    return 0.0;
+}
+
+static bool sources_init(LightSet *ls, const SgScene *s, const double centre[3], const char *path, SgError *err)
+{
+    ls->source_count = s->light_source_count;
+    if (!ls->source_count)
         return true;
+    if (!(ls->sources = calloc(ls->source_count, sizeof *ls->sources)))
+        return sg_fail(err, "%s: out of memory for the lights", path);
+    for (uint32_t i = 0; i < ls->source_count; i++) {
+        const SgLightSource *in = &s->light_sources[i];
+        LightSource *l = &ls->sources[i];
+        l->kind = in->kind;
+        l->rgb = v3(in->rgb[0], in->rgb[1], in->rgb[2]);
+        double local[3] = {in->position[0] - centre[0], in->position[1] - centre[1], in->position[2] - centre[2]};
+        l->position = vec3_of(local);
+        l->direction = v3_normalize(vec3_of(in->direction));
+        l->cos_cone = (float)in->cos_cone;
+        l->cos_falloff_start = (float)in->cos_falloff_start;
+        l->cos_radius = 1.0f;
+        if (in->kind == SG_LIGHT_DISTANT && in->angular_radius > 0.0) {
+            double radius = fmin(in->angular_radius, M_PI / 2), sr = sin(radius), half = sin(0.5 * radius);
+            l->cos_radius = (float)cos(radius);
+            l->sun_sin2 = (float)(sr * sr);
+            l->sun_one_minus_cos = (float)(2.0 * half * half);
+            l->rgb = v3_scale(l->rgb, (float)(1.0 / (M_PI * sr * sr))); /* the disk's radiance */
+            ls->has_escaping = true;
+        }
+        if (in->kind == SG_LIGHT_INFINITE) {
+            ls->has_escaping = true;
+            if (in->image_path) {
+                if (!(l->map = calloc(1, sizeof *l->map)))
+                    return sg_fail(err, "%s: out of memory for the lights", path);
+                if (!environment_load(l->map, in, err))
+                    return false;
+            }
+        }
+    }
+    return true;
+}
+
+Vec3 light_set_escaped(const LightSet *ls, Vec3 d, float bsdf_pdf)
+{
+    Vec3 sum = v3(0, 0, 0);
+    if (!ls->has_escaping)
+        return sum;
+    for (uint32_t i = 0; i < ls->source_count; i++) {
+        const LightSource *l = &ls->sources[i];
+        Vec3 le;
+        if (l->kind == SG_LIGHT_INFINITE)
+            le = l->map ? environment_radiance(l->map, d) : l->rgb;
+        else if (l->kind == SG_LIGHT_DISTANT && l->cos_radius < 1.0f && in_sun_disk(l, d))
+            le = l->rgb;
+        else
+            continue;
+        float w = bsdf_pdf < 0.0f ? 1.0f : power_heuristic(bsdf_pdf, light_source_pdf(ls, i, d));
+        sum = v3_add(sum, v3_scale(le, w));
+    }
+    return sum;
+}
+
+float light_source_pdf(const LightSet *ls, uint32_t i, Vec3 d)
+{
+    const LightSource *l = &ls->sources[i];
+    float pick = (float)l->pick_pdf;
+    if (l->kind == SG_LIGHT_INFINITE)
+        return pick * (l->map ? environment_pdf(l->map, d) : 1.0f / (4.0f * SG_PI));
+    if (l->kind == SG_LIGHT_DISTANT && l->cos_radius < 1.0f)
+        return in_sun_disk(l, d) ? pick / (2.0f * SG_PI * l->sun_one_minus_cos) : 0.0f;
+    return 0.0f;
+}
+
+bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u1, float u2, LightSourcePoint *out)
+{
+    const LightSource *l = &ls->sources[i];
+    float pick = (float)l->pick_pdf;
+    *out = (LightSourcePoint){.dist = INFINITY, .pdf = pick};
+    switch (l->kind) {
+    case SG_LIGHT_POINT:
+    case SG_LIGHT_SPOT: {
+        Vec3 to = v3_sub(l->position, origin);
+        float dist2 = v3_dot(to, to);
+        if (!(dist2 > 0.0f))
+            return false;
+        out->dist = sqrtf(dist2);
+        out->wi = v3_scale(to, 1.0f / out->dist);
+        float k = 1.0f / dist2;
+        if (l->kind == SG_LIGHT_SPOT)
+            k *= spot_falloff(l, -v3_dot(out->wi, l->direction));
+        out->le = v3_scale(l->rgb, k);
+        out->delta = true;
+        return k > 0.0f;
+    }
+    case SG_LIGHT_DISTANT:
+        if (l->cos_radius >= 1.0f) {
+            out->wi = v3_scale(l->direction, -1.0f);
+            out->le = l->rgb;
+            out->delta = true;
+            return true;
+        }
+        {
+            /* uniform in the cone around the sun's direction: 1 - cos t
+             * uniform, the sine from it without cancellation */
+            float s = u1 * l->sun_one_minus_cos;
+            float cos_t = 1.0f - s, sin_t = sqrtf(fmaxf(0.0f, s * (2.0f - s)));
+            float phi = 2.0f * SG_PI * u2;
+            out->wi = sg_to_world(v3(sin_t * cosf(phi), sin_t * sinf(phi), cos_t), v3_scale(l->direction, -1.0f));
+        }
+        out->le = l->rgb;
+        out->pdf = pick / (2.0f * SG_PI * l->sun_one_minus_cos);
+        return true;
+    case SG_LIGHT_INFINITE:
+        if (l->map) {
+            float pdf;
+            out->wi = environment_sample(l->map, u1, u2, &pdf);
+            out->le = environment_radiance(l->map, out->wi);
+            out->pdf = pick * pdf;
+            return pdf > 0.0f;
+        }
+        {
+            float z = 1.0f - 2.0f * u1, r = sqrtf(fmaxf(0.0f, 1.0f - z * z)), phi = 2.0f * SG_PI * u2;
+            out->wi = v3(r * cosf(phi), r * sinf(phi), z);
+        }
+        out->le = l->rgb;
+        out->pdf = pick / (4.0f * SG_PI);
+        return true;
+    }
+    return false;
+}
+
+double light_set_power(const LightSet *ls)
+{
+    uint32_t n = ls->count + ls->source_count;
+    return n ? ls->total_power : 0.0;
+}
+
+/* ---- the set ---------------------------------------------------------------------- */
+
+/* Pick probabilities by power: the area lights' (power[], summing to
+ * area_power), then the sources'. Without sources the arithmetic is the
+ * one area lights always had, so their images do not change. */
+static bool finish_picking(LightSet *ls, const double *power, double area_power, const SgScene *s)
+{
+    double dx = s->bounds_max[0] - s->bounds_min[0], dy = s->bounds_max[1] - s->bounds_min[1],
+           dz = s->bounds_max[2] - s->bounds_min[2];
+    double radius = 0.5 * sqrt(dx * dx + dy * dy + dz * dz);
+    double total = area_power;
+    for (uint32_t i = 0; i < ls->source_count; i++)
+        total += source_power(&ls->sources[i], radius);
+    ls->total_power = total;
+    double acc = 0.0;
+    for (uint32_t l = 0; l < ls->count; l++) {
+        ls->lights[l].pick_pdf = total > 0 ? power[l] / total : 0.0;
+        acc += ls->lights[l].pick_pdf;
+        ls->cdf[l] = acc;
+    }
+    for (uint32_t i = 0; i < ls->source_count; i++) {
+        ls->sources[i].pick_pdf = total > 0 ? source_power(&ls->sources[i], radius) / total : 0.0;
+        acc += ls->sources[i].pick_pdf;
+        ls->cdf[ls->count + i] = acc;
+    }
+    return true;
+}
+
+bool light_set_init(LightSet *ls, const SgScene *s, const Vec3 *vertices, const Material *materials,
+                    const double *follow_weight, const double centre[3], const char *path, SgError *err)
+{
+    if (!sources_init(ls, s, centre, path, err))
+        return false;
+    ls->count = s->light_count;
+    uint32_t n_all = ls->count + ls->source_count;
+    if (!n_all)
+        return true;
+    ls->cdf = calloc(n_all, sizeof *ls->cdf);
+    if (!ls->cdf)
+        return sg_fail(err, "%s: out of memory for the light table", path);
+    if (!ls->count)
+        return finish_picking(ls, NULL, 0.0, s);
     ls->lights = calloc(ls->count, sizeof *ls->lights);
-    ls->cdf = calloc(ls->count, sizeof *ls->cdf);
     ls->follow_cdf = calloc(ls->count, sizeof *ls->follow_cdf);
     uint32_t total_tris = 0;
     for (uint32_t l = 0; l < s->light_count; l++)
         total_tris += s->lights[l].triangle_count;
     ls->tris = calloc(total_tris ? total_tris : 1, sizeof *ls->tris);
     ls->tri_cdf = calloc(total_tris ? total_tris : 1, sizeof *ls->tri_cdf);
-    if (!ls->lights || !ls->cdf || !ls->follow_cdf || !ls->tris || !ls->tri_cdf)
+    if (!ls->lights || !ls->follow_cdf || !ls->tris || !ls->tri_cdf)
         return sg_fail(err, "%s: out of memory for the light table", path);
     double total_power = 0.0;
     double *power = calloc(ls->count, sizeof *power);
@@ -56,12 +277,8 @@ bool light_set_init(LightSet *ls, const SgScene *s, const Vec3 *vertices, const 
         power[l] = area > 0 ? area * luminance(e) : 0.0;
         total_power += power[l];
     }
-    double acc = 0.0;
-    for (uint32_t l = 0; l < ls->count; l++) {
-        ls->lights[l].pick_pdf = total_power > 0 ? power[l] / total_power : 0.0;
-        acc += ls->lights[l].pick_pdf;
-        ls->cdf[l] = acc;
-    }
+    finish_picking(ls, power, total_power, s);
+    double acc;
     /* guide: which light to follow */
     const double *w = follow_weight ? follow_weight : power;
     double wsum = 0.0;
@@ -78,6 +295,12 @@ bool light_set_init(LightSet *ls, const SgScene *s, const Vec3 *vertices, const 
 
 void light_set_free(LightSet *ls)
 {
+    for (uint32_t i = 0; i < ls->source_count; i++)
+        if (ls->sources[i].map) {
+            environment_free(ls->sources[i].map);
+            free(ls->sources[i].map);
+        }
+    free(ls->sources);
     free(ls->lights);
     free(ls->cdf);
     free(ls->tris);

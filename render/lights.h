@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stdint.h>
 
+#include "environment.h"
 #include "error.h"
 #include "material.h"
 #include "scene.h"
@@ -19,10 +20,30 @@ typedef struct LightTable {
     uint32_t first, count; /* its triangles in r->light_tris / r->light_tri_cdf */
 } LightTable;
 
+/* A point, spot, distant or infinite light as the renderer samples it
+ * (local coordinates). */
+typedef struct LightSource {
+    SgLightSourceKind kind;
+    Vec3 rgb;          /* point, spot: intensity; distant: irradiance (a delta) or the
+                        * disk's radiance; infinite: radiance (the map's, if any, is in it) */
+    Vec3 position;     /* point, spot */
+    Vec3 direction;    /* the way the light travels */
+    float cos_cone, cos_falloff_start; /* spot */
+    float cos_radius;  /* distant: cosine of the sun's angular radius; 1: a delta */
+    float sun_sin2;    /* ... its sine squared, and 1 - cosine: what a small disk needs */
+    float sun_one_minus_cos;
+    Environment *map;  /* infinite: the image, or NULL: constant */
+    double pick_pdf;
+} LightSource;
+
 typedef struct LightSet {
-    uint32_t count;
+    uint32_t count;     /* area lights: the scene's SgLight, in order */
     LightTable *lights;
-    double *cdf;        /* count: by power */
+    uint32_t source_count; /* then the other lights */
+    LightSource *sources;
+    bool has_escaping;  /* a light seen by rays that leave the scene (sky, sun disk) */
+    double *cdf;        /* count + source_count: by power */
+    double total_power; /* what cdf was made from: area times luminance (power / pi) */
     uint32_t *tris;     /* triangle ids grouped by light */
     double *tri_cdf;    /* per light, cumulative area fractions */
     double *follow_cdf; /* guide: cumulative follow probability per light */
@@ -30,9 +51,12 @@ typedef struct LightSet {
 
 /* From the scene's lights, their triangles' local vertices and the
  * renderer's materials; `follow_weight` (per light, NULL: the lights'
- * power) is the guide's. Fails naming `path`. */
+ * power) is the guide's; `centre` the local origin (world = local +
+ * centre). Fails naming `path` (an environment image naming its own). */
 bool light_set_init(LightSet *ls, const SgScene *s, const Vec3 *vertices, const Material *materials,
-                    const double *follow_weight, const char *path, SgError *err);
+                    const double *follow_weight, const double centre[3], const char *path, SgError *err);
+/* The total power next-event estimation picks from (0: no usable light). */
+double light_set_power(const LightSet *ls);
 void light_set_free(LightSet *ls);
 
 /* The index i with cdf[i - 1] <= u < cdf[i] (binary search). */
@@ -49,14 +73,23 @@ static inline uint32_t pick_cdf(const double *cdf, uint32_t n, double u)
     return lo;
 }
 
-/* A point y on a light for next-event estimation from four random
- * numbers, and its triangle; false: no light has power. */
-static inline bool light_set_sample(const LightSet *ls, const Vec3 *vertices, const uint32_t *indices, float ul,
-                                    float ut, float ua, float ub, uint32_t *tri, Vec3 *y)
+/* The light next-event estimation draws with random number ul: an area
+ * light below ls->count, a light source from there; false: no light has
+ * power. */
+static inline bool light_set_pick(const LightSet *ls, float ul, uint32_t *light)
 {
-    if (!ls->count || !(ls->cdf[ls->count - 1] > 0.0))
+    uint32_t n = ls->count + ls->source_count;
+    if (!n || !(ls->cdf[n - 1] > 0.0))
         return false;
-    uint32_t l = pick_cdf(ls->cdf, ls->count, ul * ls->cdf[ls->count - 1]);
+    *light = pick_cdf(ls->cdf, n, ul * ls->cdf[n - 1]);
+    return true;
+}
+
+/* A point y on area light l for next-event estimation from three random
+ * numbers, and its triangle. */
+static inline void light_set_sample_area(const LightSet *ls, uint32_t l, const Vec3 *vertices,
+                                         const uint32_t *indices, float ut, float ua, float ub, uint32_t *tri, Vec3 *y)
+{
     const LightTable *lt = &ls->lights[l];
     uint32_t k = lt->first + pick_cdf(ls->tri_cdf + lt->first, lt->count, ut);
     uint32_t t = ls->tris[k];
@@ -66,8 +99,28 @@ static inline bool light_set_sample(const LightSet *ls, const Vec3 *vertices, co
     *y = v3_add(v3_add(v3_scale(vertices[id[0]], b0), v3_scale(vertices[id[1]], b1)),
                 v3_scale(vertices[id[2]], 1.0f - b0 - b1));
     *tri = t;
-    return true;
 }
+
+/* What next-event estimation sees of a light source from `origin`. */
+typedef struct LightSourcePoint {
+    Vec3 wi;    /* unit, toward the light */
+    float dist; /* INFINITY: from outside the scene */
+    Vec3 le;    /* radiance arriving; a delta light: the value that stands for it (intensity / r^2, irradiance) */
+    float pdf;  /* solid angle, the pick included; a delta light: the pick's probability */
+    bool delta;
+} LightSourcePoint;
+
+/* Light source i (index among the sources) seen from `origin` with two
+ * random numbers; false: it sends nothing there. */
+bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u1, float u2, LightSourcePoint *out);
+
+/* What a ray leaving the scene along unit d brings: each escaping light's
+ * radiance, weighted by the power heuristic against the pdf the ray was
+ * drawn with (bsdf_pdf < 0: a specular or camera ray, weight 1). */
+Vec3 light_set_escaped(const LightSet *ls, Vec3 d, float bsdf_pdf);
+/* The pdf (solid angle, pick included) of next-event estimation drawing
+ * direction d toward light source i; 0 for delta lights. */
+float light_source_pdf(const LightSet *ls, uint32_t i, Vec3 d);
 
 /* The solid-angle pdf of next-event estimation reaching a point of light
  * `light` (SG_NO_LIGHT: none) at squared distance dist2, seen at cosine

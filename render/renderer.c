@@ -147,9 +147,15 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
     }
     for (uint32_t m = 0; m < s->material_count; m++)
         material_init(&r->materials[m], &s->materials[m]);
-    if (!light_set_init(&r->lights, s, r->geo.vertices, r->materials, r->opt.importance.light_weight, path, err)) {
+    if (!light_set_init(&r->lights, s, r->geo.vertices, r->materials, r->opt.importance.light_weight, r->geo.centre,
+                        path, err)) {
         sg_renderer_free(r);
         return NULL;
+    }
+    if (!(light_set_power(&r->lights) > 0.0)) {
+        sg_renderer_free(r);
+        return sg_fail(err, "%s: no light the renderer can use (no emissive surface of non-zero area, "
+                            "no LightSource or \"lights\" entry that sends light)", path), NULL;
     }
     camera_init(&r->camera, &s->camera, r->geo.centre, o->width, o->height);
     r->pool = sg_thread_pool_create(o->threads);

@@ -218,20 +218,20 @@ Test(pbrt_shapes, trianglemesh_bilinear_and_plymesh)
 
 Test(pbrt_shapes, unsupported_kinds_warn_once_each)
 {
-    SgScene *s = load_ok(HEADER TRIANGLE "Shape \"sphere\" \"float radius\" 1\n"
-                                "Shape \"sphere\" \"float radius\" 2\n"
-                                "Shape \"disk\"\n"
-                                "LightSource \"point\" \"rgb I\" [ 1 1 1 ]\n"
-                                "LightSource \"infinite\" \"rgb L\" [ 1 1 1 ]\n");
+    SgScene *s = load_ok(HEADER TRIANGLE "Shape \"curve\" \"float width\" 1\n"
+                                "Shape \"curve\" \"float width\" 2\n"
+                                "Shape \"cone\"\n"
+                                "LightSource \"goniometric\" \"rgb I\" [ 1 1 1 ]\n"
+                                "LightSource \"projection\" \"float scale\" 1\n");
     cr_assert_eq(s->triangle_count, 1);
-    int sphere = 0;
+    int curve = 0;
     for (uint32_t i = 0; i < s->warning_count; i++)
-        sphere += strstr(s->warnings[i], "\"sphere\"") != NULL;
-    cr_expect_eq(sphere, 1, "one line for both spheres");
-    cr_expect(has_warning(s, "scene.pbrt:5: Shape \"sphere\" is not supported: left out (2 times)"));
-    cr_expect(has_warning(s, "Shape \"disk\""));
-    cr_expect(has_warning(s, "LightSource \"point\""));
-    cr_expect(has_warning(s, "LightSource \"infinite\""));
+        curve += strstr(s->warnings[i], "\"curve\"") != NULL;
+    cr_expect_eq(curve, 1, "one line for both curves");
+    cr_expect(has_warning(s, "scene.pbrt:5: Shape \"curve\" is not supported: left out (2 times)"));
+    cr_expect(has_warning(s, "Shape \"cone\""));
+    cr_expect(has_warning(s, "LightSource \"goniometric\""));
+    cr_expect(has_warning(s, "LightSource \"projection\""));
     cr_expect_eq(s->warning_count, 4);
     for (uint32_t i = 0; i < s->warning_count; i++)
         cr_expect(!strchr(s->warnings[i], '\n'));
@@ -794,7 +794,7 @@ Test(pbrt_errors, bad_geometry)
     expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 ]\n", 4,
                  "needs \"point3 P\"");
     SgError err;
-    cr_assert_null(load_text(HEADER "Shape \"sphere\"\n", &err));
+    cr_assert_null(load_text(HEADER "Shape \"curve\"\n", &err));
     cr_expect(strstr(err.message, "no triangles"), "%s", err.message);
 }
 
@@ -810,14 +810,14 @@ Test(pbrt_programs, voxelize_reads_pbrt_and_prints_warnings)
         "room.pbrt", HEADER
         "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 4 0 0 4 0 4 0 0 4  0 4 0 4 4 0 4 4 4 0 4 4 ]\n"
         "  \"integer indices\" [ 0 1 2 0 2 3  4 6 5 4 7 6 ]\n"
-        "Shape \"sphere\"\n"
+        "Shape \"curve\"\n"
         "AttributeBegin\n  AreaLightSource \"diffuse\" \"rgb L\" [ 5 5 5 ]\n"
         "  Shape \"trianglemesh\" \"point3 P\" [ 1 3 1 3 3 1 3 3 3 1 3 3 ]\n"
         "    \"integer indices\" [ 0 1 2 0 2 3 ]\nAttributeEnd\n");
     snprintf(cmd, sizeof cmd, "%s %s -o %s/room.vdb --resolution 16", prog, scene, scene_dir);
     int rc = sg_test_run(cmd, errs, sizeof errs);
     cr_expect_eq(rc, 0, "%s", errs);
-    cr_expect(strstr(errs, "voxelize: warning: ") && strstr(errs, "room.pbrt:6: Shape \"sphere\""),
+    cr_expect(strstr(errs, "voxelize: warning: ") && strstr(errs, "room.pbrt:6: Shape \"curve\""),
               "%s", errs);
     char vdb[4200];
     snprintf(vdb, sizeof vdb, "%s/room.vdb", scene_dir);

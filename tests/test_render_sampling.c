@@ -11,6 +11,8 @@
 #include <stdlib.h>
 
 #include "../render/bsdf.h"
+#include "../render/environment.h"
+#include "../render/lights.h"
 #include "../render/sampling.h"
 #include "rng.h"
 #include "scene_builder.h"
@@ -491,6 +493,62 @@ static void dielectric_case(float eta, float ax, float ay, Vec3 wo, uint64_t see
 
 /* ---- the chi-square tests: one list declares them and counts them ------ */
 
+/* ---- the sky and the sun (render/environment.h, render/lights.h) ------------ */
+
+static Vec3 environment_sample_fn(const void *c, float u0, float u1, float u2)
+{
+    (void)u2;
+    float pdf;
+    return environment_sample(c, u0, u1, &pdf);
+}
+static float environment_pdf_fn(const void *c, Vec3 w) { return environment_pdf(c, w); }
+
+/* A map with a smooth gradient, a dark band and a bright small sun, in
+ * either layout, turned so that its pole is not the world's z. */
+static void environment_case(SgEnvironmentLayout layout, int width, int height, uint64_t seed, int sub)
+{
+    float *rgb = malloc(sizeof(float) * 3 * width * height);
+    for (int y = 0; y < height; y++)
+        for (int x = 0; x < width; x++) {
+            float *t = rgb + 3 * ((size_t)y * width + x);
+            float g = 0.2f + (float)x / width + 0.5f * (float)y / height;
+            if (y == height / 3)
+                g = 0.0f; /* never drawn where it is black */
+            if (x == width / 4 && y == height / 5)
+                g = 40.0f;
+            t[0] = g, t[1] = 0.8f * g, t[2] = 0.5f * g + 0.05f;
+        }
+    const double turn[3][3] = {{0.8, 0, -0.6}, {0, 1, 0}, {0.6, 0, 0.8}};
+    Environment e;
+    SgError err = {0};
+    cr_assert(environment_init(&e, rgb, width, height, layout, (const float[3]){1, 1, 1}, turn, "test", &err), "%s",
+              err.message);
+    free(rgb);
+    assert_chi2(layout == SG_ENVIRONMENT_LATLONG ? "lat-long sky" : "equal-area sky", environment_sample_fn,
+                environment_pdf_fn, &e, seed, sub);
+    environment_free(&e);
+}
+
+static Vec3 source_sample_fn(const void *c, float u0, float u1, float u2)
+{
+    (void)u2;
+    LightSourcePoint lp;
+    cr_assert(light_source_sample(c, 0, v3(0, 0, 0), u0, u1, &lp));
+    return lp.wi;
+}
+static float source_pdf_fn(const void *c, Vec3 w) { return light_source_pdf(c, 0, w); }
+
+/* A constant sky (uniform sphere) or a sun of angular radius `radius`. */
+static void source_case(SgLightSourceKind kind, float radius, uint64_t seed, int sub)
+{
+    LightSource src = {.kind = kind, .rgb = v3(1, 1, 1), .direction = tilted(0.3f, -1.0f, 0.2f),
+                       .cos_radius = cosf(radius), .sun_sin2 = sinf(radius) * sinf(radius),
+                       .sun_one_minus_cos = 2.0f * sinf(0.5f * radius) * sinf(0.5f * radius), .pick_pdf = 1.0};
+    LightSet ls = {.source_count = 1, .sources = &src, .has_escaping = true};
+    assert_chi2(kind == SG_LIGHT_INFINITE ? "constant sky" : "sun disk", source_sample_fn, source_pdf_fn, &ls, seed,
+                sub);
+}
+
 #define CHI2_CASES(X) \
     X(cosine_hemisphere_tilted, cosine_hemisphere_tilted_case()) \
     X(cosine_hemisphere_facing_minus_z, cosine_hemisphere_facing_minus_z_case()) \
@@ -518,7 +576,11 @@ static void dielectric_case(float eta, float ax, float ay, Vec3 wo, uint64_t see
     X(dielectric_leaving_ggx_0_2_total_reflection, \
       dielectric_case(1.0f / 1.5f, 0.2f, 0.2f, tilted(0.8f, -0.1f, 0.5f), 24, 16)) \
     X(dielectric_entering_ggx_0_6_grazing, dielectric_case(1.33f, 0.6f, 0.6f, tilted(0.95f, 0.1f, 0.12f), 25, 32)) \
-    X(dielectric_anisotropic_ggx, dielectric_case(1.5f, 0.05f, 0.3f, tilted(-0.3f, 0.5f, 0.8f), 26, 32))
+    X(dielectric_anisotropic_ggx, dielectric_case(1.5f, 0.05f, 0.3f, tilted(-0.3f, 0.5f, 0.8f), 26, 32)) \
+    X(sky_equal_area_map, environment_case(SG_ENVIRONMENT_EQUAL_AREA, 24, 24, 27, 16)) \
+    X(sky_latlong_map, environment_case(SG_ENVIRONMENT_LATLONG, 32, 16, 28, 16)) \
+    X(sky_constant, source_case(SG_LIGHT_INFINITE, 0.0f, 29, 4)) \
+    X(sun_disk_10_degrees, source_case(SG_LIGHT_DISTANT, 0.17453f, 30, 32))
 
 #define CHI2_TEST(name, call) \
     Test(render_sampling, name) { call; }

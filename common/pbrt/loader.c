@@ -167,14 +167,8 @@ static bool statement(Parser *p, const Token *t)
         return pbrt_texture_statement(p, t);
     if (pbrt_token_is(t, "AreaLightSource"))
         return pbrt_area_light_statement(p, t);
-    if (pbrt_token_is(t, "LightSource")) {
-        Token type;
-        if (!pbrt_need_string(p, t, &type) || !pbrt_parse_params(p))
-            return false;
-        pbrt_warn_at(p, t, "LightSource \"%.*s\" is not supported (only area lights): left out",
-                     (int)type.len, type.s);
-        return true;
-    }
+    if (pbrt_token_is(t, "LightSource"))
+        return pbrt_light_source_statement(p, t);
     if (pbrt_token_is(t, "MakeNamedMedium")) {
         if (!skip_named_statement(p, t))
             return false;

@@ -241,6 +241,7 @@ bool pbrt_make_named_material_statement(Parser *p, const Token *statement);
 bool pbrt_named_material_statement(Parser *p, const Token *statement);
 bool pbrt_current_scene_material(Parser *p, bool emissive, uint32_t *id);
 bool pbrt_area_light_statement(Parser *p, const Token *statement);
+bool pbrt_light_source_statement(Parser *p, const Token *statement); /* lights.c */
 
 /* graphics_state.c: the transform statements (Translate, Scale, Rotate,
  * LookAt, Transform, ConcatTransform), named coordinate systems, and the

@@ -7,6 +7,7 @@
 
 #include "pbrt_parser.h"
 #include "ply_mesh.h"
+#include "quadric_mesh.h"
 #include "vecmath.h"
 
 /* ---- shapes ------------------------------------------------------------- */
@@ -221,6 +222,51 @@ static bool inline_mesh(Parser *p, const Token *statement, const Token *type)
     return ok;
 }
 
+/* disk, sphere and cylinder with pbrt-v4's parameters and defaults, as
+ * meshes of their true area (quadric_mesh.h). */
+static bool quadric(Parser *p, const Token *statement, const Token *type)
+{
+    double radius, phi_max;
+    if (!pbrt_param_float(p, "radius", 1, &radius) || !pbrt_param_float(p, "phimax", 360, &phi_max))
+        return false;
+    if (!(radius > 0 && isfinite(radius)))
+        return pbrt_fail_at(p, statement, "Shape \"%.*s\": \"radius\" must be positive", (int)type->len, type->s);
+    if (!(phi_max > 0 && phi_max <= 360))
+        return pbrt_fail_at(p, statement, "Shape \"%.*s\": \"phimax\" must be in (0, 360]", (int)type->len,
+                            type->s);
+    phi_max *= M_PI / 180;
+    SgQuadricMesh mesh;
+    bool made;
+    if (pbrt_string_is(type, "disk")) {
+        double height, inner;
+        if (!pbrt_param_float(p, "height", 0, &height) || !pbrt_param_float(p, "innerradius", 0, &inner))
+            return false;
+        if (!(inner >= 0 && inner < radius && isfinite(height)))
+            return pbrt_fail_at(p, statement, "Shape \"disk\": want 0 <= \"innerradius\" < \"radius\"");
+        made = sg_quadric_disk(radius, inner, height, phi_max, &mesh, p->err);
+    } else {
+        bool sphere = pbrt_string_is(type, "sphere");
+        double z_min, z_max;
+        if (!pbrt_param_float(p, "zmin", sphere ? -radius : -1, &z_min) ||
+            !pbrt_param_float(p, "zmax", sphere ? radius : 1, &z_max))
+            return false;
+        if (!(isfinite(z_min) && isfinite(z_max) && z_min != z_max) ||
+            (sphere && !(fmin(z_min, z_max) < radius && fmax(z_min, z_max) > -radius)))
+            return pbrt_fail_at(p, statement, "Shape \"%.*s\": \"zmin\" and \"zmax\" leave nothing",
+                                (int)type->len, type->s);
+        made = sphere ? sg_quadric_sphere(radius, z_min, z_max, phi_max, &mesh, p->err)
+                      : sg_quadric_cylinder(radius, z_min, z_max, phi_max, &mesh, p->err);
+    }
+    if (!made)
+        return false;
+    char what[4300];
+    snprintf(what, sizeof what, "%s:%d", statement->source->path, statement->line);
+    bool ok = emit_mesh(p, statement, what, mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count,
+                        NULL, mesh.uvs);
+    sg_quadric_mesh_free(&mesh);
+    return ok;
+}
+
 bool pbrt_shape_statement(Parser *p, const Token *statement)
 {
     Token type;
@@ -236,6 +282,8 @@ bool pbrt_shape_statement(Parser *p, const Token *statement)
     if (pbrt_string_is(&type, "trianglemesh") || pbrt_string_is(&type, "bilinearmesh") ||
         pbrt_string_is(&type, "loopsubdiv"))
         return inline_mesh(p, statement, &type);
+    if (pbrt_string_is(&type, "disk") || pbrt_string_is(&type, "sphere") || pbrt_string_is(&type, "cylinder"))
+        return quadric(p, statement, &type);
     pbrt_warn_at(p, statement, "Shape \"%.*s\" is not supported: left out", (int)type.len, type.s);
     return true;
 }

@@ -1,0 +1,450 @@
+/* Lights that are not surfaces (a sky, a sun, point and spot lights) and
+ * pbrt-v4's analytic shapes, against closed forms: a plane under a
+ * constant sky (rho L), a white convex object in a white sky (L), the
+ * inverse-square law, a spot's falloff, the cosine law of a sun on a
+ * tilted plane, a floor under a window in a black room (rho L F with F
+ * the rectangle's form factor); the shapes' meshes against their true
+ * areas; and the refusals. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <unistd.h>
+
+#include "quadric_mesh.h"
+#include "scene_builder.h"
+#include "../render/renderer.h"
+#include "support_files.h"
+#include "support_render.h"
+#include "vecmath.h"
+
+/* ---- rendering a window of pixels ------------------------------------------ */
+
+typedef struct Estimate {
+    double mean, std_error; /* channel 0 over every sample of the pixels */
+} Estimate;
+
+static Estimate render_mean(const SgScene *s, SgSampling mode, int passes)
+{
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.sampling = mode;
+    o.seed = 7;
+    o.threads = 2;
+    o.max_depth = 16;
+    SgError err = {0};
+    SgRenderer *r = sg_renderer_create(s, &o, &err);
+    cr_assert(r, "renderer: %s", err.message);
+    double sum = 0.0, sum2 = 0.0;
+    size_t n = (size_t)o.width * o.height;
+    for (int i = 0; i < passes; i++) {
+        sg_renderer_pass(r);
+        const float *px = sg_renderer_last_pass(r);
+        for (size_t k = 0; k < n; k++) {
+            sum += px[3 * k];
+            sum2 += (double)px[3 * k] * px[3 * k];
+        }
+    }
+    sg_renderer_free(r);
+    double count = (double)n * passes, mean = sum / count;
+    double var = fmax(sum2 / count - mean * mean, 0.0);
+    return (Estimate){mean, sqrt(var / count)};
+}
+
+static void expect_near(Estimate e, double want, double rel_floor, const char *what)
+{
+    double tol = 3.0 * e.std_error + rel_floor * fabs(want);
+    cr_expect(fabs(e.mean - want) <= tol, "%s: %.6f, want %.6f (3 sigma %.2g + %.1g)", what, e.mean, want,
+              3.0 * e.std_error, rel_floor * fabs(want));
+}
+
+/* ---- scenes ------------------------------------------------------------------- */
+
+static const double up_z[3] = {0, 0, 1};
+
+/* A 100 x 100 floor at y = 0 (normal +y) of albedo rho, a narrow camera
+ * looking at `at` on it from above. */
+static SgScene *floor_scene(float rho, const double at[3])
+{
+    SgScene *s = sgt_scene_new();
+    uint32_t m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, (const float[3]){rho, rho, rho}, NULL);
+    const double q[4][3] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
+    sgt_add_quad(s, q, m);
+    const double eye[3] = {at[0] + 0.1, 2.0, at[2]};
+    sgt_set_camera(s, eye, at, up_z, 0.2, 4, 4);
+    return s;
+}
+
+static void add_source(SgScene *s, const SgLightSource *l)
+{
+    s->light_sources = realloc(s->light_sources, (s->light_source_count + 1) * sizeof *s->light_sources);
+    s->light_sources[s->light_source_count] = *l;
+    if (l->image_path)
+        s->light_sources[s->light_source_count].image_path = strdup(l->image_path);
+    s->light_source_count++;
+}
+
+static SgLightSource constant_sky(float radiance)
+{
+    SgLightSource l = {.kind = SG_LIGHT_INFINITE, .rgb = {radiance, radiance, radiance}};
+    for (int a = 0; a < 3; a++)
+        l.light_to_world[a][a] = 1;
+    return l;
+}
+
+/* ---- the sky --------------------------------------------------------------------- */
+
+Test(render_lights, plane_under_constant_sky_is_rho_L)
+{
+    SgScene *s = floor_scene(0.5f, (const double[3]){0, 0, 0});
+    SgLightSource sky = constant_sky(0.8f);
+    add_source(s, &sky);
+    sgt_finish(s);
+    expect_near(render_mean(s, SG_SAMPLING_BSDF, 256), 0.5 * 0.8, 0.0, "floor under a sky");
+    sgt_scene_free(s);
+}
+
+Test(render_lights, white_convex_object_in_white_sky_is_L)
+{
+    SgScene *s = sgt_scene_new();
+    uint32_t white = sgt_add_material(s, SG_MATERIAL_DIFFUSE, (const float[3]){1, 1, 1}, NULL);
+    SgQuadricMesh mesh;
+    SgError err = {0};
+    cr_assert(sg_quadric_sphere(1.0, -1.0, 1.0, 2 * M_PI, &mesh, &err));
+    for (uint32_t t = 0; t < mesh.triangle_count; t++) { /* as quads of three distinct corners */
+        const uint32_t *id = mesh.indices + 3 * (size_t)t;
+        double q[4][3];
+        for (int c = 0; c < 3; c++)
+            memcpy(q[c], mesh.positions + 3 * (size_t)id[c], sizeof q[c]);
+        memcpy(q[3], q[2], sizeof q[3]);
+        sgt_add_quad(s, q, white);
+    }
+    sg_quadric_mesh_free(&mesh);
+    sgt_set_camera(s, (const double[3]){0, 0, 4}, (const double[3]){0, 0, 0}, (const double[3]){0, 1, 0}, 40, 16,
+                   16);
+    SgLightSource sky = constant_sky(1.0f);
+    add_source(s, &sky);
+    sgt_finish(s);
+    expect_near(render_mean(s, SG_SAMPLING_BSDF, 64), 1.0, 1e-3, "white furnace sky");
+    sgt_scene_free(s);
+}
+
+/* The form factor from a point to a parallel rectangle a x b at height c
+ * whose corner is straight above it. */
+static double corner_form_factor(double a, double b, double c)
+{
+    double x = a / c, y = b / c, sx = sqrt(1 + x * x), sy = sqrt(1 + y * y);
+    return (x / sx * atan(y / sx) + y / sy * atan(x / sy)) / (2 * M_PI);
+}
+
+/* A closed black room 4 x 2 x 4 with a 1 x 0.6 opening in its ceiling
+ * above the floor's centre, the floor of albedo rho. */
+static SgScene *window_room(float rho)
+{
+    SgScene *s = sgt_scene_new();
+    uint32_t floor = sgt_add_material(s, SG_MATERIAL_DIFFUSE, (const float[3]){rho, rho, rho}, NULL);
+    uint32_t black = sgt_add_material(s, SG_MATERIAL_DIFFUSE, (const float[3]){0, 0, 0}, NULL);
+    const double x0 = -2, x1 = 2, z0 = -2, z1 = 2, h = 2, wx = 0.5, wz = 0.3;
+    sgt_add_quad(s, (const double[4][3]){{x0, 0, z0}, {x0, 0, z1}, {x1, 0, z1}, {x1, 0, z0}}, floor);
+    /* walls, facing in */
+    sgt_add_quad(s, (const double[4][3]){{x0, 0, z0}, {x1, 0, z0}, {x1, h, z0}, {x0, h, z0}}, black);
+    sgt_add_quad(s, (const double[4][3]){{x0, 0, z1}, {x0, h, z1}, {x1, h, z1}, {x1, 0, z1}}, black);
+    sgt_add_quad(s, (const double[4][3]){{x0, 0, z0}, {x0, h, z0}, {x0, h, z1}, {x0, 0, z1}}, black);
+    sgt_add_quad(s, (const double[4][3]){{x1, 0, z0}, {x1, 0, z1}, {x1, h, z1}, {x1, h, z0}}, black);
+    /* the ceiling in four pieces round the opening, facing down */
+    sgt_add_quad(s, (const double[4][3]){{x0, h, z0}, {x1, h, z0}, {x1, h, -wz}, {x0, h, -wz}}, black);
+    sgt_add_quad(s, (const double[4][3]){{x0, h, wz}, {x1, h, wz}, {x1, h, z1}, {x0, h, z1}}, black);
+    sgt_add_quad(s, (const double[4][3]){{x0, h, -wz}, {-wx, h, -wz}, {-wx, h, wz}, {x0, h, wz}}, black);
+    sgt_add_quad(s, (const double[4][3]){{wx, h, -wz}, {x1, h, -wz}, {x1, h, wz}, {wx, h, wz}}, black);
+    sgt_set_camera(s, (const double[3]){0.05, 1.0, 0}, (const double[3]){0, 0, 0}, up_z, 0.2, 4, 4);
+    return s;
+}
+
+Test(render_lights, floor_under_window_is_rho_L_F)
+{
+    SgScene *s = window_room(0.6f);
+    SgLightSource sky = constant_sky(2.0f);
+    add_source(s, &sky);
+    sgt_finish(s);
+    double F = 4 * corner_form_factor(0.5, 0.3, 2.0);
+    expect_near(render_mean(s, SG_SAMPLING_BSDF, 512), 0.6 * 2.0 * F, 0.0, "floor under a window");
+    sgt_scene_free(s);
+}
+
+/* ---- point, spot, sun --------------------------------------------------------------- */
+
+Test(render_lights, point_light_inverse_square)
+{
+    const double h = 1.5;
+    SgScene *s = floor_scene(0.5f, (const double[3]){0, 0, 0});
+    SgLightSource l = {.kind = SG_LIGHT_POINT, .rgb = {3, 3, 3}, .position = {0, h, 0}};
+    add_source(s, &l);
+    sgt_finish(s);
+    expect_near(render_mean(s, SG_SAMPLING_BSDF, 16), 0.5 / M_PI * 3.0 / (h * h), 2e-3, "point light");
+    sgt_scene_free(s);
+}
+
+static double smooth_step(double x, double a, double b)
+{
+    double t = fmin(fmax((x - a) / (b - a), 0.0), 1.0);
+    return t * t * (3 - 2 * t);
+}
+
+Test(render_lights, spot_falloff)
+{
+    const double h = 1.0, cone = 30, delta = 10;
+    const double angles[] = {10, 25, 35};
+    for (int k = 0; k < 3; k++) {
+        double theta = angles[k] * M_PI / 180, r = h * tan(theta);
+        SgScene *s = floor_scene(0.5f, (const double[3]){r, 0, 0});
+        SgLightSource l = {.kind = SG_LIGHT_SPOT, .rgb = {2, 2, 2}, .position = {0, h, 0}, .direction = {0, -1, 0},
+                           .cos_cone = cos(cone * M_PI / 180), .cos_falloff_start = cos((cone - delta) * M_PI / 180)};
+        add_source(s, &l);
+        sgt_finish(s);
+        double d2 = h * h + r * r, c = cos(theta);
+        double want = 0.5 / M_PI * 2.0 * smooth_step(c, l.cos_cone, l.cos_falloff_start) * c / d2;
+        char what[64];
+        snprintf(what, sizeof what, "spot at %g degrees", angles[k]);
+        /* at 35 degrees the spot sends nothing: the renderer refuses no scene for it, the image is black */
+        Estimate e = render_mean(s, SG_SAMPLING_BSDF, 8);
+        if (want == 0.0)
+            cr_expect(e.mean == 0.0, "%s: %g, want 0", what, e.mean);
+        else
+            expect_near(e, want, 2e-3, what);
+        sgt_scene_free(s);
+    }
+}
+
+Test(render_lights, sun_cosine_law_on_tilted_plane)
+{
+    const double tilt[] = {0, 60, 80};
+    for (int k = 0; k < 3; k++) {
+        double a = tilt[k] * M_PI / 180;
+        SgScene *s = floor_scene(0.5f, (const double[3]){0, 0, 0});
+        SgLightSource sun = {.kind = SG_LIGHT_DISTANT, .rgb = {4, 4, 4}, .direction = {sin(a), -cos(a), 0}};
+        add_source(s, &sun);
+        sgt_finish(s);
+        char what[64];
+        snprintf(what, sizeof what, "sun %g degrees from the normal", tilt[k]);
+        expect_near(render_mean(s, SG_SAMPLING_BSDF, 8), 0.5 / M_PI * 4.0 * cos(a), 1e-4, what);
+        sgt_scene_free(s);
+    }
+}
+
+Test(render_lights, sun_disk_cosine_law_with_mis)
+{
+    /* a sun of angular radius 5 degrees: reached by light samples and by
+     * bounces alike, MIS-weighted; the irradiance keeps the cosine law */
+    double a = 50 * M_PI / 180;
+    SgScene *s = floor_scene(0.5f, (const double[3]){0, 0, 0});
+    SgLightSource sun = {.kind = SG_LIGHT_DISTANT, .rgb = {4, 4, 4}, .direction = {sin(a), -cos(a), 0},
+                         .angular_radius = 5 * M_PI / 180};
+    add_source(s, &sun);
+    sgt_finish(s);
+    expect_near(render_mean(s, SG_SAMPLING_BSDF, 256), 0.5 / M_PI * 4.0 * cos(a), 2e-3, "sun disk");
+    sgt_scene_free(s);
+}
+
+/* ---- the shapes --------------------------------------------------------------------- */
+
+Test(render_lights, quadric_meshes_have_true_area_and_face_out)
+{
+    SgError err = {0};
+    SgQuadricMesh m;
+    struct {
+        const char *what;
+        int shape; /* 0 disk, 1 sphere, 2 cylinder */
+        double a, b, c, phi;
+    } cases[] = {
+        {"disk", 0, 1.5, 0.0, 0.2, 2 * M_PI},   {"annulus", 0, 2.0, 0.5, 0.0, 2 * M_PI},
+        {"half disk", 0, 1.0, 0.0, 0.0, M_PI}, {"sphere", 1, 0.7, -0.7, 0.7, 2 * M_PI},
+        {"cap", 1, 1.0, 0.3, 1.0, 2 * M_PI},    {"sphere wedge", 1, 2.0, -1.0, 2.0, 1.5},
+        {"cylinder", 2, 0.5, -1.0, 2.0, 2 * M_PI}, {"cylinder wedge", 2, 1.0, 0.0, 1.0, 2.0},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        double want;
+        if (cases[k].shape == 0) {
+            cr_assert(sg_quadric_disk(cases[k].a, cases[k].b, cases[k].c, cases[k].phi, &m, &err));
+            want = sg_quadric_disk_area(cases[k].a, cases[k].b, cases[k].phi);
+        } else if (cases[k].shape == 1) {
+            cr_assert(sg_quadric_sphere(cases[k].a, cases[k].b, cases[k].c, cases[k].phi, &m, &err));
+            want = sg_quadric_sphere_area(cases[k].a, cases[k].b, cases[k].c, cases[k].phi);
+        } else {
+            cr_assert(sg_quadric_cylinder(cases[k].a, cases[k].b, cases[k].c, cases[k].phi, &m, &err));
+            want = sg_quadric_cylinder_area(cases[k].a, cases[k].b, cases[k].c, cases[k].phi);
+        }
+        cr_expect(fabs(sg_quadric_mesh_area(&m) - want) <= 1e-9 * want, "%s: area %.12g, want %.12g", cases[k].what,
+                  sg_quadric_mesh_area(&m), want);
+        cr_expect(m.triangle_count >= 64, "%s: only %u triangles", cases[k].what, m.triangle_count);
+        uint32_t inward = 0;
+        for (uint32_t t = 0; t < m.triangle_count; t++) {
+            const uint32_t *id = m.indices + 3 * (size_t)t;
+            const double *p0 = m.positions + 3 * (size_t)id[0], *p1 = m.positions + 3 * (size_t)id[1],
+                         *p2 = m.positions + 3 * (size_t)id[2];
+            double e1[3], e2[3], n[3], out[3];
+            d3_sub(p1, p0, e1);
+            d3_sub(p2, p0, e2);
+            d3_cross(e1, e2, n);
+            for (int a = 0; a < 3; a++)
+                out[a] = (p0[a] + p1[a] + p2[a]) / 3;
+            if (cases[k].shape == 0)
+                out[0] = out[1] = 0, out[2] = 1;
+            else if (cases[k].shape == 2)
+                out[2] = 0;
+            inward += d3_dot(n, out) <= 0;
+        }
+        cr_expect(inward == 0, "%s: %u triangles face in", cases[k].what, inward);
+        sg_quadric_mesh_free(&m);
+    }
+}
+
+/* ---- the scene files --------------------------------------------------------------- */
+
+static SgScene *load_text(const char *name, const char *text, SgError *err)
+{
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/sg_test_lights_%d_%s", (int)getpid(), name);
+    FILE *f = fopen(path, "w");
+    cr_assert(f);
+    fputs(text, f);
+    fclose(f);
+    SgScene *s = sg_scene_load(path, err);
+    remove(path);
+    return s;
+}
+
+#define PBRT_ROOM                                                                                                   \
+    "Scale -1 1 1\nLookAt 0 1 -3  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\nFilm \"rgb\" \"integer xresolution\" 8 " \
+    "\"integer yresolution\" 8\nWorldBegin\n"                                                                       \
+    "Shape \"trianglemesh\" \"point3 P\" [-1 0 -1 1 0 -1 1 0 1 -1 0 1] \"integer indices\" [0 1 2 0 2 3]\n"
+
+Test(render_lights, pbrt_light_sources_read_as_pbrt_v4_does)
+{
+    SgError err = {0};
+    SgScene *s = load_text("sources.pbrt",
+                           PBRT_ROOM "LightSource \"point\" \"rgb I\" [1 2 3] \"float power\" 100 \"point3 from\" [0 2 0]\n"
+                                     "AttributeBegin\nTranslate 1 0 0\n"
+                                     "LightSource \"spot\" \"rgb I\" [1 1 1] \"float scale\" 2 \"float coneangle\" 40 "
+                                     "\"float conedeltaangle\" 10 \"point3 from\" [0 3 0] \"point3 to\" [0 0 0]\n"
+                                     "AttributeEnd\n"
+                                     "LightSource \"distant\" \"rgb L\" [1 1 1] \"float illuminance\" 5 "
+                                     "\"point3 from\" [0 1 1] \"point3 to\" [0 0 0]\n"
+                                     "Rotate -90 1 0 0\n"
+                                     "LightSource \"infinite\" \"rgb L\" [0.5 0.5 0.5] \"float scale\" 2 "
+                                     "\"point3 portal\" [-1 -1 2  1 -1 2  1 1 2  -1 1 2]\n",
+                           &err);
+    cr_assert(s, "%s", err.message);
+    cr_assert_eq(s->light_source_count, 4);
+    const SgLightSource *p = &s->light_sources[0], *spot = &s->light_sources[1], *sun = &s->light_sources[2],
+                        *sky = &s->light_sources[3];
+    cr_expect(p->kind == SG_LIGHT_POINT && fabs(p->position[1] - 2) < 1e-12);
+    cr_expect(fabsf(p->rgb[2] - (float)(3 * 100 / (4 * M_PI))) < 1e-4f, "power over 4 pi: %g", p->rgb[2]);
+    cr_expect(spot->kind == SG_LIGHT_SPOT && fabs(spot->position[0] - 1) < 1e-12 && fabs(spot->direction[1] + 1) < 1e-12);
+    cr_expect(fabs(spot->cos_cone - cos(40 * M_PI / 180)) < 1e-12 && fabs(spot->cos_falloff_start - cos(30 * M_PI / 180)) < 1e-12);
+    cr_expect(spot->rgb[0] == 2.0f);
+    cr_expect(sun->kind == SG_LIGHT_DISTANT && sun->rgb[0] == 5.0f);
+    cr_expect(fabs(sun->direction[1] + sqrt(0.5)) < 1e-9 && fabs(sun->direction[2] + sqrt(0.5)) < 1e-9);
+    cr_expect(sky->kind == SG_LIGHT_INFINITE && sky->rgb[0] == 1.0f && sky->has_portal);
+    /* Rotate -90 about x takes light space's z (up) to world +y */
+    cr_expect(fabs(sky->light_to_world[1][2] - 1) < 1e-9, "light z to world y: %g", sky->light_to_world[1][2]);
+    cr_expect(fabs(sky->portal[0][1] - 2) < 1e-9 && fabs(sky->portal[0][2] - 1) < 1e-9, "portal through the transform");
+    sg_scene_free(s);
+}
+
+Test(render_lights, pbrt_disk_lamp_has_its_true_area)
+{
+    SgError err = {0};
+    SgScene *s = load_text("disk.pbrt",
+                           PBRT_ROOM "AttributeBegin\nTranslate 0 2 0\nRotate 90 1 0 0\n"
+                                     "AreaLightSource \"diffuse\" \"rgb L\" [4 4 4]\n"
+                                     "Shape \"disk\" \"float radius\" 0.25\nAttributeEnd\n"
+                                     "Shape \"sphere\" \"float radius\" 0.3\nShape \"cylinder\" \"float radius\" 0.1\n",
+                           &err);
+    cr_assert(s, "%s", err.message);
+    cr_assert_eq(s->light_count, 1);
+    cr_expect(fabs(s->lights[0].area - M_PI * 0.0625) < 1e-9, "disk area %.12g", s->lights[0].area);
+    /* Rotate 90 about x takes the disk's +z to -y: it shines down */
+    cr_expect(s->lights[0].normal[1] < -0.999, "disk normal %g", s->lights[0].normal[1]);
+    cr_expect_eq(s->warning_count, 0, "no shape left out: %s", s->warning_count ? s->warnings[0] : "");
+    cr_expect_eq(s->degenerate_dropped, 0, "the meshes hold no zero-area triangle (a sphere's poles)");
+    sg_scene_free(s);
+}
+
+Test(render_lights, json_light_sources)
+{
+    SgError err = {0};
+    SgScene *s = load_text("sources.json",
+                           "{\"lights\": [{\"type\": \"quad\", \"corners\": [[0,2,0],[1,2,0],[1,2,1],[0,2,1]], "
+                           "\"radiance\": [1,1,1]},"
+                           "{\"type\": \"sky\", \"radiance\": [0.2,0.3,0.4], \"up\": [0,0,2]},"
+                           "{\"type\": \"sun\", \"irradiance\": [3,3,3], \"direction\": [0,-2,0], \"angular_radius\": 0.5},"
+                           "{\"type\": \"point\", \"intensity\": [1,1,1], \"scale\": 4, \"position\": [0,1,0]},"
+                           "{\"type\": \"spot\", \"intensity\": [1,1,1], \"position\": [0,1,0], \"direction\": [0,-1,0], "
+                           "\"cone_angle\": 20}]}",
+                           &err);
+    cr_assert(s, "%s", err.message);
+    cr_assert_eq(s->light_source_count, 4);
+    cr_expect(s->light_sources[0].kind == SG_LIGHT_INFINITE && s->light_sources[0].rgb[2] == 0.4f);
+    cr_expect(fabs(s->light_sources[0].light_to_world[2][2] - 1) < 1e-12, "up is the map's z");
+    cr_expect(s->light_sources[1].kind == SG_LIGHT_DISTANT && fabs(s->light_sources[1].direction[1] + 1) < 1e-12);
+    cr_expect(fabs(s->light_sources[1].angular_radius - 0.5 * M_PI / 180) < 1e-12);
+    cr_expect(s->light_sources[2].rgb[0] == 4.0f);
+    cr_expect(fabs(s->light_sources[3].cos_falloff_start - cos(15 * M_PI / 180)) < 1e-12, "default delta 5");
+    sg_scene_free(s);
+}
+
+Test(render_lights, bad_lights_are_refused_with_the_cause)
+{
+    struct {
+        const char *name, *text, *cause;
+    } cases[] = {
+        {"negative.pbrt", PBRT_ROOM "LightSource \"point\" \"rgb I\" [-1 1 1]\n", "negative"},
+        {"scale.pbrt", PBRT_ROOM "LightSource \"distant\" \"float scale\" -2\n", "\"scale\" must be finite"},
+        {"both.pbrt", PBRT_ROOM "LightSource \"infinite\" \"rgb L\" [1 1 1] \"string filename\" \"sky.exr\"\n",
+         "not both"},
+        {"portal.pbrt", PBRT_ROOM "LightSource \"infinite\" \"point3 portal\" [0 0 0 1 1 1]\n", "must be 4 points"},
+        {"cone.pbrt", PBRT_ROOM "LightSource \"spot\" \"float coneangle\" 10 \"float conedeltaangle\" 20\n",
+         "conedeltaangle"},
+        {"radius.pbrt", PBRT_ROOM "Shape \"sphere\" \"float radius\" -1\n", "\"radius\" must be positive"},
+        {"sun.json", "{\"lights\": [{\"type\": \"sun\", \"irradiance\": [1,1,1]}]}", "direction is missing"},
+        {"sky.json", "{\"lights\": [{\"type\": \"sky\", \"radiance\": [1,-1,1]}]}", "non-negative"},
+        {"kind.json", "{\"lights\": [{\"type\": \"lamp\"}]}", "\"sky\", \"sun\""},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        SgError err = {0};
+        SgScene *s = load_text(cases[k].name, cases[k].text, &err);
+        cr_expect(!s, "%s loaded", cases[k].name);
+        cr_expect(strstr(err.message, cases[k].cause) && strstr(err.message, cases[k].name), "%s: %s",
+                  cases[k].name, err.message);
+        sg_scene_free(s);
+    }
+}
+
+Test(render_lights, renderer_refuses_a_missing_sky_image_and_no_light)
+{
+    SgScene *s = floor_scene(0.5f, (const double[3]){0, 0, 0});
+    SgLightSource sky = constant_sky(1.0f);
+    sky.image_path = "/nonexistent/sky.exr";
+    add_source(s, &sky);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.sampling = SG_SAMPLING_BSDF;
+    SgError err = {0};
+    SgRenderer *r = sg_renderer_create(s, &o, &err);
+    cr_expect(!r && strstr(err.message, "/nonexistent/sky.exr"), "%s", err.message);
+    sg_renderer_free(r);
+    sgt_scene_free(s);
+
+    s = floor_scene(0.5f, (const double[3]){0, 0, 0});
+    sgt_finish(s);
+    sg_render_options_default(&o, s);
+    o.sampling = SG_SAMPLING_BSDF;
+    err = (SgError){0};
+    r = sg_renderer_create(s, &o, &err);
+    cr_expect(!r && strstr(err.message, "no light"), "%s", err.message);
+    sg_renderer_free(r);
+    sgt_scene_free(s);
+}
