@@ -24,6 +24,8 @@ typedef struct SgMediumLight {
     float radiance[3];
     int seed[3];        /* the air voxel in front of the emitter: flood-fill seed
                            and skeleton constraint; (-1,-1,-1) if sealed */
+    bool outside;       /* the sky and sun: every air voxel of the grid's
+                           outside margin is this light (SgGuideLight) */
 } SgMediumLight;
 
 typedef struct SgMedium {
@@ -33,6 +35,8 @@ typedef struct SgMedium {
     bool has_camera;
     double camera_position[3];
     int resolution;            /* voxels along the longest side */
+    int outside_margin;        /* voxels of air added round the scene's bounds
+                                  for light from outside; 0: none */
     uint64_t geometry_hash;    /* SgScene.geometry_hash of the input */
     char scene_path[4096];
 } SgMedium;

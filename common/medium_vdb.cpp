@@ -119,7 +119,11 @@ extern "C" bool sg_medium_write(const SgMedium *m, const char *path, SgError *er
             meta.insertMeta(light_key(k, "power"), openvdb::DoubleMetadata(l.power));
             meta.insertMeta(light_key(k, "seed"),
                             openvdb::Vec3IMetadata(openvdb::Vec3i(l.seed[0], l.seed[1], l.seed[2])));
+            if (l.outside) // only where there is one: files of closed scenes stay as they were
+                meta.insertMeta(light_key(k, "outside"), openvdb::BoolMetadata(true));
         }
+        if (m->outside_margin > 0)
+            meta.insertMeta("outside_margin", openvdb::Int32Metadata(m->outside_margin));
         if (m->has_camera)
             meta.insertMeta("camera_position",
                             openvdb::Vec3DMetadata(openvdb::Vec3d(m->camera_position)));
@@ -257,6 +261,9 @@ extern "C" bool sg_medium_read(SgMedium *m, const char *path, SgError *err)
             std::string text;
             if (get_meta(*meta, "resolution", resolution))
                 m->resolution = resolution;
+            int32_t margin = 0;
+            if (get_meta(*meta, "outside_margin", margin) && margin > 0 && margin < 1 << 20)
+                m->outside_margin = margin;
             if (get_meta(*meta, "geometry_hash", text))
                 m->geometry_hash = std::strtoull(text.c_str(), nullptr, 16);
             if (get_meta(*meta, "scene", text))
@@ -299,6 +306,8 @@ extern "C" bool sg_medium_read(SgMedium *m, const char *path, SgError *err)
                         l.seed[a] = seed[a] - (seed[0] >= 0 ? shift[a] : 0);
                     }
                     l.power = std::isfinite(power) ? power : 0;
+                    bool outside = false;
+                    l.outside = get_meta(*meta, light_key(k, "outside").c_str(), outside) && outside;
                 }
             }
         }

@@ -203,6 +203,30 @@ typedef struct SgScene {
     char **warnings;
 } SgScene;
 
+/* What the precompute takes as its lights and the guide follows, in this
+ * order: the area lights (SgLight, same index), the point and spot lights,
+ * then, where a sky or a sun shines, the outside (one for both: the air
+ * beyond the scene's bounds). */
+typedef enum SgGuideLightKind {
+    SG_GUIDE_LIGHT_AREA,
+    SG_GUIDE_LIGHT_POINT,   /* a point or spot light */
+    SG_GUIDE_LIGHT_OUTSIDE, /* the sky and the sun, reached through the openings */
+} SgGuideLightKind;
+
+typedef struct SgGuideLight {
+    SgGuideLightKind kind;
+    uint32_t index;     /* area: the SgLight; point: the SgLightSource; outside: unused */
+    double position[3]; /* area: centroid; point: its position; outside: unused */
+    double normal[3];   /* area: mean normal; spot: its axis; else 0 */
+    double power;       /* for choosing which light to follow (an image sky: its colour's, the map unread) */
+} SgGuideLight;
+
+uint32_t sg_scene_guide_light_count(const SgScene *scene);
+/* Guide light i < sg_scene_guide_light_count(scene). */
+SgGuideLight sg_scene_guide_light(const SgScene *scene, uint32_t i);
+/* A sky or a sun: the outside of the scene sends light in. */
+bool sg_scene_lit_from_outside(const SgScene *scene);
+
 /* Loads a scene description: a JSON file, or a pbrt-v4 file when the name
  * ends in ".pbrt". On failure returns NULL with "file: cause" (pbrt:
  * "file:line: cause"). */

@@ -173,6 +173,19 @@ static void point_chunk(void *ctx, uint64_t chunk, int thread)
     }
 }
 
+/* Whether a voxel lies in the air added round a scene lit from outside:
+ * there the sky is, every node there is the outside light. */
+static bool in_margin(const SgGrid *g, int margin, const int v[3])
+{
+    if (margin <= 0)
+        return false;
+    int dims[3] = {g->nx, g->ny, g->nz};
+    for (int a = 0; a < 3; a++)
+        if (v[a] < margin || v[a] >= dims[a] - margin)
+            return true;
+    return false;
+}
+
 /* ---- vectors.ply: node -> importance point, one edge per node and light - */
 
 static bool write_vectors(const char *path, const SgSkeleton *s, const uint32_t *component,
@@ -307,7 +320,8 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
          * that, the node nearest to the light's seed voxel. */
         uint32_t count = 0;
         for (uint32_t n = 0; n < N; n++)
-            if (skeleton->nodes[n].kind == SG_NODE_LIGHT && skeleton->nodes[n].light == (int)k)
+            if ((skeleton->nodes[n].kind == SG_NODE_LIGHT && skeleton->nodes[n].light == (int)k) ||
+                (ml->outside && in_margin(grid, medium->outside_margin, skeleton->nodes[n].voxel)))
                 sources[count++] = n;
         if (count == 0 && sg_grid_inside(grid, ml->seed[0], ml->seed[1], ml->seed[2])) {
             uint32_t n = sg_label_at(&labels, ml->seed[0], ml->seed[1], ml->seed[2]);

@@ -216,6 +216,34 @@ static bool finish_picking(LightSet *ls, const double *power, double area_power,
     return true;
 }
 
+/* Which light the guide follows (SgGuideLight's order): in proportion to
+ * follow_weight where given, else to power (the area lights' area_power,
+ * area times luminance; the others' power over pi in the same unit). */
+static bool follow_init(LightSet *ls, const SgScene *s, const double *follow_weight, const double *area_power,
+                        const char *path, SgError *err)
+{
+    ls->follow_count = sg_scene_guide_light_count(s);
+    if (!ls->follow_count)
+        return true;
+    ls->follow_cdf = calloc(ls->follow_count, sizeof *ls->follow_cdf);
+    double *w = calloc(ls->follow_count, sizeof *w);
+    if (!ls->follow_cdf || !w) {
+        free(w);
+        return sg_fail(err, "%s: out of memory for the light table", path);
+    }
+    for (uint32_t l = 0; l < ls->follow_count; l++)
+        w[l] = follow_weight ? follow_weight[l] : l < ls->count ? area_power[l] : sg_scene_guide_light(s, l).power / M_PI;
+    double wsum = 0.0, acc = 0.0;
+    for (uint32_t l = 0; l < ls->follow_count; l++)
+        wsum += w[l] > 0 ? w[l] : 0.0;
+    for (uint32_t l = 0; l < ls->follow_count; l++) {
+        acc += wsum > 0 && w[l] > 0 ? w[l] / wsum : 0.0;
+        ls->follow_cdf[l] = acc;
+    }
+    free(w);
+    return true;
+}
+
 bool light_set_init(LightSet *ls, const SgScene *s, const Vec3 *vertices, const Material *materials,
                     const double *follow_weight, const double centre[3], const char *path, SgError *err)
 {
@@ -229,15 +257,14 @@ bool light_set_init(LightSet *ls, const SgScene *s, const Vec3 *vertices, const 
     if (!ls->cdf)
         return sg_fail(err, "%s: out of memory for the light table", path);
     if (!ls->count)
-        return finish_picking(ls, NULL, 0.0, s);
+        return finish_picking(ls, NULL, 0.0, s) && follow_init(ls, s, follow_weight, NULL, path, err);
     ls->lights = calloc(ls->count, sizeof *ls->lights);
-    ls->follow_cdf = calloc(ls->count, sizeof *ls->follow_cdf);
     uint32_t total_tris = 0;
     for (uint32_t l = 0; l < s->light_count; l++)
         total_tris += s->lights[l].triangle_count;
     ls->tris = calloc(total_tris ? total_tris : 1, sizeof *ls->tris);
     ls->tri_cdf = calloc(total_tris ? total_tris : 1, sizeof *ls->tri_cdf);
-    if (!ls->lights || !ls->follow_cdf || !ls->tris || !ls->tri_cdf)
+    if (!ls->lights || !ls->tris || !ls->tri_cdf)
         return sg_fail(err, "%s: out of memory for the light table", path);
     double total_power = 0.0;
     double *power = calloc(ls->count, sizeof *power);
@@ -278,19 +305,9 @@ bool light_set_init(LightSet *ls, const SgScene *s, const Vec3 *vertices, const 
         total_power += power[l];
     }
     finish_picking(ls, power, total_power, s);
-    double acc;
-    /* guide: which light to follow */
-    const double *w = follow_weight ? follow_weight : power;
-    double wsum = 0.0;
-    for (uint32_t l = 0; l < ls->count; l++)
-        wsum += w[l] > 0 ? w[l] : 0.0;
-    acc = 0.0;
-    for (uint32_t l = 0; l < ls->count; l++) {
-        acc += wsum > 0 && w[l] > 0 ? w[l] / wsum : 0.0;
-        ls->follow_cdf[l] = acc;
-    }
+    bool ok = follow_init(ls, s, follow_weight, power, path, err);
     free(power);
-    return true;
+    return ok;
 }
 
 void light_set_free(LightSet *ls)

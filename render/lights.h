@@ -46,12 +46,13 @@ typedef struct LightSet {
     double total_power; /* what cdf was made from: area times luminance (power / pi) */
     uint32_t *tris;     /* triangle ids grouped by light */
     double *tri_cdf;    /* per light, cumulative area fractions */
-    double *follow_cdf; /* guide: cumulative follow probability per light */
+    uint32_t follow_count; /* the guide's lights (SgGuideLight): area, point and spot, the outside */
+    double *follow_cdf; /* guide: cumulative follow probability per guide light */
 } LightSet;
 
 /* From the scene's lights, their triangles' local vertices and the
- * renderer's materials; `follow_weight` (per light, NULL: the lights'
- * power) is the guide's; `centre` the local origin (world = local +
+ * renderer's materials; `follow_weight` (per guide light, NULL: the
+ * lights' power) is the guide's; `centre` the local origin (world = local +
  * centre). Fails naming `path` (an environment image naming its own). */
 bool light_set_init(LightSet *ls, const SgScene *s, const Vec3 *vertices, const Material *materials,
                     const double *follow_weight, const double centre[3], const char *path, SgError *err);

@@ -15,6 +15,7 @@
 #include "render/renderer.h"
 #include "scene.h"
 #include "support_files.h"
+#include "voxelize/voxelize.h"
 
 static bool have_programs(void)
 {
@@ -226,4 +227,101 @@ Test(render_pipeline, the_renderers_reading_of_the_cache_matches_the_guide_funct
     free(unpacked);
     sg_cache_close(cache);
     sg_scene_free(scene);
+}
+
+/* ---- light from outside ------------------------------------------------------- */
+
+/* A closed room 4 x 2 x 4 whose walls are black, a floor of albedo 0.6, and
+ * (window) a 1 x 0.6 opening in the ceiling above the floor's centre; a
+ * constant sky of radiance 2; the camera looks at the floor's centre. */
+static const char *sky_room(const char *dir, bool window)
+{
+    static char scene[4200];
+    SgTestText obj = {0};
+    sg_test_put(&obj, "mtllib room.mtl\n"
+                      "v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nv -2 2 -2\nv 2 2 -2\nv 2 2 2\nv -2 2 2\n"
+                      "v -0.5 2 -0.3\nv 0.5 2 -0.3\nv 0.5 2 0.3\nv -0.5 2 0.3\n"
+                      "usemtl floor\nf 1 4 3\nf 1 3 2\nusemtl wall\n"
+                      "f 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n"
+                      "f 5 6 10\nf 5 10 9\nf 8 12 11\nf 8 11 7\nf 5 9 12\nf 5 12 8\nf 6 7 11\nf 6 11 10\n");
+    if (!window)
+        sg_test_put(&obj, "f 9 10 11\nf 9 11 12\n");
+    sg_test_write(dir, "room.obj", obj.data);
+    free(obj.data);
+    sg_test_write(dir, "room.mtl", "newmtl floor\nKd 0.6 0.6 0.6\nnewmtl wall\nKd 0 0 0\n");
+    char *path = sg_test_write(dir, "room.json",
+                               "{\"mesh\": \"room.obj\", \"camera\": {\"position\": [0.05, 1.0, 0], "
+                               "\"look_at\": [0, 0, 0], \"up\": [0, 0, 1], \"fov\": 0.2},"
+                               "\"image\": {\"width\": 80, \"height\": 60}, \"voxel\": {\"resolution\": 48},"
+                               "\"lights\": [{\"type\": \"sky\", \"radiance\": [2, 2, 2]}]}");
+    snprintf(scene, sizeof scene, "%s", path);
+    return scene;
+}
+
+/* The sky reaches the room through its window: the outside is the guide's
+ * light, the importance point at the floor leads up through the opening,
+ * and guided renders the closed form rho L F (F: the opening's form factor
+ * from the floor's centre) as bsdf does. */
+Test(render_pipeline, guided_follows_the_sky_through_a_window, .timeout = 240)
+{
+    if (!have_programs())
+        cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
+    const char *dir = sg_test_tmpdir();
+    const char *scene = sky_room(dir, true);
+    const char *cache_path = precompute(scene, dir);
+    SgError e = {0};
+    SgScene *loaded = sg_scene_load(scene, &e);
+    cr_assert(loaded, "%s", e.message);
+    cr_assert_eq(sg_scene_guide_light_count(loaded), 1, "the outside is the one light");
+
+    SgImportanceCache *cache = sg_cache_open(cache_path, &e);
+    cr_assert(cache, "%s", e.message);
+    const double floor_point[3] = {0.3, 0.1, -0.2};
+    double q[3];
+    cr_assert(sg_cache_importance_point(cache, floor_point, 0, q), "the floor reaches the outside");
+    /* the lobe's axis, from the floor toward the importance point (the
+     * barycenter of the visible run, the paper's 3.3), crosses the ceiling
+     * inside the opening */
+    cr_assert(q[1] > floor_point[1] + 0.5, "the importance point (%g, %g, %g) is above the floor", q[0], q[1], q[2]);
+    double t = (2.0 - floor_point[1]) / (q[1] - floor_point[1]);
+    double cx = floor_point[0] + t * (q[0] - floor_point[0]), cz = floor_point[2] + t * (q[2] - floor_point[2]);
+    cr_expect(fabs(cx) < 0.5 && fabs(cz) < 0.3, "the axis toward (%g, %g, %g) meets the ceiling at (%g, %g), "
+              "not in the opening", q[0], q[1], q[2], cx, cz);
+    sg_cache_close(cache);
+
+    /* the opening's form factor: four corner rectangles 0.5 x 0.3 at height 2 */
+    double x = 0.5 / 2, y = 0.3 / 2, sx = sqrt(1 + x * x), sy = sqrt(1 + y * y);
+    double F = 4 * (x / sx * atan(y / sx) + y / sy * atan(x / sy)) / (2 * M_PI);
+    double want = 0.6 * 2.0 * F, mb, sb, mg, sg;
+    image_means(loaded, scene, cache_path, SG_SAMPLING_BSDF, 4, 16, &mb, &sb);
+    image_means(loaded, scene, cache_path, SG_SAMPLING_GUIDED, 4, 16, &mg, &sg);
+    sg_scene_free(loaded);
+    cr_log_info("window: closed form %.6f, bsdf %.6f +- %.6f, guided %.6f +- %.6f", want, mb, sb, mg, sg);
+    cr_expect(fabs(mb - want) < 3 * sb + 0.003 * want, "bsdf %.6f, closed form %.6f", mb, want);
+    cr_expect(fabs(mg - want) < 3 * sg + 0.003 * want, "guided %.6f, closed form %.6f", mg, want);
+}
+
+/* Without the window the sky reaches only the air round the room: the
+ * room is not in the medium and the camera's air is said to see no light. */
+Test(render_pipeline, a_room_with_no_opening_is_not_lit_by_the_sky)
+{
+    if (!have_programs())
+        cr_skip_test("needs bin/voxelize");
+    const char *dir = sg_test_tmpdir();
+    const char *scene = sky_room(dir, false);
+    SgError e = {0};
+    SgScene *loaded = sg_scene_load(scene, &e);
+    cr_assert(loaded, "%s", e.message);
+    SgMedium medium;
+    SgVoxelizeStats stats;
+    SgVoxelizeOptions options = {.resolution = 48, .threads = 1};
+    cr_assert(sg_voxelize(loaded, &options, &medium, &stats, &e), "%s", e.message);
+    cr_expect_eq(stats.medium_components, 1, "the outside alone");
+    cr_expect_eq(stats.air_components, 2, "the outside and the room");
+    cr_expect(stats.camera_in_grid && stats.camera_voxel_state == 0, "the camera's air is unlit (state %d)",
+              stats.camera_voxel_state);
+    cr_expect_eq(medium.outside_margin, SG_VOXELIZE_OUTSIDE_MARGIN);
+    cr_expect(medium.light_count == 1 && medium.lights[0].outside);
+    sg_medium_release(&medium);
+    sg_scene_free(loaded);
 }

@@ -95,7 +95,7 @@ int main(int argc, char **argv)
             fprintf(stderr,
                     "voxelize: %s: %u of %u lights are sealed (no air voxel in front of them "
                     "at this resolution): they are left out\n",
-                    scene_path, stats.sealed_lights, scene->light_count);
+                    scene_path, stats.sealed_lights, sg_scene_guide_light_count(scene));
         if (scene->has_camera && !stats.camera_in_grid)
             fprintf(stderr, "voxelize: %s: note: the camera is outside the scene's bounding box\n",
                     scene_path);
@@ -117,7 +117,7 @@ int main(int argc, char **argv)
                 "voxelize: %dx%dx%d voxels of %.4g; medium %" PRIu64 " voxels in %u of %u air "
                 "components, %u light(s); load %.2f s, voxelize %.2f s, fill %.2f s, write %.2f s\n",
                 g->nx, g->ny, g->nz, g->voxel_size, stats.medium_voxels, stats.medium_components,
-                stats.air_components, scene->light_count - stats.sealed_lights, t_load,
+                stats.air_components, sg_scene_guide_light_count(scene) - stats.sealed_lights, t_load,
                 stats.seconds_voxelize, stats.seconds_fill, t_write);
     }
     sg_medium_release(&medium);

@@ -78,13 +78,18 @@ bool sg_voxelize_grid_for(const SgScene *scene, int resolution, SgGrid *grid, Sg
         return sg_fail(err, "%s: the scene's bounding box is empty or not finite", scene->path);
     double h = longest / resolution;
     int dims[3];
+    /* light from outside: a margin of air round the bounds, where the sky
+     * is, reached through the scene's openings */
+    int margin = sg_scene_lit_from_outside(scene) ? SG_VOXELIZE_OUTSIDE_MARGIN : 0;
+    double origin[3];
     for (int a = 0; a < 3; a++) {
         /* Relative slack so that 10.0 / 0.1 counts as 100 voxels, not 101. */
         double n = ceil(extent[a] / h - 1e-9);
-        dims[a] = n < 1 ? 1 : (int)n;
+        dims[a] = (n < 1 ? 1 : (int)n) + 2 * margin;
+        origin[a] = scene->bounds_min[a] - margin * h;
     }
     SgError why = {0};
-    if (!sg_grid_init(grid, dims[0], dims[1], dims[2], scene->bounds_min, h, &why))
+    if (!sg_grid_init(grid, dims[0], dims[1], dims[2], origin, h, &why))
         return sg_fail(err, "%s: resolution %d: %s", scene->path, resolution, why.message);
     return true;
 }
@@ -382,7 +387,8 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
         options = &defaults;
     memset(medium, 0, sizeof *medium);
     memset(stats, 0, sizeof *stats);
-    if (scene->light_count == 0)
+    uint32_t light_count = sg_scene_guide_light_count(scene);
+    if (light_count == 0)
         return sg_fail(err, "%s: no light: give a material an emission (MTL Ke) or add \"lights\"",
                        scene->path);
     int resolution = options->resolution > 0          ? options->resolution
@@ -404,20 +410,30 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
     stats->solid_voxels = sg_grid_count_nonzero(g);
     stats->air_voxels = total - stats->solid_voxels;
 
-    medium->lights = calloc(scene->light_count, sizeof *medium->lights);
+    medium->lights = calloc(light_count, sizeof *medium->lights);
     if (!medium->lights) {
         sg_medium_release(medium);
         return sg_fail(err, "%s: out of memory", scene->path);
     }
-    medium->light_count = scene->light_count;
-    for (uint32_t k = 0; k < scene->light_count; k++) {
-        const SgLight *l = &scene->lights[k];
+    medium->light_count = light_count;
+    int margin = sg_scene_lit_from_outside(scene) ? SG_VOXELIZE_OUTSIDE_MARGIN : 0;
+    medium->outside_margin = margin;
+    for (uint32_t k = 0; k < light_count; k++) {
+        SgGuideLight l = sg_scene_guide_light(scene, k);
         SgMediumLight *ml = &medium->lights[k];
-        memcpy(ml->position, l->position, sizeof ml->position);
-        memcpy(ml->normal, l->normal, sizeof ml->normal);
-        memcpy(ml->radiance, l->radiance, sizeof ml->radiance);
-        ml->power = l->power;
-        if (!find_seed(g, l->position, l->normal, ml->seed)) {
+        memcpy(ml->position, l.position, sizeof ml->position);
+        memcpy(ml->normal, l.normal, sizeof ml->normal);
+        if (l.kind == SG_GUIDE_LIGHT_AREA)
+            memcpy(ml->radiance, scene->lights[l.index].radiance, sizeof ml->radiance);
+        else if (l.kind == SG_GUIDE_LIGHT_POINT)
+            memcpy(ml->radiance, scene->light_sources[l.index].rgb, sizeof ml->radiance);
+        ml->power = l.power;
+        if (l.kind == SG_GUIDE_LIGHT_OUTSIDE) {
+            /* a corner of the margin: air, joined to all the outside */
+            ml->outside = true;
+            ml->seed[0] = ml->seed[1] = ml->seed[2] = 0;
+            sg_grid_voxel_center(g, 0, 0, 0, ml->position);
+        } else if (!find_seed(g, l.position, l.normal, ml->seed)) {
             ml->seed[0] = ml->seed[1] = ml->seed[2] = -1;
         }
     }
@@ -436,13 +452,17 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
         sg_medium_release(medium);
         return sg_fail(err, "%s: out of memory", scene->path);
     }
-    for (uint32_t k = 0; k < scene->light_count; k++) {
+    for (uint32_t k = 0; k < light_count; k++) {
         const SgMediumLight *ml = &medium->lights[k];
         bool sealed = ml->seed[0] < 0;
         if (!sealed) {
             uint32_t run = run_of(g, &runs, ml->seed[0], ml->seed[1], ml->seed[2]);
             if (run != UINT32_MAX)
                 keep[sg_set_find(runs.parent, run)] = 1;
+        }
+        if (k >= scene->light_count) { /* a point light or the outside: its seed is all */
+            stats->sealed_lights += sealed;
+            continue;
         }
         const SgLight *l = &scene->lights[k];
         for (uint32_t t = 0; t < l->triangle_count; t++) {
@@ -505,7 +525,7 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
     stats->seconds_fill = sg_seconds() - t0;
     sg_progress_end(&progress);
 
-    if (stats->sealed_lights == scene->light_count || stats->medium_voxels == 0) {
+    if (stats->sealed_lights == light_count || stats->medium_voxels == 0) {
         sg_medium_release(medium);
         return sg_fail(err, "%s: every light is sealed: no air in front of any emitter at "
                             "resolution %d", scene->path, resolution);

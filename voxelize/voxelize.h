@@ -16,6 +16,9 @@
 #define SG_VOXELIZE_DEFAULT_RESOLUTION 128
 /* Bumped when the voxelization rules change, so that make redoes it. */
 #define SG_VOXELIZE_VERSION 1
+/* Voxels of air round a scene lit from outside (a sky, a sun): enough for
+ * the skeleton to pass round the building from one opening to another. */
+#define SG_VOXELIZE_OUTSIDE_MARGIN 3
 
 typedef struct SgVoxelizeOptions {
     int resolution; /* voxels along the longest side; 0: scene's, else default */

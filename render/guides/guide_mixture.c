@@ -281,7 +281,7 @@ static PathGuide *mixture_create(const PathGuideSetup *setup, SgError *err)
         mixture_destroy(&x->base);
         return NULL;
     }
-    if (o->alpha == SG_ALPHA_LEARNED && setup->lights->count) {
+    if (o->alpha == SG_ALPHA_LEARNED && setup->lights->follow_count) {
         Vec3 lo, hi;
         geometry_bounds(setup->geo, &lo, &hi);
         SgError e;

@@ -22,12 +22,13 @@ bool sg_importance_file_open(SgImportanceFile *g, const char *path, const SgScen
                 path, sg_cache_geometry_hash(g->cache), scene_path, scene->geometry_hash);
         goto fail;
     }
-    if (sg_cache_light_count(g->cache) != scene->light_count) {
+    uint32_t lights = sg_scene_guide_light_count(scene);
+    if (sg_cache_light_count(g->cache) != lights) {
         sg_fail(err, "%s: has %u lights, %s has %u: rebuild it with bin/importance", path,
-                sg_cache_light_count(g->cache), scene_path, scene->light_count);
+                sg_cache_light_count(g->cache), scene_path, lights);
         goto fail;
     }
-    g->follow = calloc(scene->light_count ? scene->light_count : 1, sizeof *g->follow);
+    g->follow = calloc(lights ? lights : 1, sizeof *g->follow);
     if (!g->follow) {
         sg_fail(err, "%s: out of memory", scene_path);
         goto fail;
@@ -43,9 +44,9 @@ bool sg_importance_file_open(SgImportanceFile *g, const char *path, const SgScen
     for (int a = 0; a < 3; a++)
         if (!(scene->camera.position[a] >= origin[a] && scene->camera.position[a] <= origin[a] + dims[a] * h))
             testable = false;
-    for (uint32_t l = 0; l < scene->light_count; l++) {
+    for (uint32_t l = 0; l < lights; l++) {
         if (!testable || sg_cache_light_reaches(g->cache, l, scene->camera.position))
-            g->follow[l] = scene->lights[l].power;
+            g->follow[l] = sg_scene_guide_light(scene, l).power;
         else
             g->dropped++;
     }

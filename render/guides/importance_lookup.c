@@ -12,9 +12,9 @@ bool importance_lookup_init(ImportanceLookup *g, const SgImportanceSource *sourc
     if (!c)
         return true;
     uint32_t nodes = sg_cache_node_count(c), n_lights = sg_cache_light_count(c);
-    if (n_lights != lights->count)
+    if (n_lights != lights->follow_count)
         return sg_fail(err, "%s: the importance cache has %u lights, the scene %u", path, n_lights,
-                       lights->count);
+                       lights->follow_count);
     uint32_t lights_n = n_lights;
     double floats = 3.0 * nodes * lights_n;
     if (!nodes || !lights_n || floats * sizeof(float) > 256.0 * 1024 * 1024)

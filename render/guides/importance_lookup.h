@@ -64,9 +64,10 @@ static inline bool importance_lookup_begin(const ImportanceLookup *g, Vec3 p, Ve
 {
     float u = sg_rng_float(rng); /* drawn always: keeps the streams aligned */
     const LightSet *ls = g->lights;
-    if (!ls->count || ls->follow_cdf[ls->count - 1] <= 0.0)
+    uint32_t count = ls->follow_count;
+    if (!count || ls->follow_cdf[count - 1] <= 0.0)
         return false;
-    gq->light = ls->count == 1 ? 0 : pick_cdf(ls->follow_cdf, ls->count, u * ls->follow_cdf[ls->count - 1]);
+    gq->light = count == 1 ? 0 : pick_cdf(ls->follow_cdf, count, u * ls->follow_cdf[count - 1]);
     if (g->points) {
         Vec3 w = v3_add(p, v3_scale(n, g->offset));
         gq->voxel[0] = (w.x - g->origin.x) * g->inv_voxel;

@@ -1,0 +1,75 @@
+/* The scene's lights as the precompute and the guide count them (scene.h,
+ * SgGuideLight). */
+#include <math.h>
+#include <string.h>
+
+#include "color.h"
+#include "scene.h"
+
+bool sg_scene_lit_from_outside(const SgScene *s)
+{
+    for (uint32_t i = 0; i < s->light_source_count; i++)
+        if (s->light_sources[i].kind == SG_LIGHT_INFINITE || s->light_sources[i].kind == SG_LIGHT_DISTANT)
+            return true;
+    return false;
+}
+
+static uint32_t point_count(const SgScene *s)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < s->light_source_count; i++)
+        n += s->light_sources[i].kind == SG_LIGHT_POINT || s->light_sources[i].kind == SG_LIGHT_SPOT;
+    return n;
+}
+
+uint32_t sg_scene_guide_light_count(const SgScene *s)
+{
+    return s->light_count + point_count(s) + (sg_scene_lit_from_outside(s) ? 1u : 0u);
+}
+
+SgGuideLight sg_scene_guide_light(const SgScene *s, uint32_t i)
+{
+    SgGuideLight g;
+    memset(&g, 0, sizeof g);
+    if (i < s->light_count) {
+        const SgLight *l = &s->lights[i];
+        g.kind = SG_GUIDE_LIGHT_AREA;
+        g.index = i;
+        memcpy(g.position, l->position, sizeof g.position);
+        memcpy(g.normal, l->normal, sizeof g.normal);
+        g.power = l->power;
+        return g;
+    }
+    i -= s->light_count;
+    for (uint32_t k = 0; k < s->light_source_count; k++) {
+        const SgLightSource *l = &s->light_sources[k];
+        if (l->kind != SG_LIGHT_POINT && l->kind != SG_LIGHT_SPOT)
+            continue;
+        if (i-- > 0)
+            continue;
+        g.kind = SG_GUIDE_LIGHT_POINT;
+        g.index = k;
+        memcpy(g.position, l->position, sizeof g.position);
+        if (l->kind == SG_LIGHT_SPOT)
+            memcpy(g.normal, l->direction, sizeof g.normal);
+        double lum = sg_luminance(l->rgb[0], l->rgb[1], l->rgb[2]);
+        g.power = l->kind == SG_LIGHT_POINT ? 4 * M_PI * lum
+                                            : 2 * M_PI * lum * (1 - 0.5 * (l->cos_falloff_start + l->cos_cone));
+        return g;
+    }
+    /* the outside: what the sky and the sun send through a disk of the
+     * scene's size (pi r^2 E for a sun, pi r^2 pi L for a sky) */
+    g.kind = SG_GUIDE_LIGHT_OUTSIDE;
+    double r2 = 0;
+    for (int a = 0; a < 3; a++)
+        r2 += 0.25 * (s->bounds_max[a] - s->bounds_min[a]) * (s->bounds_max[a] - s->bounds_min[a]);
+    for (uint32_t k = 0; k < s->light_source_count; k++) {
+        const SgLightSource *l = &s->light_sources[k];
+        double lum = sg_luminance(l->rgb[0], l->rgb[1], l->rgb[2]);
+        if (l->kind == SG_LIGHT_DISTANT)
+            g.power += M_PI * r2 * lum;
+        else if (l->kind == SG_LIGHT_INFINITE)
+            g.power += M_PI * r2 * M_PI * lum;
+    }
+    return g;
+}
