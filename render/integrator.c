@@ -137,7 +137,7 @@ static void add_emission(Path *p, const Hit *h, const Material *m, float cos_o, 
 static void add_escaped(Path *p)
 {
     const Integrator *it = p->it;
-    Vec3 le = light_set_escaped(it->lights, p->ps.d, p->ps.specular_bounce ? -1.0f : p->ps.prev_pdf);
+    Vec3 le = light_set_escaped(it->lights, p->ps.prev_p, p->ps.d, p->ps.specular_bounce ? -1.0f : p->ps.prev_pdf);
     p->radiance = v3_add(p->radiance, v3_mul(p->ps.beta, le));
     if (p->pc->record) {
         Vec3 far = v3_add(p->ps.o, v3_scale(p->ps.d, 1e3f * it->geo->scale));
@@ -191,14 +191,14 @@ typedef struct LightSample {
  * (index among the sources). A delta light's sample has pdf 0 here: it
  * takes no MIS weight, which the caller gives where pdf > 0. */
 static LightSample sample_light_source(const Integrator *it, const BounceVertex *v, uint32_t source,
-                                       bool lit_below_horizon, float u1, float u2, PathStats *st)
+                                       bool lit_below_horizon, float u0, float u1, float u2, PathStats *st)
 {
     LightSample ls = {0};
     LightSourcePoint lp;
     /* the light as seen from the surface point itself: from the offset
      * origin a point light would be nearer by the offset (0.2 % brighter
      * at a scene's size / 65536 from a lamp 1.5 away) */
-    if (!light_source_sample(it->lights, source, v->p, u1, u2, &lp))
+    if (!light_source_sample(it->lights, source, v->p, u0, u1, u2, &lp))
         return ls;
     float cos_x = v3_dot(lp.wi, v->g.bsdf.lobe.n);
     if (!(cos_x > 0.0f || lit_below_horizon))
@@ -238,7 +238,7 @@ static LightSample sample_light(const Integrator *it, const BounceVertex *v, boo
     if (!light_set_pick(it->lights, ul, &light))
         return ls;
     if (light >= it->lights->count)
-        return sample_light_source(it, v, light - it->lights->count, lit_below_horizon, ua, ub, st);
+        return sample_light_source(it, v, light - it->lights->count, lit_below_horizon, ut, ua, ub, st);
     light_set_sample_area(it->lights, light, geo->vertices, geo->indices, ut, ua, ub, &t, &y);
     Vec3 n = v->g.bsdf.lobe.n;
     Vec3 to = v3_sub(y, v->origin);

@@ -25,6 +25,81 @@ static float spot_falloff(const LightSource *l, float cos_theta)
     return t * t * (3.0f - 2.0f * t);
 }
 
+/* ---- portals ---------------------------------------------------------------- */
+
+static bool portal_init(Portal *p, const Vec3 c[4])
+{
+    p->p0 = c[0];
+    p->e1 = v3_sub(c[1], c[0]);
+    p->e2 = v3_sub(c[3], c[0]);
+    Vec3 n = v3_cross(p->e1, p->e2);
+    p->area = v3_length(n);
+    if (!(p->area > 0.0f) || !isfinite(p->area))
+        return false;
+    p->n = v3_scale(n, 1.0f / p->area);
+    p->g11 = v3_dot(p->e1, p->e1);
+    p->g12 = v3_dot(p->e1, p->e2);
+    p->g22 = v3_dot(p->e2, p->e2);
+    float det = p->g11 * p->g22 - p->g12 * p->g12;
+    if (!(det > 0.0f))
+        return false;
+    p->inv_det = 1.0f / det;
+    return true;
+}
+
+/* The solid-angle density at x of a point uniform on the portal, toward
+ * unit w: 0 where w misses it. */
+static float portal_pdf(const Portal *p, Vec3 x, Vec3 w)
+{
+    float wn = v3_dot(w, p->n);
+    if (wn == 0.0f)
+        return 0.0f;
+    float t = v3_dot(v3_sub(p->p0, x), p->n) / wn;
+    if (!(t > 0.0f))
+        return 0.0f;
+    Vec3 d = v3_sub(v3_add(x, v3_scale(w, t)), p->p0);
+    float a = v3_dot(d, p->e1), b = v3_dot(d, p->e2);
+    float u = (a * p->g22 - b * p->g12) * p->inv_det, v = (b * p->g11 - a * p->g12) * p->inv_det;
+    if (!(u >= 0.0f && u <= 1.0f && v >= 0.0f && v <= 1.0f))
+        return 0.0f;
+    return t * t / (p->area * fabsf(wn));
+}
+
+/* The sky's own density of direction w (no pick). */
+static float sky_pdf(const LightSource *l, Vec3 w)
+{
+    return l->map ? environment_pdf(l->map, w) : 1.0f / (4.0f * SG_PI);
+}
+
+/* A sky's NEE density at x toward w: its map's, mixed with its portals'. */
+static float infinite_pdf(const LightSource *l, Vec3 x, Vec3 w)
+{
+    float pdf = sky_pdf(l, w);
+    if (!l->portal_count)
+        return pdf;
+    float portals = 0.0f;
+    for (uint32_t k = 0; k < l->portal_count; k++)
+        portals += portal_pdf(&l->portals[k], x, w);
+    return (1.0f - PORTAL_SHARE) * pdf + PORTAL_SHARE * portals / (float)l->portal_count;
+}
+
+bool light_source_set_portals(LightSet *ls, uint32_t i, const Vec3 (*corners)[4], uint32_t count)
+{
+    LightSource *l = &ls->sources[i];
+    Portal *p = count ? calloc(count, sizeof *p) : NULL;
+    if (count && !p)
+        return false;
+    for (uint32_t k = 0; k < count; k++)
+        if (!portal_init(&p[k], corners[k])) {
+            free(p);
+            return false;
+        }
+    free(l->portals);
+    l->portals = p;
+    l->portal_count = count;
+    return true;
+}
+
 /* Whether unit w points into the sun's disk: by the sine, which keeps its
  * precision for a disk of a quarter degree where the cosine has none. */
 static bool in_sun_disk(const LightSource *l, Vec3 w)
@@ -82,6 +157,16 @@ static bool sources_init(LightSet *ls, const SgScene *s, const double centre[3],
         }
         if (in->kind == SG_LIGHT_INFINITE) {
             ls->has_escaping = true;
+            if (in->has_portal) {
+                Vec3 c[1][4];
+                for (int k = 0; k < 4; k++) {
+                    double q[3] = {in->portal[k][0] - centre[0], in->portal[k][1] - centre[1],
+                                   in->portal[k][2] - centre[2]};
+                    c[0][k] = vec3_of(q);
+                }
+                if (!light_source_set_portals(ls, i, (const Vec3(*)[4])c, 1))
+                    return sg_fail(err, "%s: a sky's portal is degenerate (its corners must span a window)", path);
+            }
             if (in->image_path) {
                 if (!(l->map = calloc(1, sizeof *l->map)))
                     return sg_fail(err, "%s: out of memory for the lights", path);
@@ -93,7 +178,7 @@ static bool sources_init(LightSet *ls, const SgScene *s, const double centre[3],
     return true;
 }
 
-Vec3 light_set_escaped(const LightSet *ls, Vec3 d, float bsdf_pdf)
+Vec3 light_set_escaped(const LightSet *ls, Vec3 x, Vec3 d, float bsdf_pdf)
 {
     Vec3 sum = v3(0, 0, 0);
     if (!ls->has_escaping)
@@ -107,24 +192,25 @@ Vec3 light_set_escaped(const LightSet *ls, Vec3 d, float bsdf_pdf)
             le = l->rgb;
         else
             continue;
-        float w = bsdf_pdf < 0.0f ? 1.0f : power_heuristic(bsdf_pdf, light_source_pdf(ls, i, d));
+        float w = bsdf_pdf < 0.0f ? 1.0f : power_heuristic(bsdf_pdf, light_source_pdf(ls, i, x, d));
         sum = v3_add(sum, v3_scale(le, w));
     }
     return sum;
 }
 
-float light_source_pdf(const LightSet *ls, uint32_t i, Vec3 d)
+float light_source_pdf(const LightSet *ls, uint32_t i, Vec3 x, Vec3 d)
 {
     const LightSource *l = &ls->sources[i];
     float pick = (float)l->pick_pdf;
     if (l->kind == SG_LIGHT_INFINITE)
-        return pick * (l->map ? environment_pdf(l->map, d) : 1.0f / (4.0f * SG_PI));
+        return pick * infinite_pdf(l, x, d);
     if (l->kind == SG_LIGHT_DISTANT && l->cos_radius < 1.0f)
         return in_sun_disk(l, d) ? pick / (2.0f * SG_PI * l->sun_one_minus_cos) : 0.0f;
     return 0.0f;
 }
 
-bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u1, float u2, LightSourcePoint *out)
+bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u0, float u1, float u2,
+                         LightSourcePoint *out)
 {
     const LightSource *l = &ls->sources[i];
     float pick = (float)l->pick_pdf;
@@ -164,6 +250,30 @@ bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u1, 
         out->pdf = pick / (2.0f * SG_PI * l->sun_one_minus_cos);
         return true;
     case SG_LIGHT_INFINITE:
+        if (l->portal_count) { /* through a window, or from the whole sky */
+            if (u0 < PORTAL_SHARE) {
+                float s = u0 / PORTAL_SHARE * (float)l->portal_count;
+                uint32_t k = (uint32_t)s < l->portal_count ? (uint32_t)s : l->portal_count - 1;
+                const Portal *p = &l->portals[k];
+                Vec3 y = v3_add(p->p0, v3_add(v3_scale(p->e1, u1), v3_scale(p->e2, u2)));
+                Vec3 to = v3_sub(y, origin);
+                float len = v3_length(to);
+                if (!(len > 0.0f))
+                    return false;
+                out->wi = v3_scale(to, 1.0f / len);
+            } else {
+                float pdf, v1 = u1, v2 = u2;
+                if (l->map)
+                    out->wi = environment_sample(l->map, v1, v2, &pdf);
+                else {
+                    float z = 1.0f - 2.0f * v1, r = sqrtf(fmaxf(0.0f, 1.0f - z * z)), phi = 2.0f * SG_PI * v2;
+                    out->wi = v3(r * cosf(phi), r * sinf(phi), z);
+                }
+            }
+            out->le = l->map ? environment_radiance(l->map, out->wi) : l->rgb;
+            out->pdf = pick * infinite_pdf(l, origin, out->wi);
+            return out->pdf > 0.0f;
+        }
         if (l->map) {
             float pdf;
             out->wi = environment_sample(l->map, u1, u2, &pdf);
@@ -312,11 +422,13 @@ bool light_set_init(LightSet *ls, const SgScene *s, const Vec3 *vertices, const 
 
 void light_set_free(LightSet *ls)
 {
-    for (uint32_t i = 0; i < ls->source_count; i++)
+    for (uint32_t i = 0; i < ls->source_count; i++) {
         if (ls->sources[i].map) {
             environment_free(ls->sources[i].map);
             free(ls->sources[i].map);
         }
+        free(ls->sources[i].portals);
+    }
     free(ls->sources);
     free(ls->lights);
     free(ls->cdf);

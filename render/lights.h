@@ -20,6 +20,19 @@ typedef struct LightTable {
     uint32_t first, count; /* its triangles in r->light_tris / r->light_tri_cdf */
 } LightTable;
 
+/* A window the sky is seen through: the parallelogram p0 + u e1 + v e2,
+ * u, v in [0, 1] (local coordinates). */
+typedef struct Portal {
+    Vec3 p0, e1, e2, n; /* n: unit normal */
+    float area;
+    float g11, g12, g22, inv_det; /* the edges' Gram matrix, to find (u, v) of a point */
+} Portal;
+
+/* Of an infinite light's light samples, the share drawn through its portals
+ * (the rest from the sky's own distribution, so that directions no portal
+ * covers keep their density). */
+#define PORTAL_SHARE 0.8f
+
 /* A point, spot, distant or infinite light as the renderer samples it
  * (local coordinates). */
 typedef struct LightSource {
@@ -33,6 +46,8 @@ typedef struct LightSource {
     float sun_sin2;    /* ... its sine squared, and 1 - cosine: what a small disk needs */
     float sun_one_minus_cos;
     Environment *map;  /* infinite: the image, or NULL: constant */
+    uint32_t portal_count; /* infinite: windows to sample it through (hand-drawn or found) */
+    Portal *portals;
     double pick_pdf;
 } LightSource;
 
@@ -111,17 +126,24 @@ typedef struct LightSourcePoint {
     bool delta;
 } LightSourcePoint;
 
-/* Light source i (index among the sources) seen from `origin` with two
- * random numbers; false: it sends nothing there. */
-bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u1, float u2, LightSourcePoint *out);
+/* Light source i (index among the sources) seen from `origin` with three
+ * random numbers (u0 chooses a sky's strategy: its portals or its map);
+ * false: it sends nothing there. */
+bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u0, float u1, float u2,
+                         LightSourcePoint *out);
 
-/* What a ray leaving the scene along unit d brings: each escaping light's
- * radiance, weighted by the power heuristic against the pdf the ray was
- * drawn with (bsdf_pdf < 0: a specular or camera ray, weight 1). */
-Vec3 light_set_escaped(const LightSet *ls, Vec3 d, float bsdf_pdf);
-/* The pdf (solid angle, pick included) of next-event estimation drawing
- * direction d toward light source i; 0 for delta lights. */
-float light_source_pdf(const LightSet *ls, uint32_t i, Vec3 d);
+/* What a ray leaving the scene along unit d from the vertex at x brings:
+ * each escaping light's radiance, weighted by the power heuristic against
+ * the pdf the ray was drawn with (bsdf_pdf < 0: a specular or camera ray,
+ * weight 1). */
+Vec3 light_set_escaped(const LightSet *ls, Vec3 x, Vec3 d, float bsdf_pdf);
+/* The pdf (solid angle, pick included) of next-event estimation at x
+ * drawing direction d toward light source i; 0 for delta lights. */
+float light_source_pdf(const LightSet *ls, uint32_t i, Vec3 x, Vec3 d);
+/* Gives infinite light i these portals (local coordinates, copied);
+ * corners c[4] each, in order round the window. False: out of memory or a
+ * degenerate window. */
+bool light_source_set_portals(LightSet *ls, uint32_t i, const Vec3 (*corners)[4], uint32_t count);
 
 /* The solid-angle pdf of next-event estimation reaching a point of light
  * `light` (SG_NO_LIGHT: none) at squared distance dist2, seen at cosine

@@ -557,12 +557,16 @@ int main(int argc, char **argv)
             fprintf(stderr, "render: textures: %.1f MB cached of %.1f MB of images\n", texture_cache / 1048576.0,
                     texture_images / 1048576.0);
         double paths = (double)o.width * o.height * sg_renderer_spp(r);
+        char openings[64] = "";
+        if (report.openings)
+            snprintf(openings, sizeof openings, ", sky sampled through %u opening%s", report.openings,
+                     report.openings == 1 ? "" : "s");
         fprintf(stderr,
-                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s, roulette %s, seed "
+                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s, roulette %s, seed "
                 "%s, %s NaN/inf samples%s\n",
                 o.width, o.height, sg_renderer_spp(r), render_seconds, paths / render_seconds * 1e-6,
-                (double)sg_renderer_rays(r) / render_seconds * 1e-6, mode->name, report.guide, roulette, seed_s,
-                nonfinite_s, shard_line);
+                (double)sg_renderer_rays(r) / render_seconds * 1e-6, mode->name, report.guide, openings, roulette,
+                seed_s, nonfinite_s, shard_line);
     }
     status = 0;
 

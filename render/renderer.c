@@ -18,6 +18,7 @@
 #include "hash.h"
 #include "integrator.h"
 #include "lights.h"
+#include "openings.h"
 #include "material.h"
 #include "memory.h"
 #include "pixel_noise.h"
@@ -42,6 +43,7 @@ struct SgRenderer {
     TextureSet *textures; /* NULL: no material is textured */
 
     LightSet lights;
+    uint32_t openings; /* windows found for the sky (openings.h) */
     PathGuide *guide;     /* how bounces are drawn: one of path_guide.h's */
     Integrator integrator;
     /* Learned roulette: per pixel, the sums of the luminance of its samples
@@ -95,6 +97,21 @@ bool sg_roulette_parse(const char *name, SgRoulette *r)
 /* ---- setup ---------------------------------------------------------------- */
 
 /* `create`: the guide's constructor, NULL: the one o->sampling names. */
+static bool attach_openings(SgRenderer *r, const SgScene *s, const char *path, SgError *err)
+{
+    Vec3(*corners)[4];
+    uint32_t n;
+    if (!openings_find(r->opt.importance.cache, s->bounds_min, s->bounds_max, r->geo.centre, &corners, &n))
+        return sg_fail(err, "%s: out of memory for the openings", path);
+    bool ok = true;
+    for (uint32_t i = 0; ok && i < r->lights.source_count; i++)
+        if (r->lights.sources[i].kind == SG_LIGHT_INFINITE && !r->lights.sources[i].portal_count && n)
+            ok = light_source_set_portals(&r->lights, i, (const Vec3(*)[4])corners, n);
+    r->openings = n;
+    free(corners);
+    return ok || sg_fail(err, "%s: out of memory for the openings", path);
+}
+
 static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, PathGuideCreate create, SgError *err)
 {
     const char *path = s->path[0] ? s->path : "scene";
@@ -149,6 +166,12 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
         material_init(&r->materials[m], &s->materials[m]);
     if (!light_set_init(&r->lights, s, r->geo.vertices, r->materials, r->opt.importance.light_weight, r->geo.centre,
                         path, err)) {
+        sg_renderer_free(r);
+        return NULL;
+    }
+    /* a sky without a hand-drawn portal looks through the openings the
+     * precompute found */
+    if (o->importance.cache && r->lights.has_escaping && !attach_openings(r, s, path, err)) {
         sg_renderer_free(r);
         return NULL;
     }
@@ -360,6 +383,7 @@ void sg_renderer_report(const SgRenderer *r, SgRenderReport *report)
     report->roulette = r->noise ? SG_ROULETTE_LEARNED : SG_ROULETTE_ALBEDO;
     snprintf(report->alpha, sizeof report->alpha, "%g", r->opt.alpha);
     report->guide[0] = '\0';
+    report->openings = r->openings;
     if (r->guide->ops->describe)
         r->guide->ops->describe(r->guide, &gs, report);
 }

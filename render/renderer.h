@@ -209,6 +209,7 @@ typedef struct SgRenderReport {
     SgRoulette roulette; /* the roulette that ran: learned only where the guide learns what bounces bring */
     char alpha[64];      /* the mixture's weight: the options' number, or how it was learned */
     char guide[192];     /* the guide's part of the summary line, "" or ", ..." */
+    uint32_t openings;   /* windows the precompute found, through which the sky is sampled */
 } SgRenderReport;
 void sg_renderer_report(const SgRenderer *r, SgRenderReport *report);
 

@@ -12,6 +12,7 @@
 
 #include "importance_cache.h"
 #include "render/guides/importance_file.h"
+#include "render/openings.h"
 #include "render/renderer.h"
 #include "scene.h"
 #include "support_files.h"
@@ -287,6 +288,25 @@ Test(render_pipeline, guided_follows_the_sky_through_a_window, .timeout = 240)
     double cx = floor_point[0] + t * (q[0] - floor_point[0]), cz = floor_point[2] + t * (q[2] - floor_point[2]);
     cr_expect(fabs(cx) < 0.5 && fabs(cz) < 0.3, "the axis toward (%g, %g, %g) meets the ceiling at (%g, %g), "
               "not in the opening", q[0], q[1], q[2], cx, cz);
+    /* the opening found: one rectangle on the ceiling's plane, the window's
+     * own within a voxel */
+    cr_assert(sg_cache_decode(cache, 1u << 30));
+    Vec3(*corners)[4];
+    uint32_t openings;
+    const double origin[3] = {0, 0, 0};
+    cr_assert(openings_find(cache, loaded->bounds_min, loaded->bounds_max, origin, &corners, &openings));
+    cr_assert_eq(openings, 1, "openings found: %u", openings);
+    double h = sg_cache_voxel_size(cache), lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int c = 0; c < 4; c++) {
+        const float w[3] = {corners[0][c].x, corners[0][c].y, corners[0][c].z};
+        for (int a = 0; a < 3; a++)
+            lo[a] = fmin(lo[a], w[a]), hi[a] = fmax(hi[a], w[a]);
+    }
+    free(corners);
+    cr_expect(fabs(lo[1] - 2) < 1e-6 && fabs(hi[1] - 2) < 1e-6, "on the ceiling's plane: y %g..%g", lo[1], hi[1]);
+    cr_expect(fabs(lo[0] + 0.5) <= h && fabs(hi[0] - 0.5) <= h && fabs(lo[2] + 0.3) <= h && fabs(hi[2] - 0.3) <= h,
+              "the window [-0.5, 0.5] x [-0.3, 0.3] within a voxel (%g): [%g, %g] x [%g, %g]", h, lo[0], hi[0], lo[2],
+              hi[2]);
     sg_cache_close(cache);
 
     /* the opening's form factor: four corner rectangles 0.5 x 0.3 at height 2 */
@@ -299,6 +319,9 @@ Test(render_pipeline, guided_follows_the_sky_through_a_window, .timeout = 240)
     cr_log_info("window: closed form %.6f, bsdf %.6f +- %.6f, guided %.6f +- %.6f", want, mb, sb, mg, sg);
     cr_expect(fabs(mb - want) < 3 * sb + 0.003 * want, "bsdf %.6f, closed form %.6f", mb, want);
     cr_expect(fabs(mg - want) < 3 * sg + 0.003 * want, "guided %.6f, closed form %.6f", mg, want);
+    /* the sky sampled through the opening found: far less noise (measured
+     * 0.000013 against bsdf's 0.000848 at the same spp) */
+    cr_expect(sg < 0.1 * sb, "guided's standard error %g is not a tenth of bsdf's %g", sg, sb);
 }
 
 /* Without the window the sky reaches only the air round the room: the

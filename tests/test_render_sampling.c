@@ -533,10 +533,23 @@ static Vec3 source_sample_fn(const void *c, float u0, float u1, float u2)
 {
     (void)u2;
     LightSourcePoint lp;
-    cr_assert(light_source_sample(c, 0, v3(0, 0, 0), u0, u1, &lp));
+    cr_assert(light_source_sample(c, 0, v3(0, 0, 0), u2, u0, u1, &lp));
     return lp.wi;
 }
-static float source_pdf_fn(const void *c, Vec3 w) { return light_source_pdf(c, 0, w); }
+static float source_pdf_fn(const void *c, Vec3 w) { return light_source_pdf(c, 0, v3(0, 0, 0), w); }
+
+/* A constant sky seen through a portal (a 1 x 0.6 window 2 above, tilted)
+ * from the origin: the portal's density mixed with the sky's. */
+static void portal_case(uint64_t seed, int sub)
+{
+    LightSource src = {.kind = SG_LIGHT_INFINITE, .rgb = v3(1, 1, 1), .pick_pdf = 1.0};
+    LightSet ls = {.source_count = 1, .sources = &src, .has_escaping = true};
+    const Vec3 corners[1][4] = {{v3(-0.5f, 2.0f, -0.3f), v3(0.5f, 2.2f, -0.3f), v3(0.5f, 2.2f, 0.3f),
+                                 v3(-0.5f, 2.0f, 0.3f)}};
+    cr_assert(light_source_set_portals(&ls, 0, corners, 1));
+    assert_chi2("sky through a portal", source_sample_fn, source_pdf_fn, &ls, seed, sub);
+    free(src.portals);
+}
 
 /* A constant sky (uniform sphere) or a sun of angular radius `radius`. */
 static void source_case(SgLightSourceKind kind, float radius, uint64_t seed, int sub)
@@ -580,7 +593,8 @@ static void source_case(SgLightSourceKind kind, float radius, uint64_t seed, int
     X(sky_equal_area_map, environment_case(SG_ENVIRONMENT_EQUAL_AREA, 24, 24, 27, 16)) \
     X(sky_latlong_map, environment_case(SG_ENVIRONMENT_LATLONG, 32, 16, 28, 16)) \
     X(sky_constant, source_case(SG_LIGHT_INFINITE, 0.0f, 29, 4)) \
-    X(sun_disk_10_degrees, source_case(SG_LIGHT_DISTANT, 0.17453f, 30, 32))
+    X(sun_disk_10_degrees, source_case(SG_LIGHT_DISTANT, 0.17453f, 30, 32)) \
+    X(sky_through_portal, portal_case(31, 32))
 
 #define CHI2_TEST(name, call) \
     Test(render_sampling, name) { call; }
