@@ -8,21 +8,14 @@
 #include <string.h>
 
 #include "input_file.h"
+#include "memory.h"
 #include "pbrt_parser.h"
 
 /* Grows *array to hold needed items of size item. */
 bool pbrt_reserve(Parser *p, void **array, size_t *capacity, size_t needed, size_t item)
 {
-    if (needed <= *capacity)
-        return true;
-    size_t cap = *capacity ? *capacity : 16;
-    while (cap < needed)
-        cap *= 2;
-    void *grown = realloc(*array, cap * item);
-    if (!grown)
+    if (!sg_reserve(array, capacity, needed, item, 16))
         return sg_fail(p->err, "%s: out of memory", p->core.path);
-    *array = grown;
-    *capacity = cap;
     return true;
 }
 
