@@ -265,18 +265,30 @@ static inline void consider(const Collapse *c, Sink *sk, uint32_t h)
         sk->oom = true;
 }
 
-static inline void consider_faces(const Collapse *c, Sink *sk, uint32_t cell)
+/* The faces of a cell (one dimension lower), two per axis it spans: at its
+ * vertex and one step along the axis. Returns how many (at most 6). */
+static inline int cell_faces(const Collapse *c, uint32_t cell, uint32_t faces[6])
 {
     size_t v = cell >> 3;
     unsigned m = cell & 7;
+    int n = 0;
     for (int a = 0; a < 3; a++) {
         unsigned bit = 1u << a;
         if (!(m & bit))
             continue;
         unsigned fm = m ^ bit;
-        consider(c, sk, (uint32_t)(v * 8 + fm));
-        consider(c, sk, (uint32_t)((v + c->st[a]) * 8 + fm));
+        faces[n++] = (uint32_t)(v * 8 + fm);
+        faces[n++] = (uint32_t)((v + c->st[a]) * 8 + fm);
     }
+    return n;
+}
+
+static inline void consider_faces(const Collapse *c, Sink *sk, uint32_t cell)
+{
+    uint32_t faces[6];
+    int n = cell_faces(c, cell, faces);
+    for (int i = 0; i < n; i++)
+        consider(c, sk, faces[i]);
 }
 
 static uint16_t edge_opening(const Collapse *c, size_t v, unsigned m)
@@ -296,31 +308,23 @@ static uint16_t edge_opening(const Collapse *c, size_t v, unsigned m)
 /* A square was removed: record its edges that have no square left. */
 static void note_isolated_edges(const Collapse *c, Sink *sk, uint32_t square)
 {
-    size_t v = square >> 3;
-    unsigned m = square & 7;
-    for (int a = 0; a < 3; a++) {
-        unsigned bit = 1u << a;
-        if (!(m & bit))
+    uint32_t edges[6];
+    int n = cell_faces(c, square, edges);
+    for (int i = 0; i < n; i++) {
+        size_t w = edges[i] >> 3;
+        unsigned em = edges[i] & 7;
+        if (!has(c->cells, w, em))
             continue;
-        unsigned em = m ^ bit;
-        size_t ends[2] = {v, v + c->st[a]};
-        for (int i = 0; i < 2; i++) {
-            size_t w = ends[i];
-            if (!has(c->cells, w, em))
+        bool isolated = true;
+        for (int b = 0; b < 3 && isolated; b++) {
+            unsigned bb = 1u << b;
+            if (em & bb)
                 continue;
-            bool isolated = true;
-            for (int b = 0; b < 3 && isolated; b++) {
-                unsigned bb = 1u << b;
-                if (em & bb)
-                    continue;
-                if (has(c->cells, w, em | bb) || has(c->cells, w - c->st[b], em | bb))
-                    isolated = false;
-            }
-            if (isolated && !vec_push_edge(sk->noted, (SgIsolatedEdge){(uint32_t)(w * 8 + em),
-                                                                      c->step, -1,
-                                                                      edge_opening(c, w, em)}))
-                sk->oom = true;
+            if (has(c->cells, w, em | bb) || has(c->cells, w - c->st[b], em | bb))
+                isolated = false;
         }
+        if (isolated && !vec_push_edge(sk->noted, (SgIsolatedEdge){edges[i], c->step, -1, edge_opening(c, w, em)}))
+            sk->oom = true;
     }
 }
 
