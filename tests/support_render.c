@@ -196,3 +196,10 @@ float *sgt_render_image(const SgScene *s, const SgRenderOptions *o, int passes, 
     sg_renderer_free(r);
     return rgb;
 }
+
+float *sgt_render_default(const SgScene *s, SgRenderOptions *o, int passes, SgError *err)
+{
+    sg_render_options_default(o, s);
+    o->threads = 2;
+    return sgt_render_image(s, o, passes, err);
+}

@@ -39,5 +39,7 @@ bool sgt_fixed_point_guide(void *ctx, const double p[3], uint32_t light, double 
 /* s rendered `passes` passes under o: its image, 3 floats a pixel (the
  * caller frees it), or NULL with err set. */
 float *sgt_render_image(const SgScene *s, const SgRenderOptions *o, int passes, SgError *err);
+/* The same under s's default options on 2 threads, which *o receives. */
+float *sgt_render_default(const SgScene *s, SgRenderOptions *o, int passes, SgError *err);
 
 #endif

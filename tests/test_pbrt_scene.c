@@ -32,13 +32,26 @@
 
 static const char *scene_dir;
 
+/* The folder the tests write their scenes and files in (made on first use). */
+static const char *scene_folder(void)
+{
+    if (!scene_dir)
+        scene_dir = sg_test_tmpdir();
+    return scene_dir;
+}
+
+/* path = scene_folder()/name. */
+static char *scene_file(char path[4200], const char *name)
+{
+    snprintf(path, 4200, "%s/%s", scene_folder(), name);
+    return path;
+}
+
 /* Writes scene_dir/name; the path stays valid until the next call. */
 static const char *write_scene(const char *name, const char *text)
 {
     static char path[4200];
-    if (!scene_dir)
-        scene_dir = sg_test_tmpdir();
-    snprintf(path, sizeof path, "%s/%s", scene_dir, name);
+    scene_file(path, name);
     FILE *f = fopen(path, "wb");
     cr_assert(f, "cannot write %s", path);
     cr_assert(fputs(text, f) >= 0 && fclose(f) == 0, "cannot write %s", path);
@@ -180,11 +193,8 @@ Test(pbrt_transforms, instances_apply_their_transform_after_the_definition)
 Test(pbrt_shapes, trianglemesh_bilinear_and_plymesh)
 {
     /* A binary PLY whose first data byte is 0x0A, as in the bathroom. */
-    if (!scene_dir)
-        scene_dir = sg_test_tmpdir();
     char ply[4200];
-    snprintf(ply, sizeof ply, "%s/quad.ply", scene_dir);
-    FILE *f = fopen(ply, "wb");
+    FILE *f = fopen(scene_file(ply, "quad.ply"), "wb");
     cr_assert(f);
     fputs("ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\n"
           "property float y\nproperty float z\nelement face 1\n"
@@ -240,11 +250,8 @@ Test(pbrt_shapes, unsupported_kinds_warn_once_each)
 
 Test(pbrt_shapes, include_and_import_resolve_against_the_main_file)
 {
-    if (!scene_dir)
-        scene_dir = sg_test_tmpdir();
     char path[4200];
-    snprintf(path, sizeof path, "%s/parts", scene_dir);
-    mkdir(path, 0755);
+    mkdir(scene_file(path, "parts"), 0755);
     write_scene("parts/materials.pbrt",
                 "MakeNamedMaterial \"red\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0.8 0 0 ]\n");
     write_scene("parts/geometry.pbrt", "NamedMaterial \"red\"\nTranslate 0 0 2\n" TRIANGLE);
@@ -360,8 +367,6 @@ Test(pbrt_materials, textures_as_their_average)
 
 Test(pbrt_materials, image_textures_as_their_mean_linear_colour)
 {
-    if (!scene_dir)
-        scene_dir = sg_test_tmpdir();
     /* Left half (0.2, 0.4, 0.6), right half (0.6, 0.4, 0.2): mean 0.4. */
     enum { W = 64, H = 32 };
     static float rgb[W * H * 3];
@@ -370,8 +375,8 @@ Test(pbrt_materials, image_textures_as_their_mean_linear_colour)
             for (int c = 0; c < 3; c++)
                 rgb[3 * (y * W + x) + c] = x < W / 2 ? 0.2f * (1 + c) : 0.2f * (3 - c);
     char png[4200], exr[4200];
-    snprintf(png, sizeof png, "%s/wood.png", scene_dir);
-    snprintf(exr, sizeof exr, "%s/wood.exr", scene_dir);
+    scene_file(png, "wood.png");
+    scene_file(exr, "wood.exr");
     SgError err = {0};
     cr_assert(sg_image_write_png(png, W, H, rgb, 0, &err), "%s", err.message);
     cr_assert(sg_image_write_exr(exr, W, H, rgb, NULL, 0, &err), "%s", err.message);
@@ -848,16 +853,14 @@ Test(pbrt_render, staircase_mean_brightness, .timeout = 120)
     }
     fclose(f);
     cr_assert(tolerance > 0 && spp > 0 && width > 0 && height > 0, "bad reference file");
-    if (!scene_dir)
-        scene_dir = sg_test_tmpdir();
+    const char *dir = scene_folder();
     char cmd[16384], errs[8192];
     snprintf(cmd, sizeof cmd,
              "%s %s --sampling bsdf --spp %d --size %dx%d --seed 1 -o %s/stairs.exr --quiet",
-             prog, STAIRCASE, spp, width, height, scene_dir);
+             prog, STAIRCASE, spp, width, height, dir);
     int rc = sg_test_run(cmd, errs, sizeof errs);
     cr_assert_eq(rc, 0, "%s", errs);
-    snprintf(cmd, sizeof cmd, "oiiotool %s/stairs.exr --printstats 2>&1 | grep 'Stats Avg'",
-             scene_dir);
+    snprintf(cmd, sizeof cmd, "oiiotool %s/stairs.exr --printstats 2>&1 | grep 'Stats Avg'", dir);
     FILE *stats = popen(cmd, "r");
     cr_assert(stats);
     double got[3] = {-1, -1, -1};
@@ -889,10 +892,8 @@ Test(pbrt_render, checkerboard_texture_follows_the_uv)
                "    \"integer indices\" [ 0 1 2 ]\nAttributeEnd\n");
     cr_assert_not_null(s->uvs, "the quad's uv");
     SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.threads = 2;
     SgError err = {0};
-    float *rgb = sgt_render_image(s, &o, 4, &err);
+    float *rgb = sgt_render_default(s, &o, 4, &err);
     cr_assert(rgb, "%s", err.message);
     /* per column: which colour wins; the columns must split in two runs */
     int red_left = 0, red_right = 0, blue_left = 0, blue_right = 0;
