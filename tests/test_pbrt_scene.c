@@ -88,6 +88,15 @@ static void expect_error(const char *text, int line, const char *what)
     cr_expect(!strchr(err.message, '\n'), "message is not one line");
 }
 
+/* expect_error for an error on the first statement after HEADER (line 4). */
+static void expect_first_statement_error(const char *statements, const char *what)
+{
+    char text[4096];
+    cr_assert_lt(strlen(HEADER) + strlen(statements), sizeof text);
+    snprintf(text, sizeof text, "%s%s", HEADER, statements);
+    expect_error(text, 4, what);
+}
+
 static const double *vertex(const SgScene *s, uint32_t t, int c)
 {
     return s->positions + 3 * (size_t)s->indices[3 * (size_t)t + c];
@@ -735,43 +744,43 @@ Test(pbrt_errors, unbalanced_brackets)
     expect_error(HEADER "Shape \"trianglemesh\"\n  \"point3 P\" [ 0 0 0 1 0 0 0 1 0\n"
                         "  \"integer indices\" [ 0 1 2 ]\n",
                  5, "'[' is not closed");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0\n"
-                        "Shape \"sphere\"\n",
-                 4, "'[' is not closed");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ] ]\n", 4,
-                 "']'");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0", 4,
-                 "never closed");
-    expect_error(HEADER "Transform [ 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\nWorldBegin\n", 4,
-                 "is not closed");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0\n"
+                                 "Shape \"sphere\"\n", "'[' is not closed");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ] ]\n",
+                                 "']'");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0",
+                                 "never closed");
+    expect_first_statement_error("Transform [ 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\nWorldBegin\n",
+                                 "is not closed");
 }
 
 Test(pbrt_errors, unknown_parameter_types_and_statements)
 {
     expect_error(HEADER "\n\nShape \"sphere\" \"floot radius\" [ 1 ]\n", 6,
                  "unknown parameter type \"floot\"");
-    expect_error(HEADER "Shape \"sphere\" \"radius\" [ 1 ]\n", 4, "not a parameter declaration");
-    expect_error(HEADER "Shapes \"sphere\"\n", 4, "unknown statement \"Shapes\"");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 \"x\" 0 1 0 ]\n", 4,
-                 "expected numbers");
+    expect_first_statement_error("Shape \"sphere\" \"radius\" [ 1 ]\n",
+                                 "not a parameter declaration");
+    expect_first_statement_error("Shapes \"sphere\"\n", "unknown statement \"Shapes\"");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 \"x\" 0 1 0 ]\n",
+                                 "expected numbers");
     expect_error(HEADER "Translate 1 2\nWorldEnd\n", 5, "expected a number");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 nan 0 1 0 ]\n", 4,
-                 "expected a value, found nan");
-    expect_error(HEADER "Material \"diffuse\" \"string reflectance\" \"x\n", 4,
-                 "unterminated string");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 nan 0 1 0 ]\n",
+                                 "expected a value, found nan");
+    expect_first_statement_error("Material \"diffuse\" \"string reflectance\" \"x\n",
+                                 "unterminated string");
 }
 
 Test(pbrt_errors, missing_files_and_names)
 {
     expect_error(HEADER "\nShape \"plymesh\" \"string filename\" \"models/none.ply\"\n", 5,
                  "models/none.ply: cannot open mesh");
-    expect_error(HEADER "Include \"none.pbrt\"\n", 4, "none.pbrt: cannot open");
-    expect_error(HEADER "Include \"part.pbrt.gz\"\n", 4, "gunzip it first");
+    expect_first_statement_error("Include \"none.pbrt\"\n", "none.pbrt: cannot open");
+    expect_first_statement_error("Include \"part.pbrt.gz\"\n", "gunzip it first");
     expect_error(HEADER TRIANGLE "NamedMaterial \"nothing\"\n" TRIANGLE, 5,
                  "\"nothing\" is never defined");
-    expect_error(HEADER "ObjectInstance \"nothing\"\n", 4, "no such object");
-    expect_error(HEADER "Material \"diffuse\" \"texture reflectance\" \"none\"\n", 4,
-                 "no texture named \"none\"");
+    expect_first_statement_error("ObjectInstance \"nothing\"\n", "no such object");
+    expect_first_statement_error("Material \"diffuse\" \"texture reflectance\" \"none\"\n",
+                                 "no texture named \"none\"");
     /* An error in an included file names that file. */
     write_scene("bad.pbrt", "\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 ] \"integer indices\" [ 0 1 2 ]\n");
     SgError err;
@@ -782,22 +791,21 @@ Test(pbrt_errors, missing_files_and_names)
 Test(pbrt_errors, unbalanced_blocks)
 {
     expect_error(HEADER TRIANGLE "AttributeEnd\n", 5, "AttributeEnd without");
-    expect_error(HEADER "AttributeBegin\n" TRIANGLE, 4, "AttributeBegin has no matching");
-    expect_error(HEADER "TransformBegin\n" TRIANGLE, 4, "TransformBegin has no matching");
-    expect_error(HEADER "ObjectBegin \"a\"\n" TRIANGLE, 4, "ObjectBegin has no matching");
+    expect_first_statement_error("AttributeBegin\n" TRIANGLE, "AttributeBegin has no matching");
+    expect_first_statement_error("TransformBegin\n" TRIANGLE, "TransformBegin has no matching");
+    expect_first_statement_error("ObjectBegin \"a\"\n" TRIANGLE, "ObjectBegin has no matching");
     expect_error(HEADER "ObjectBegin \"a\"\nObjectBegin \"b\"\n", 5, "ObjectBegin inside");
-    expect_error(HEADER "ObjectEnd\n", 4, "ObjectEnd without");
+    expect_first_statement_error("ObjectEnd\n", "ObjectEnd without");
 }
 
 Test(pbrt_errors, bad_geometry)
 {
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 1 1 1 ]\n", 4,
-                 "needs \"integer indices\"");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n"
-                        "  \"integer indices\" [ 0 1 3 ]\n",
-                 4, "index 3 is out of range");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 ]\n", 4,
-                 "needs \"point3 P\"");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 1 1 1 ]\n",
+                                 "needs \"integer indices\"");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n"
+                                 "  \"integer indices\" [ 0 1 3 ]\n", "index 3 is out of range");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 ]\n",
+                                 "needs \"point3 P\"");
     SgError err;
     cr_assert_null(load_text(HEADER "Shape \"sphere\"\n", &err));
     cr_expect(strstr(err.message, "no triangles"), "%s", err.message);
