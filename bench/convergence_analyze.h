@@ -148,7 +148,8 @@ static bool sg_analyze_load_mode(const char *dir, const char *mode, int seeds, S
 }
 
 /* Opens DIR/NAME SUFFIX for writing (through a temporary name until committed). */
-static bool sg_analyze_open(SgOutputFile *out, const char *dir, const char *name, const char *suffix, SgError *err)
+static bool sg_analyze_open(SgOutputFile *out, const char *dir, const char *name, const char *suffix,
+                            SgError *err)
 {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s%s", dir, name, suffix);

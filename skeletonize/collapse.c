@@ -323,7 +323,10 @@ static void note_isolated_edges(const Collapse *c, Sink *sk, uint32_t square)
             if (has(c->cells, w, em | bb) || has(c->cells, w - c->st[b], em | bb))
                 isolated = false;
         }
-        if (isolated && !vec_push_edge(sk->noted, (SgIsolatedEdge){edges[i], c->step, -1, edge_opening(c, w, em)}))
+        if (!isolated)
+            continue;
+        SgIsolatedEdge noted = {edges[i], c->step, -1, edge_opening(c, w, em)};
+        if (!vec_push_edge(sk->noted, noted))
             sk->oom = true;
     }
 }

@@ -34,7 +34,8 @@ bool pbrt_fail_at(Parser *p, const Token *t, const char *fmt, ...)
     /* without a token's place, the error is where reading stopped */
     bool placed = t && t->source;
     char where[4200]; /* as long as a warning's place */
-    write_place(p, placed ? t->source : p->last_source, placed ? t->line : p->last_line, where, sizeof where);
+    write_place(p, placed ? t->source : p->last_source, placed ? t->line : p->last_line, where,
+                sizeof where);
     char cause[900];
     va_list ap;
     va_start(ap, fmt);
