@@ -147,12 +147,19 @@ static bool sg_analyze_load_mode(const char *dir, const char *mode, int seeds, S
     return ok;
 }
 
-static bool sg_analyze_write_mean(const char *dir, const char *mode, const SgCurve *c, SgError *err)
+/* Opens DIR/NAME SUFFIX for writing (through a temporary name until committed). */
+static bool sg_analyze_open(SgOutputFile *out, const char *dir, const char *name, const char *suffix,
+                            SgError *err)
 {
     char path[4096];
-    snprintf(path, sizeof path, "%s/%s.mean.dat", dir, mode);
+    snprintf(path, sizeof path, "%s/%s%s", dir, name, suffix);
+    return sg_output_open(out, path, err);
+}
+
+static bool sg_analyze_write_mean(const char *dir, const char *mode, const SgCurve *c, SgError *err)
+{
     SgOutputFile out;
-    if (!sg_output_open(&out, path, err))
+    if (!sg_analyze_open(&out, dir, mode, ".mean.dat", err))
         return false;
     fprintf(out.file, "# seconds spp relmse mse8 mse (mean of seeds)\n");
     for (size_t i = 0; i < c->count; i++)
@@ -177,10 +184,8 @@ static bool sg_analyze_append(const char *dir, const char *file, const char *tex
 /* TABLEDIR/FILE.head (FILE without .md) := the header and its rule */
 static bool sg_analyze_header(const char *dir, const char *table, const char *header, SgError *err)
 {
-    char path[4096];
-    snprintf(path, sizeof path, "%s/%s.head", dir, table);
     SgOutputFile out;
-    if (!sg_output_open(&out, path, err))
+    if (!sg_analyze_open(&out, dir, table, ".head", err))
         return false;
     fprintf(out.file, "%s\n|", header);
     for (const char *p = header + 1; *p; p++) /* one |---| per column */
@@ -419,10 +424,8 @@ int sg_convergence_analyze(int argc, char **argv, SgError *err)
         sg_cat(line, sizeof line, "%s%s %.6g %.6g", k ? " " : "", sg_metric_key[k], levels[k][0], levels[k][1]);
     sg_cat(line, sizeof line, "\n");
     {
-        char path[4096];
-        snprintf(path, sizeof path, "%s/levels.txt", dir);
         SgOutputFile out;
-        if (!sg_output_open(&out, path, err))
+        if (!sg_analyze_open(&out, dir, "levels.txt", "", err))
             goto done;
         fputs(line, out.file);
         if (!sg_output_commit(&out, err))

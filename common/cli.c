@@ -69,3 +69,19 @@ SgCliArg sg_cli_step_argument(SgStepArguments *s, int argc, char **argv, int *i)
     s->inputs[s->input_count++] = a;
     return SG_CLI_TAKEN;
 }
+
+SgCliArg sg_cli_step_arguments(SgStepArguments *s, int argc, char **argv, SgCliOwnOption own, void *ctx)
+{
+    for (int i = 1; i < argc; i++) {
+        SgCliArg got = own ? own(ctx, argc, argv, &i) : SG_CLI_OTHER;
+        if (got == SG_CLI_OTHER)
+            got = sg_cli_step_argument(s, argc, argv, &i);
+        if (got != SG_CLI_TAKEN)
+            return got;
+    }
+    if (s->input_count < s->min_inputs || (s->out_required && !s->out_path)) {
+        s->usage(stderr);
+        return SG_CLI_BAD;
+    }
+    return SG_CLI_TAKEN;
+}

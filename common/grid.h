@@ -33,6 +33,14 @@ static inline size_t sg_grid_index(const SgGrid *g, int i, int j, int k)
     return (size_t)i + (size_t)g->nx * ((size_t)j + (size_t)g->ny * (size_t)k);
 }
 
+/* The voxel (i,j,k) at index v: the inverse of sg_grid_index. */
+static inline void sg_grid_coords(const SgGrid *g, size_t v, int ijk[3])
+{
+    ijk[0] = (int)(v % (size_t)g->nx);
+    ijk[1] = (int)(v / (size_t)g->nx % (size_t)g->ny);
+    ijk[2] = (int)(v / (size_t)g->nx / (size_t)g->ny);
+}
+
 static inline size_t sg_grid_count(const SgGrid *g)
 {
     return (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;

@@ -63,3 +63,23 @@ void sg_memory_prefer_huge_pages(void *p, size_t bytes)
     if (hi > lo)
         (void)madvise((void *)lo, hi - lo, MADV_HUGEPAGE);
 }
+
+bool sg_reserve(void **array, size_t *capacity, size_t needed, size_t item_size, size_t first)
+{
+    if (needed <= *capacity)
+        return true;
+    size_t cap = *capacity ? *capacity : first;
+    while (cap < needed) {
+        if (cap > SIZE_MAX / 2)
+            return false;
+        cap *= 2;
+    }
+    if (cap > SIZE_MAX / item_size)
+        return false;
+    void *grown = realloc(*array, cap * item_size);
+    if (!grown)
+        return false;
+    *array = grown;
+    *capacity = cap;
+    return true;
+}

@@ -30,6 +30,11 @@ bool sg_memory_check(double bytes, const char *name, const char *what, SgError *
  * 1000, would otherwise miss the TLB on nearly every access). */
 void sg_memory_prefer_huge_pages(void *p, size_t bytes);
 
+/* Grows *array, *capacity items of item_size bytes, to hold at least
+ * `needed` items: its capacity doubles, from `first`. False, the array as it
+ * was, when memory runs out or the size overflows. */
+bool sg_reserve(void **array, size_t *capacity, size_t needed, size_t item_size, size_t first);
+
 #ifdef __cplusplus
 }
 #endif

@@ -95,32 +95,44 @@ static int info(const char *cache_path, const char *scene_path)
     return 0;
 }
 
+typedef struct OwnOptions {
+    SgImportanceOptions *options;
+    const char *info_path; /* --info CACHE */
+} OwnOptions;
+
+static SgCliArg own_option(void *ctx, int argc, char **argv, int *i)
+{
+    OwnOptions *own = ctx;
+    const char *a = argv[*i];
+    if (*i + 1 >= argc)
+        return SG_CLI_OTHER; /* every one of them takes a value */
+    if (!strcmp(a, "--vectors")) {
+        own->options->vectors_path = argv[++*i];
+    } else if (!strcmp(a, "--run-tolerance")) {
+        double t;
+        if (!sg_parse_double(argv[++*i], 0, 1, &t) || t <= 0) {
+            fprintf(stderr, "importance: --run-tolerance takes a number in (0, 1]\n");
+            return SG_CLI_BAD;
+        }
+        own->options->run_tolerance = t;
+    } else if (!strcmp(a, "--info")) {
+        own->info_path = argv[++*i];
+    } else {
+        return SG_CLI_OTHER;
+    }
+    return SG_CLI_TAKEN;
+}
+
 int main(int argc, char **argv)
 {
-    const char *info_path = NULL;
     SgImportanceOptions options = {0};
-    bool want_info = false;
+    OwnOptions own = {.options = &options};
     SgStepArguments args = {.program = "importance", .usage = usage, .max_inputs = 2};
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "--vectors") && i + 1 < argc) {
-            options.vectors_path = argv[++i];
-        } else if (!strcmp(a, "--run-tolerance") && i + 1 < argc) {
-            double t;
-            if (!sg_parse_double(argv[++i], 0, 1, &t) || t <= 0) {
-                fprintf(stderr, "importance: --run-tolerance takes a number in (0, 1]\n");
-                return 2;
-            }
-            options.run_tolerance = t;
-        } else if (!strcmp(a, "--info") && i + 1 < argc) {
-            want_info = true;
-            info_path = argv[++i];
-        } else {
-            SgCliArg got = sg_cli_step_argument(&args, argc, argv, &i);
-            if (got != SG_CLI_TAKEN)
-                return got == SG_CLI_HELP ? 0 : 2;
-        }
-    }
+    SgCliArg got = sg_cli_step_arguments(&args, argc, argv, own_option, &own);
+    if (got != SG_CLI_TAKEN)
+        return got == SG_CLI_HELP ? 0 : 2;
+    const char *info_path = own.info_path;
+    bool want_info = info_path != NULL;
     const char *const *inputs = args.inputs, *out_path = args.out_path;
     int input_count = args.input_count;
     bool quiet = args.quiet;

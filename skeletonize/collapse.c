@@ -25,6 +25,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "memory.h"
+#include "row_runs.h"
 #include "threads.h"
 #include "union_find.h"
 
@@ -176,24 +178,12 @@ struct Collapse {
     _Atomic size_t next_slab;
 };
 
-static bool vec_reserve(void **a, size_t *cap, size_t need, size_t size)
-{
-    if (need <= *cap)
-        return true;
-    size_t cap2 = *cap ? *cap : 256;
-    while (cap2 < need)
-        cap2 *= 2;
-    void *p = realloc(*a, cap2 * size);
-    if (!p)
-        return false;
-    *a = p;
-    *cap = cap2;
-    return true;
-}
+/* the first capacity of the collapse's growing arrays */
+#define VEC_FIRST 256
 
 static inline bool vec_push_u32(U32Vec *v, uint32_t x)
 {
-    if (v->n == v->cap && !vec_reserve((void **)&v->a, &v->cap, v->n + 1, sizeof *v->a))
+    if (v->n == v->cap && !sg_reserve((void **)&v->a, &v->cap, v->n + 1, sizeof *v->a, VEC_FIRST))
         return false;
     v->a[v->n++] = x;
     return true;
@@ -201,7 +191,7 @@ static inline bool vec_push_u32(U32Vec *v, uint32_t x)
 
 static inline bool vec_push_edge(EdgeVec *v, SgIsolatedEdge e)
 {
-    if (v->n == v->cap && !vec_reserve((void **)&v->a, &v->cap, v->n + 1, sizeof *v->a))
+    if (v->n == v->cap && !sg_reserve((void **)&v->a, &v->cap, v->n + 1, sizeof *v->a, VEC_FIRST))
         return false;
     v->a[v->n++] = e;
     return true;
@@ -209,7 +199,7 @@ static inline bool vec_push_edge(EdgeVec *v, SgIsolatedEdge e)
 
 static inline void u32_push(Collapse *c, U32Vec *v, uint32_t x)
 {
-    if (v->n == v->cap && !vec_reserve((void **)&v->a, &v->cap, v->n + 1, sizeof *v->a)) {
+    if (v->n == v->cap && !sg_reserve((void **)&v->a, &v->cap, v->n + 1, sizeof *v->a, VEC_FIRST)) {
         c->oom = true;
         return;
     }
@@ -218,7 +208,7 @@ static inline void u32_push(Collapse *c, U32Vec *v, uint32_t x)
 
 static inline void edge_push(Collapse *c, EdgeVec *v, SgIsolatedEdge e)
 {
-    if (v->n == v->cap && !vec_reserve((void **)&v->a, &v->cap, v->n + 1, sizeof *v->a)) {
+    if (v->n == v->cap && !sg_reserve((void **)&v->a, &v->cap, v->n + 1, sizeof *v->a, VEC_FIRST)) {
         c->oom = true;
         return;
     }
@@ -275,18 +265,30 @@ static inline void consider(const Collapse *c, Sink *sk, uint32_t h)
         sk->oom = true;
 }
 
-static inline void consider_faces(const Collapse *c, Sink *sk, uint32_t cell)
+/* The faces of a cell (one dimension lower), two per axis it spans: at its
+ * vertex and one step along the axis. Returns how many (at most 6). */
+static inline int cell_faces(const Collapse *c, uint32_t cell, uint32_t faces[6])
 {
     size_t v = cell >> 3;
     unsigned m = cell & 7;
+    int n = 0;
     for (int a = 0; a < 3; a++) {
         unsigned bit = 1u << a;
         if (!(m & bit))
             continue;
         unsigned fm = m ^ bit;
-        consider(c, sk, (uint32_t)(v * 8 + fm));
-        consider(c, sk, (uint32_t)((v + c->st[a]) * 8 + fm));
+        faces[n++] = (uint32_t)(v * 8 + fm);
+        faces[n++] = (uint32_t)((v + c->st[a]) * 8 + fm);
     }
+    return n;
+}
+
+static inline void consider_faces(const Collapse *c, Sink *sk, uint32_t cell)
+{
+    uint32_t faces[6];
+    int n = cell_faces(c, cell, faces);
+    for (int i = 0; i < n; i++)
+        consider(c, sk, faces[i]);
 }
 
 static uint16_t edge_opening(const Collapse *c, size_t v, unsigned m)
@@ -306,31 +308,26 @@ static uint16_t edge_opening(const Collapse *c, size_t v, unsigned m)
 /* A square was removed: record its edges that have no square left. */
 static void note_isolated_edges(const Collapse *c, Sink *sk, uint32_t square)
 {
-    size_t v = square >> 3;
-    unsigned m = square & 7;
-    for (int a = 0; a < 3; a++) {
-        unsigned bit = 1u << a;
-        if (!(m & bit))
+    uint32_t edges[6];
+    int n = cell_faces(c, square, edges);
+    for (int i = 0; i < n; i++) {
+        size_t w = edges[i] >> 3;
+        unsigned em = edges[i] & 7;
+        if (!has(c->cells, w, em))
             continue;
-        unsigned em = m ^ bit;
-        size_t ends[2] = {v, v + c->st[a]};
-        for (int i = 0; i < 2; i++) {
-            size_t w = ends[i];
-            if (!has(c->cells, w, em))
+        bool isolated = true;
+        for (int b = 0; b < 3 && isolated; b++) {
+            unsigned bb = 1u << b;
+            if (em & bb)
                 continue;
-            bool isolated = true;
-            for (int b = 0; b < 3 && isolated; b++) {
-                unsigned bb = 1u << b;
-                if (em & bb)
-                    continue;
-                if (has(c->cells, w, em | bb) || has(c->cells, w - c->st[b], em | bb))
-                    isolated = false;
-            }
-            if (isolated && !vec_push_edge(sk->noted, (SgIsolatedEdge){(uint32_t)(w * 8 + em),
-                                                                      c->step, -1,
-                                                                      edge_opening(c, w, em)}))
-                sk->oom = true;
+            if (has(c->cells, w, em | bb) || has(c->cells, w - c->st[b], em | bb))
+                isolated = false;
         }
+        if (!isolated)
+            continue;
+        SgIsolatedEdge noted = {edges[i], c->step, -1, edge_opening(c, w, em)};
+        if (!vec_push_edge(sk->noted, noted))
+            sk->oom = true;
     }
 }
 
@@ -418,7 +415,7 @@ static bool append_u32(U32Vec *dst, U32Vec *src)
 {
     if (src->n == 0)
         return true;
-    if (!vec_reserve((void **)&dst->a, &dst->cap, dst->n + src->n, sizeof *dst->a))
+    if (!sg_reserve((void **)&dst->a, &dst->cap, dst->n + src->n, sizeof *dst->a, VEC_FIRST))
         return false;
     memcpy(dst->a + dst->n, src->a, src->n * sizeof *src->a);
     dst->n += src->n;
@@ -442,7 +439,7 @@ static void run_substep_parallel(Collapse *c, U32Vec *q)
         c->oom |= c->workers[t].sink.oom;
         total += c->workers[t].pairs.n;
     }
-    if (c->oom || !vec_reserve((void **)&c->pairs.a, &c->pairs.cap, total, sizeof *c->pairs.a)) {
+    if (c->oom || !sg_reserve((void **)&c->pairs.a, &c->pairs.cap, total, sizeof *c->pairs.a, VEC_FIRST)) {
         c->oom = true;
         return;
     }
@@ -495,7 +492,7 @@ static void sort_queue(Collapse *c, U32Vec *q)
 {
     if (q->n < 4096)
         return;
-    if (!vec_reserve((void **)&c->sort_scratch.a, &c->sort_scratch.cap, q->n, sizeof *q->a))
+    if (!sg_reserve((void **)&c->sort_scratch.a, &c->sort_scratch.cap, q->n, sizeof *q->a, VEC_FIRST))
         return; /* unsorted is still correct */
     uint32_t *from = q->a, *to = c->sort_scratch.a;
     for (int shift = 0; shift < 33; shift += 11) {
@@ -601,120 +598,66 @@ static uint16_t voxel_dist8(const Collapse *c, size_t v)
  * in memory order (a flood from each square visited the lattice in
  * breadth-first order, a cache miss per vertex on large grids). The
  * partition is the same, so the same squares are removed. */
-typedef struct SpaceRuns {
-    size_t row_length, rows_y, rows;
-    uint32_t *start, *end; /* inclusive x of each run */
-    uint32_t *parent;
-    uint32_t *row_first;   /* rows + 1 */
-    size_t count, cap;
-} SpaceRuns;
-
-static void space_runs_release(SpaceRuns *r)
+static size_t space_rows_y(const Collapse *c)
 {
-    free(r->start);
-    free(r->end);
-    free(r->parent);
-    free(r->row_first);
+    return (size_t)c->cx->ly - 1; /* without the far padding */
 }
 
-static bool space_runs_push(SpaceRuns *r, uint32_t x0, uint32_t x1)
+/* Two runs of neighbouring rows meet wherever a vertex of the upper row is
+ * not walled off from the one under it by a square of normal `wall`. */
+typedef struct SpaceWall {
+    const uint8_t *cells;
+    size_t first_vertex; /* of the upper row */
+    unsigned wall;
+} SpaceWall;
+
+static bool space_runs_meet(const void *ctx, uint32_t lo, uint32_t hi)
 {
-    if (r->count == r->cap) {
-        size_t cap = r->cap ? 2 * r->cap : 4096;
-        uint32_t *s = realloc(r->start, cap * sizeof *s);
-        if (s)
-            r->start = s;
-        uint32_t *e = realloc(r->end, cap * sizeof *e);
-        if (e)
-            r->end = e;
-        if (!s || !e || cap >= UINT32_MAX)
-            return false;
-        r->cap = cap;
-    }
-    r->start[r->count] = x0;
-    r->end[r->count] = x1;
-    r->count++;
-    return true;
+    const SpaceWall *w = ctx;
+    for (uint32_t x = lo; x <= hi; x++)
+        if (!has(w->cells, w->first_vertex + x, w->wall))
+            return true;
+    return false;
 }
 
-/* Joins the runs of row b to those of row a (the row below it along axis
- * `axis`, 1 or 2) wherever a vertex of b is not walled off from the one
- * under it by a square of normal `axis`. */
-static void space_runs_connect(const Collapse *c, SpaceRuns *r, size_t ra, size_t rb,
-                               size_t b_first_vertex, unsigned wall)
-{
-    uint32_t a = r->row_first[ra], a_end = r->row_first[ra + 1];
-    uint32_t b = r->row_first[rb], b_end = r->row_first[rb + 1];
-    while (a < a_end && b < b_end) {
-        uint32_t lo = r->start[a] > r->start[b] ? r->start[a] : r->start[b];
-        uint32_t hi = r->end[a] < r->end[b] ? r->end[a] : r->end[b];
-        for (uint32_t x = lo; x <= hi && lo <= hi; x++)
-            if (!has(c->cells, b_first_vertex + x, wall)) {
-                sg_set_union(r->parent, a, b);
-                break;
-            }
-        if (r->end[a] < r->end[b])
-            a++;
-        else
-            b++;
-    }
-}
-
-static bool space_runs_build(const Collapse *c, SpaceRuns *r)
+static bool space_runs_build(const Collapse *c, SgRowRuns *r)
 {
     const SgComplex *cx = c->cx;
-    memset(r, 0, sizeof *r);
-    r->row_length = (size_t)cx->lx - 1; /* without the far padding */
-    r->rows_y = (size_t)cx->ly - 1;
-    r->rows = r->rows_y * ((size_t)cx->lz - 1);
-    r->row_first = malloc((r->rows + 1) * sizeof *r->row_first);
-    if (!r->row_first)
+    size_t row_length = (size_t)cx->lx - 1, rows_y = space_rows_y(c);
+    if (!sg_row_runs_begin(r, rows_y * ((size_t)cx->lz - 1)))
         return false;
     for (size_t row = 0; row < r->rows; row++) {
-        r->row_first[row] = (uint32_t)r->count;
-        size_t y = row % r->rows_y, z = row / r->rows_y;
+        sg_row_runs_start_row(r, row);
+        size_t y = row % rows_y, z = row / rows_y;
         const uint8_t *cells = c->cells + y * c->st[1] + z * c->st[2];
         uint32_t x0 = 0;
-        for (uint32_t x = 1; x < r->row_length; x++)
+        for (uint32_t x = 1; x < row_length; x++)
             if (cells[x] >> 6 & 1) { /* the yz square at x walls x-1 off from x */
-                if (!space_runs_push(r, x0, x - 1))
+                if (!sg_row_runs_push(r, x0, x - 1))
                     return false;
                 x0 = x;
             }
-        if (!space_runs_push(r, x0, (uint32_t)r->row_length - 1))
+        if (!sg_row_runs_push(r, x0, (uint32_t)row_length - 1))
             return false;
     }
-    r->row_first[r->rows] = (uint32_t)r->count;
-    r->parent = malloc(r->count * sizeof *r->parent);
-    if (!r->parent)
+    if (!sg_row_runs_end(r))
         return false;
-    for (size_t i = 0; i < r->count; i++)
-        r->parent[i] = (uint32_t)i;
     for (size_t row = 0; row < r->rows; row++) {
-        size_t y = row % r->rows_y, z = row / r->rows_y;
+        size_t y = row % rows_y, z = row / rows_y;
         size_t first = y * c->st[1] + z * c->st[2];
-        if (y > 0)
-            space_runs_connect(c, r, row - 1, row, first, 5); /* xz square */
-        if (z > 0)
-            space_runs_connect(c, r, row - r->rows_y, row, first, 3); /* xy square */
+        if (y > 0) /* xz square */
+            sg_row_runs_connect(r, row - 1, row, 0, space_runs_meet, &(SpaceWall){c->cells, first, 5});
+        if (z > 0) /* xy square */
+            sg_row_runs_connect(r, row - rows_y, row, 0, space_runs_meet, &(SpaceWall){c->cells, first, 3});
     }
     return true;
 }
 
 /* The region (root run) of lattice vertex v. */
-static uint32_t space_region(const Collapse *c, SpaceRuns *r, size_t v)
+static uint32_t space_region(const Collapse *c, SgRowRuns *r, size_t v)
 {
     size_t x = v % c->st[1], y = v / c->st[1] % ((size_t)c->cx->ly), z = v / c->st[2];
-    size_t row = y + r->rows_y * z;
-    uint32_t lo = r->row_first[row], hi = r->row_first[row + 1];
-    while (lo + 1 < hi) {
-        uint32_t mid = (lo + hi) / 2;
-        if (r->start[mid] <= x)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    return sg_set_find(r->parent, lo);
+    return sg_set_find(r->parent, sg_row_runs_at(r, y + space_rows_y(c) * z, (uint32_t)x));
 }
 
 /* The collapse is stuck with squares left: no free face anywhere. The
@@ -740,7 +683,7 @@ static bool break_cavities(Collapse *c)
     size_t n = squares.n;
     uint32_t *side = malloc(2 * n * sizeof *side + 1);
     uint64_t *order = malloc(n * sizeof *order + 1);
-    SpaceRuns runs;
+    SgRowRuns runs;
     bool ok = false;
     bool built = space_runs_build(c, &runs);
     if (c->oom || !side || !order || !built)
@@ -792,7 +735,7 @@ done:
     free(squares.a);
     free(side);
     free(order);
-    space_runs_release(&runs);
+    sg_row_runs_release(&runs);
     if (!ok)
         c->oom = true;
     return ok;

@@ -103,26 +103,32 @@ static void edt_x(void *vctx, uint64_t index, int thread)
     }
 }
 
+/* The 1D pass along one line of d2: n values from `line`, `stride` apart,
+ * through the thread's buffers (a line with no medium is left as it is). */
+static inline void edt_line(const EdtContext *c, int thread, uint32_t *line, size_t stride, int n)
+{
+    uint32_t *f = c->f_buf[thread], *out = c->out_buf[thread];
+    bool any = false;
+    for (int i = 0; i < n; i++) {
+        f[i] = line[stride * (size_t)i];
+        any |= f[i] != 0;
+    }
+    if (!any)
+        return;
+    envelope_1d(f, out, n, c->v_buf[thread], c->z_buf[thread]);
+    for (int i = 0; i < n; i++)
+        if (f[i]) line[stride * (size_t)i] = out[i];
+}
+
 /* y: one z slice per task (the slice stays in cache). */
 static void edt_y(void *vctx, uint64_t z, int thread)
 {
     EdtContext *c = vctx;
     const SgGrid *g = c->grid;
-    uint32_t *f = c->f_buf[thread], *out = c->out_buf[thread];
     size_t nx = (size_t)g->nx;
     uint32_t *slice = c->d2 + (size_t)z * nx * (size_t)g->ny;
-    for (size_t x = 0; x < nx; x++) {
-        bool any = false;
-        for (int y = 0; y < g->ny; y++) {
-            f[y] = slice[x + nx * (size_t)y];
-            any |= f[y] != 0;
-        }
-        if (!any)
-            continue;
-        envelope_1d(f, out, g->ny, c->v_buf[thread], c->z_buf[thread]);
-        for (int y = 0; y < g->ny; y++)
-            if (f[y]) slice[x + nx * (size_t)y] = out[y];
-    }
+    for (size_t x = 0; x < nx; x++)
+        edt_line(c, thread, slice + x, nx, g->ny);
 }
 
 /* z: one y row per task. */
@@ -130,21 +136,10 @@ static void edt_z(void *vctx, uint64_t y, int thread)
 {
     EdtContext *c = vctx;
     const SgGrid *g = c->grid;
-    uint32_t *f = c->f_buf[thread], *out = c->out_buf[thread];
     size_t nx = (size_t)g->nx, plane = nx * (size_t)g->ny;
     uint32_t *base = c->d2 + (size_t)y * nx;
-    for (size_t x = 0; x < nx; x++) {
-        bool any = false;
-        for (int z = 0; z < g->nz; z++) {
-            f[z] = base[x + plane * (size_t)z];
-            any |= f[z] != 0;
-        }
-        if (!any)
-            continue;
-        envelope_1d(f, out, g->nz, c->v_buf[thread], c->z_buf[thread]);
-        for (int z = 0; z < g->nz; z++)
-            if (f[z]) base[x + plane * (size_t)z] = out[z];
-    }
+    for (size_t x = 0; x < nx; x++)
+        edt_line(c, thread, base + x, plane, g->nz);
 }
 
 /* ---- opening ----------------------------------------------------------- */

@@ -65,35 +65,43 @@ static double idle_cores(int ms)
     return total && cores > 0 ? (double)idle / (double)total * (double)cores : -1;
 }
 
+typedef struct OwnOptions {
+    SgSkeletonOptions *options;
+    bool collapse_choice; /* --parallel-collapse or --serial-collapse given */
+} OwnOptions;
+
+static SgCliArg own_option(void *ctx, int argc, char **argv, int *i)
+{
+    (void)argc;
+    OwnOptions *own = ctx;
+    const char *a = argv[*i];
+    if (!strcmp(a, "--parallel-collapse")) {
+        own->options->parallel_grain = SG_SKELETON_PARALLEL_GRAIN;
+        own->collapse_choice = true;
+    } else if (!strcmp(a, "--serial-collapse")) {
+        own->options->parallel_grain = 0;
+        own->collapse_choice = true;
+    } else if (!strcmp(a, "--camera-constraint")) {
+        own->options->camera_constraint = true;
+    } else {
+        return SG_CLI_OTHER;
+    }
+    return SG_CLI_TAKEN;
+}
+
 int main(int argc, char **argv)
 {
     SgSkeletonOptions options;
     sg_skeleton_options_default(&options);
-    bool collapse_choice = false;
-    SgStepArguments args = {.program = "skeletonize", .usage = usage, .threads = options.threads, .max_inputs = 1};
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "--parallel-collapse")) {
-            options.parallel_grain = SG_SKELETON_PARALLEL_GRAIN;
-            collapse_choice = true;
-        } else if (!strcmp(a, "--serial-collapse")) {
-            options.parallel_grain = 0;
-            collapse_choice = true;
-        } else if (!strcmp(a, "--camera-constraint")) {
-            options.camera_constraint = true;
-        } else {
-            SgCliArg got = sg_cli_step_argument(&args, argc, argv, &i);
-            if (got != SG_CLI_TAKEN)
-                return got == SG_CLI_HELP ? 0 : 2;
-        }
-    }
+    OwnOptions own = {.options = &options};
+    SgStepArguments args = {.program = "skeletonize", .usage = usage, .threads = options.threads,
+                            .min_inputs = 1, .max_inputs = 1, .out_required = true};
+    SgCliArg got = sg_cli_step_arguments(&args, argc, argv, own_option, &own);
+    if (got != SG_CLI_TAKEN)
+        return got == SG_CLI_HELP ? 0 : 2;
     const char *in_path = args.inputs[0], *out_path = args.out_path;
-    bool quiet = args.quiet;
+    bool quiet = args.quiet, collapse_choice = own.collapse_choice;
     options.threads = args.threads;
-    if (!in_path || !out_path) {
-        usage(stderr);
-        return 2;
-    }
 
     SgError err = {0};
     double t0 = sg_seconds();

@@ -132,19 +132,19 @@ void sg_shape_roughen(SgMedium *m, double p, uint64_t seed)
     if (!next)
         return;
     memcpy(next, g->voxels, n);
-    for (int k = 0; k < g->nz; k++)
-        for (int j = 0; j < g->ny; j++)
-            for (int i = 0; i < g->nx; i++) {
-                size_t v = sg_grid_index(g, i, j, k);
-                if (!g->voxels[v])
-                    continue;
-                bool wall = !sg_grid_get(g, i - 1, j, k) || !sg_grid_get(g, i + 1, j, k) ||
-                            !sg_grid_get(g, i, j - 1, k) || !sg_grid_get(g, i, j + 1, k) ||
-                            !sg_grid_get(g, i, j, k - 1) || !sg_grid_get(g, i, j, k + 1);
-                float u = sg_rng_float(&rng);
-                if (wall && u < p)
-                    next[v] = 0;
-            }
+    for (size_t v = 0; v < n; v++) {
+        if (!g->voxels[v])
+            continue;
+        int c[3];
+        sg_grid_coords(g, v, c);
+        int i = c[0], j = c[1], k = c[2];
+        bool wall = !sg_grid_get(g, i - 1, j, k) || !sg_grid_get(g, i + 1, j, k) ||
+                    !sg_grid_get(g, i, j - 1, k) || !sg_grid_get(g, i, j + 1, k) ||
+                    !sg_grid_get(g, i, j, k - 1) || !sg_grid_get(g, i, j, k + 1);
+        float u = sg_rng_float(&rng);
+        if (wall && u < p)
+            next[v] = 0;
+    }
     for (uint32_t l = 0; l < m->light_count; l++) {
         const int *s = m->lights[l].seed;
         if (sg_grid_inside(g, s[0], s[1], s[2]))

@@ -196,3 +196,28 @@ float *sgt_render_image(const SgScene *s, const SgRenderOptions *o, int passes, 
     sg_renderer_free(r);
     return rgb;
 }
+
+float *sgt_render_default(const SgScene *s, SgRenderOptions *o, int passes, SgError *err)
+{
+    sg_render_options_default(o, s);
+    o->threads = 2;
+    return sgt_render_image(s, o, passes, err);
+}
+
+SgtSampleMean sgt_passes_mean(SgRenderer *r, int passes, size_t pixels)
+{
+    double sum = 0.0, sum2 = 0.0;
+    long n = 0;
+    for (int p = 0; p < passes; p++) {
+        sg_renderer_pass(r);
+        const float *last = sg_renderer_last_pass(r);
+        for (size_t i = 0; i < pixels; i++, n++) {
+            double v = last[3 * i];
+            sum += v;
+            sum2 += v * v;
+        }
+    }
+    SgtSampleMean m = {.mean = sum / n};
+    m.std_error = sqrt(fmax(0.0, sum2 / n - m.mean * m.mean) / (n - 1));
+    return m;
+}

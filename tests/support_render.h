@@ -36,8 +36,18 @@ typedef struct SgtFixedPoint {
 } SgtFixedPoint;
 bool sgt_fixed_point_guide(void *ctx, const double p[3], uint32_t light, double q[3]);
 
+/* `passes` more passes of r (an image of `pixels` pixels): the mean of
+ * channel 0 over every sample and its standard error from the samples'
+ * spread (they are independent). */
+typedef struct SgtSampleMean {
+    double mean, std_error;
+} SgtSampleMean;
+SgtSampleMean sgt_passes_mean(SgRenderer *r, int passes, size_t pixels);
+
 /* s rendered `passes` passes under o: its image, 3 floats a pixel (the
  * caller frees it), or NULL with err set. */
 float *sgt_render_image(const SgScene *s, const SgRenderOptions *o, int passes, SgError *err);
+/* The same under s's default options on 2 threads, which *o receives. */
+float *sgt_render_default(const SgScene *s, SgRenderOptions *o, int passes, SgError *err);
 
 #endif

@@ -25,6 +25,8 @@ typedef struct LScene {
     SgMedium medium;
     SgSkeleton skeleton;
     uint32_t corner; /* node at the corner (38,2,2) */
+    SgImportanceCache *cache; /* l_scene_cache's, at path */
+    char path[256];
 } LScene;
 
 static void l_scene(LScene *s)
@@ -43,12 +45,6 @@ static void l_scene(LScene *s)
     s->skeleton.nodes[last].light = 0;
 }
 
-static void l_scene_free(LScene *s)
-{
-    sgt_medium_free(&s->medium);
-    sg_skeleton_release(&s->skeleton);
-}
-
 static SgImportanceCache *build_and_open(const SgMedium *m, const SgSkeleton *sk,
                                          const char *tag, int threads, char *path, size_t cap)
 {
@@ -60,6 +56,24 @@ static SgImportanceCache *build_and_open(const SgMedium *m, const SgSkeleton *sk
     SgImportanceCache *c = sg_cache_open(path, &err);
     cr_assert_not_null(c, "%s", err.message);
     return c;
+}
+
+/* The L scene's cache, built with `threads` at a temporary path named by
+ * tag; l_scene_free closes and removes it. */
+static SgImportanceCache *l_scene_cache(LScene *s, const char *tag, int threads)
+{
+    s->cache = build_and_open(&s->medium, &s->skeleton, tag, threads, s->path, sizeof s->path);
+    return s->cache;
+}
+
+static void l_scene_free(LScene *s)
+{
+    if (s->cache) {
+        sg_cache_close(s->cache);
+        unlink(s->path);
+    }
+    sgt_medium_free(&s->medium);
+    sg_skeleton_release(&s->skeleton);
 }
 
 static void node_point(const SgImportanceCache *c, uint32_t n, uint32_t light, double point[3])
@@ -205,8 +219,9 @@ static void reference_labels(const SgGrid *g, const SgSkeleton *s, uint32_t *lab
         heap[2 * i + 1] = lv;
         if (key[v] != k)
             continue;
-        int x = (int)(v % (size_t)g->nx), y = (int)(v / (size_t)g->nx % (size_t)g->ny),
-            z = (int)(v / ((size_t)g->nx * (size_t)g->ny));
+        int c[3];
+        sg_grid_coords(g, v, c);
+        int x = c[0], y = c[1], z = c[2];
         for (int dz = -1; dz <= 1; dz++)
             for (int dy = -1; dy <= 1; dy++)
                 for (int dx = -1; dx <= 1; dx++) {
@@ -229,6 +244,15 @@ static void reference_labels(const SgGrid *g, const SgSkeleton *s, uint32_t *lab
     free(key);
 }
 
+/* How many of n labels differ. */
+static size_t differences(const uint32_t *got, const uint32_t *want, size_t n)
+{
+    size_t wrong = 0;
+    for (size_t v = 0; v < n; v++)
+        wrong += got[v] != want[v];
+    return wrong;
+}
+
 /* sg_importance_label_voxels gives reference_labels' table at each thread
  * count given; the number of voxels labelled. */
 static size_t labels_match_reference(SgMedium *m, const SgSkeleton *s, const int *threads, int runs)
@@ -242,9 +266,7 @@ static size_t labels_match_reference(SgMedium *m, const SgSkeleton *s, const int
     for (int r = 0; r < runs; r++) {
         SgError err = {0};
         cr_assert(sg_importance_label_voxels(&m->grid, s, threads[r], got, &err), "%s", err.message);
-        size_t wrong = 0;
-        for (size_t v = 0; v < n; v++)
-            wrong += got[v] != want[v];
+        size_t wrong = differences(got, want, n);
         cr_assert_eq(wrong, 0, "threads %d: %zu voxels differ from the reference", threads[r], wrong);
     }
     free(want);
@@ -252,24 +274,30 @@ static size_t labels_match_reference(SgMedium *m, const SgSkeleton *s, const int
     return labelled;
 }
 
+/* A serpentine: z-running corridors joined alternately at y = 0 and y = 39,
+ * so that geodesics cross the slab boundaries many times; and its first
+ * `count` nodes of a few, some in one slab and nearest to voxels of another. */
+static void serpentine(SgMedium *m, SgSkeleton *s, size_t count)
+{
+    sgt_medium_init(m, 24, 40, 48);
+    for (int k = 1; k < 47; k += 4) {
+        sgt_box(m, 1, 1, k, 22, 38, k + 1, 1);
+        int j = (k / 4) % 2 ? 1 : 36;
+        sgt_box(m, 1, j, k + 2, 22, j + 2, k + 3, 1);
+    }
+    static const int nodes[][3] = {{3, 20, 1}, {20, 3, 45}, {12, 30, 21}, {12, 30, 22}, {2, 37, 3}, {5, 10, 30}};
+    *s = (SgSkeleton){0};
+    for (size_t i = 0; i < count && i < sizeof nodes / sizeof nodes[0]; i++)
+        sgt_node(s, nodes[i][0], nodes[i][1], nodes[i][2], SG_NODE_PLAIN, -1);
+}
+
 Test(importance_labels, slabs_match_plain_dijkstra_for_any_thread_count)
 {
-    /* A serpentine: z-running corridors joined alternately at y = 0 and
-     * y = 39, so that geodesics cross the slab boundaries many times; a
-     * few nodes, some in one slab and nearest to voxels of another. */
     SgMedium m;
-    sgt_medium_init(&m, 24, 40, 48);
-    for (int k = 1; k < 47; k += 4) {
-        sgt_box(&m, 1, 1, k, 22, 38, k + 1, 1);
-        int j = (k / 4) % 2 ? 1 : 36;
-        sgt_box(&m, 1, j, k + 2, 22, j + 2, k + 3, 1);
-    }
+    SgSkeleton s;
+    serpentine(&m, &s, 6);
     sgt_box(&m, 5, 5, 1, 8, 30, 46, 1); /* a shaft through everything */
     sgt_box(&m, 6, 6, 2, 7, 29, 45, 0); /* hollow: the shaft is a tube */
-    SgSkeleton s = {0};
-    int nodes[][3] = {{3, 20, 1}, {20, 3, 45}, {12, 30, 21}, {12, 30, 22}, {2, 37, 3}, {5, 10, 30}};
-    for (size_t i = 0; i < sizeof nodes / sizeof nodes[0]; i++)
-        sgt_node(&s, nodes[i][0], nodes[i][1], nodes[i][2], SG_NODE_PLAIN, -1);
     sgt_node(&s, 3, 20, 1, SG_NODE_PLAIN, -1); /* same voxel as node 0: never a source */
     const int threads[] = {1, 2, 3, 4, 5};
     cr_assert_gt(labels_match_reference(&m, &s, threads, 5), 10000);
@@ -310,16 +338,8 @@ static void labels_of(const SgGrid *g, const SgLabelGrid *l, uint32_t *out)
 Test(importance_labels, key_widths_and_overflow_fallback_agree)
 {
     SgMedium m;
-    sgt_medium_init(&m, 24, 40, 48);
-    for (int k = 1; k < 47; k += 4) {
-        sgt_box(&m, 1, 1, k, 22, 38, k + 1, 1);
-        int j = (k / 4) % 2 ? 1 : 36;
-        sgt_box(&m, 1, j, k + 2, 22, j + 2, k + 3, 1);
-    }
-    SgSkeleton s = {0};
-    sgt_node(&s, 3, 20, 1, SG_NODE_PLAIN, -1);
-    sgt_node(&s, 20, 3, 45, SG_NODE_PLAIN, -1);
-    sgt_node(&s, 12, 30, 21, SG_NODE_PLAIN, -1);
+    SgSkeleton s;
+    serpentine(&m, &s, 3);
     size_t n = sg_grid_count(&m.grid);
     uint32_t *want = malloc(n * sizeof *want), *got = malloc(n * sizeof *got);
     reference_labels(&m.grid, &s, want);
@@ -337,9 +357,7 @@ Test(importance_labels, key_widths_and_overflow_fallback_agree)
             cr_expect_eq(l.key32 != NULL, cases[c].narrow, "case %zu: 32-bit keys", c);
             cr_expect_eq(l.widened, cases[c].widened, "case %zu: widened", c);
             labels_of(&m.grid, &l, got);
-            size_t wrong = 0;
-            for (size_t v = 0; v < n; v++)
-                wrong += got[v] != want[v];
+            size_t wrong = differences(got, want, n);
             cr_expect_eq(wrong, 0, "case %zu, threads %d: %zu voxels differ", c, threads, wrong);
             sg_label_grid_release(&l);
         }
@@ -381,6 +399,18 @@ Test(importance_visibility, blocked_by_one_voxel_and_symmetric)
     sgt_medium_free(&m);
 }
 
+/* A random segment in g: its ends drawn axis by axis (a, then b); b within
+ * 4 voxels of a along each axis when `near`. */
+static void random_segment(const SgGrid *g, SgRng *rng, bool near, int a[3], int b[3])
+{
+    const int dims[3] = {g->nx, g->ny, g->nz};
+    for (int x = 0; x < 3; x++) {
+        a[x] = (int)(sg_rng_float(rng) * dims[x]);
+        b[x] = near ? a[x] + (int)(sg_rng_float(rng) * 9) - 4 : (int)(sg_rng_float(rng) * dims[x]);
+        b[x] = b[x] < 0 ? 0 : b[x] >= dims[x] ? dims[x] - 1 : b[x];
+    }
+}
+
 Test(importance_visibility, agrees_with_dense_sampling)
 {
     SgMedium m;
@@ -392,10 +422,7 @@ Test(importance_visibility, agrees_with_dense_sampling)
     int agree = 0, total = 400, unsafe = 0;
     for (int t = 0; t < total; t++) {
         int a[3], b[3];
-        for (int x = 0; x < 3; x++) {
-            a[x] = (int)(sg_rng_float(&rng) * 24);
-            b[x] = (int)(sg_rng_float(&rng) * 24);
-        }
+        random_segment(&m.grid, &rng, false, a, b);
         m.grid.voxels[sg_grid_index(&m.grid, a[0], a[1], a[2])] = 1;
         m.grid.voxels[sg_grid_index(&m.grid, b[0], b[1], b[2])] = 1;
         bool sampled = true;
@@ -439,14 +466,7 @@ Test(importance_visibility, brick_jumps_agree_with_plain_walk)
     int visible = 0, total = 20000;
     for (int t = 0; t < total; t++) {
         int a[3], b[3];
-        for (int x = 0; x < 3; x++) {
-            int n = x == 0 ? 61 : x == 1 ? 45 : 38;
-            a[x] = (int)(sg_rng_float(&rng) * n);
-            b[x] = t % 4 == 0 ? a[x] + (int)(sg_rng_float(&rng) * 9) - 4
-                              : (int)(sg_rng_float(&rng) * n);
-            if (b[x] < 0) b[x] = 0;
-            if (b[x] >= n) b[x] = n - 1;
-        }
+        random_segment(&m.grid, &rng, t % 4 == 0, a, b);
         if (t % 7 == 0)
             b[t % 3] = a[t % 3]; /* axis-parallel and diagonal-in-a-plane cases */
         bool plain = sg_importance_visible(&m.grid, a, b);
@@ -465,8 +485,7 @@ Test(importance_points, l_corridor_points_to_the_corner_never_through_the_wall)
 {
     LScene s;
     l_scene(&s);
-    char path[256];
-    SgImportanceCache *c = build_and_open(&s.medium, &s.skeleton, "l", 2, path, sizeof path);
+    SgImportanceCache *c = l_scene_cache(&s, "l", 2);
     cr_assert_eq(sg_cache_node_count(c), s.skeleton.node_count);
     cr_assert_eq(sg_cache_light_count(c), 1);
     int far_nodes = 0;
@@ -497,8 +516,6 @@ Test(importance_points, l_corridor_points_to_the_corner_never_through_the_wall)
         }
     }
     cr_assert_eq(far_nodes, 19);
-    sg_cache_close(c);
-    unlink(path);
     l_scene_free(&s);
 }
 
@@ -595,41 +612,60 @@ Test(importance_points, sealed_rooms_light_unreachable_from_camera)
 
 /* ---- lookups --------------------------------------------------------------- */
 
+/* Four random points in each voxel of g that is medium (or, with !medium,
+ * solid), in memory order, each with its voxel: *count of them. */
+typedef struct VoxelPoint {
+    int voxel[3];
+    double p[3];
+} VoxelPoint;
+
+static VoxelPoint *random_points(const SgGrid *g, bool medium, uint64_t seed, uint64_t stream, size_t *count)
+{
+    SgRng rng;
+    sg_rng_seed(&rng, seed, stream);
+    VoxelPoint *points = malloc(4 * sg_grid_count(g) * sizeof *points);
+    cr_assert_not_null(points);
+    size_t n = 0;
+    for (size_t v = 0; v < sg_grid_count(g); v++) {
+        if ((g->voxels[v] != 0) != medium)
+            continue;
+        for (int t = 0; t < 4; t++, n++) {
+            sg_grid_coords(g, v, points[n].voxel);
+            for (int a = 0; a < 3; a++)
+                points[n].p[a] = points[n].voxel[a] + sg_rng_float(&rng);
+        }
+    }
+    *count = n;
+    return points;
+}
+
 Test(importance_cache, every_medium_position_finds_a_node_on_its_side)
 {
     LScene s;
     l_scene(&s);
-    char path[256];
-    SgImportanceCache *c = build_and_open(&s.medium, &s.skeleton, "lookup", 2, path, sizeof path);
+    SgImportanceCache *c = l_scene_cache(&s, "lookup", 2);
     const SgGrid *g = &s.medium.grid;
     cr_assert_eq(sg_cache_medium_voxels(c), sg_grid_count_nonzero(g));
-    SgRng rng;
-    sg_rng_seed(&rng, 3, 9);
-    int checked = 0;
-    for (int k = 0; k < g->nz; k++)
-        for (int j = 0; j < g->ny; j++)
-            for (int i = 0; i < g->nx; i++) {
-                if (!sg_grid_get(g, i, j, k))
-                    continue;
-                for (int t = 0; t < 4; t++) {
-                    double p[3] = {i + sg_rng_float(&rng), j + sg_rng_float(&rng),
-                                   k + sg_rng_float(&rng)};
-                    uint32_t n;
-                    cr_assert(sg_cache_nearest_node(c, p, &n), "voxel %d %d %d", i, j, k);
-                    cr_assert_lt(n, s.skeleton.node_count);
-                    const int *nv = s.skeleton.nodes[n].voxel;
-                    /* Geodesically nearest on this skeleton = the centre-line node
-                     * beside the voxel. */
-                    if (i <= 33)
-                        cr_assert(nv[1] == 2 && abs(nv[0] - i) <= 2, "voxel %d %d %d", i, j, k);
-                    if (j >= 8)
-                        cr_assert(nv[0] == 38 && abs(nv[1] - j) <= 2, "voxel %d %d %d", i, j, k);
-                    double q[3];
-                    cr_assert(sg_cache_importance_point(c, p, 0, q));
-                    checked++;
-                }
-            }
-    cr_assert_eq(checked, 4 * (int)sg_grid_count_nonzero(g));
+    size_t count;
+    VoxelPoint *points = random_points(g, true, 3, 9, &count);
+    for (size_t t = 0; t < count; t++) {
+        const double *p = points[t].p;
+        int i = points[t].voxel[0], j = points[t].voxel[1], k = points[t].voxel[2];
+        uint32_t n;
+        cr_assert(sg_cache_nearest_node(c, p, &n), "voxel %d %d %d", i, j, k);
+        cr_assert_lt(n, s.skeleton.node_count);
+        const int *nv = s.skeleton.nodes[n].voxel;
+        /* Geodesically nearest on this skeleton = the centre-line node
+         * beside the voxel. */
+        if (i <= 33)
+            cr_assert(nv[1] == 2 && abs(nv[0] - i) <= 2, "voxel %d %d %d", i, j, k);
+        if (j >= 8)
+            cr_assert(nv[0] == 38 && abs(nv[1] - j) <= 2, "voxel %d %d %d", i, j, k);
+        double q[3];
+        cr_assert(sg_cache_importance_point(c, p, 0, q));
+    }
+    cr_assert_eq(count, 4 * sg_grid_count_nonzero(g));
+    free(points);
     /* A point on a wall surface (in a solid voxel next to the corridor)
      * uses the corridor voxel beside it; far outside: nothing. */
     double wall[3] = {10.3, 5.02, 2.5}, far[3] = {10.5, 20.5, 2.5}, out[3] = {-5, 2, 2};
@@ -642,8 +678,6 @@ Test(importance_cache, every_medium_position_finds_a_node_on_its_side)
     cr_assert_not(sg_cache_nearest_node(c, nan3, &n));
     cr_assert_eq(sg_cache_geometry_hash(c), s.medium.geometry_hash);
     cr_assert_eq(sg_cache_skeleton_hash(c), sg_importance_skeleton_hash(&s.skeleton));
-    sg_cache_close(c);
-    unlink(path);
     l_scene_free(&s);
 }
 
@@ -654,52 +688,45 @@ Test(importance_cache, a_point_in_a_wall_takes_the_nearest_medium_neighbour)
 {
     LScene s;
     l_scene(&s);
-    char path[256];
-    SgImportanceCache *c = build_and_open(&s.medium, &s.skeleton, "wall", 1, path, sizeof path);
+    SgImportanceCache *c = l_scene_cache(&s, "wall", 1);
     const SgGrid *g = &s.medium.grid;
-    SgRng rng;
-    sg_rng_seed(&rng, 5, 1);
+    size_t count;
+    VoxelPoint *points = random_points(g, false, 5, 1, &count);
     int checked = 0;
-    for (int k = 0; k < g->nz; k++)
-        for (int j = 0; j < g->ny; j++)
-            for (int i = 0; i < g->nx; i++) {
-                if (sg_grid_get(g, i, j, k))
-                    continue;
-                for (int t = 0; t < 4; t++) {
-                    double p[3] = {i + sg_rng_float(&rng), j + sg_rng_float(&rng), k + sg_rng_float(&rng)};
-                    /* every medium neighbour: its squared distance and node */
-                    double d2[27], best = INFINITY;
-                    uint32_t node[27];
-                    int count = 0;
-                    for (int dz = -1; dz <= 1; dz++)
-                        for (int dy = -1; dy <= 1; dy++)
-                            for (int dx = -1; dx <= 1; dx++) {
-                                int a = i + dx, b = j + dy, e = k + dz;
-                                if (a < 0 || b < 0 || e < 0 || a >= g->nx || b >= g->ny || e >= g->nz ||
-                                    !sg_grid_get(g, a, b, e))
-                                    continue;
-                                double centre[3] = {a + 0.5, b + 0.5, e + 0.5};
-                                double t0 = p[0] - centre[0], t1 = p[1] - centre[1], t2 = p[2] - centre[2];
-                                cr_assert(sg_cache_nearest_node(c, centre, &node[count]));
-                                d2[count] = t0 * t0 + t1 * t1 + t2 * t2;
-                                best = fmin(best, d2[count++]);
-                            }
-                    uint32_t n;
-                    bool found = sg_cache_nearest_node(c, p, &n);
-                    cr_assert_eq(found, count > 0, "voxel %d %d %d", i, j, k);
-                    if (!found)
+    for (size_t t = 0; t < count; t++) {
+        const double *p = points[t].p;
+        int i = points[t].voxel[0], j = points[t].voxel[1], k = points[t].voxel[2];
+        /* every medium neighbour: its squared distance and node */
+        double d2[27], best = INFINITY;
+        uint32_t node[27];
+        int neighbours = 0;
+        for (int dz = -1; dz <= 1; dz++)
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dx = -1; dx <= 1; dx++) {
+                    int a = i + dx, b = j + dy, e = k + dz;
+                    if (a < 0 || b < 0 || e < 0 || a >= g->nx || b >= g->ny || e >= g->nz ||
+                        !sg_grid_get(g, a, b, e))
                         continue;
-                    /* the node is that of a neighbour at the least distance (ties: any) */
-                    bool matched = false;
-                    for (int q = 0; q < count && !matched; q++)
-                        matched = fabs(d2[q] - best) < 1e-12 && node[q] == n;
-                    cr_assert(matched, "voxel %d %d %d: node %u is no nearest neighbour's", i, j, k, n);
-                    checked++;
+                    double centre[3] = {a + 0.5, b + 0.5, e + 0.5};
+                    double t0 = p[0] - centre[0], t1 = p[1] - centre[1], t2 = p[2] - centre[2];
+                    cr_assert(sg_cache_nearest_node(c, centre, &node[neighbours]));
+                    d2[neighbours] = t0 * t0 + t1 * t1 + t2 * t2;
+                    best = fmin(best, d2[neighbours++]);
                 }
-            }
+        uint32_t n;
+        bool found = sg_cache_nearest_node(c, p, &n);
+        cr_assert_eq(found, neighbours > 0, "voxel %d %d %d", i, j, k);
+        if (!found)
+            continue;
+        /* the node is that of a neighbour at the least distance (ties: any) */
+        bool matched = false;
+        for (int q = 0; q < neighbours && !matched; q++)
+            matched = fabs(d2[q] - best) < 1e-12 && node[q] == n;
+        cr_assert(matched, "voxel %d %d %d: node %u is no nearest neighbour's", i, j, k, n);
+        checked++;
+    }
+    free(points);
     cr_assert_gt(checked, 100);
-    sg_cache_close(c);
-    unlink(path);
     l_scene_free(&s);
 }
 
@@ -712,10 +739,9 @@ Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
 {
     LScene s;
     l_scene(&s);
-    char path[256];
-    SgImportanceCache *c = build_and_open(&s.medium, &s.skeleton, "decode", 1, path, sizeof path);
+    SgImportanceCache *c = l_scene_cache(&s, "decode", 1);
     SgError err = {0};
-    SgImportanceCache *packed = sg_cache_open(path, &err); /* never decoded: searches */
+    SgImportanceCache *packed = sg_cache_open(s.path, &err); /* never decoded: searches */
     cr_assert_not_null(packed, "%s", err.message);
     const SgGrid *g = &s.medium.grid;
     enum { POINTS = 20000 };
@@ -797,8 +823,6 @@ Test(importance_cache, the_unpacked_node_table_answers_as_the_packed_blocks)
     free(node);
     free(found);
     sg_cache_close(packed);
-    sg_cache_close(c);
-    unlink(path);
     l_scene_free(&s);
 }
 

@@ -187,18 +187,8 @@ static FurnaceResult furnace(float pdf_error, int passes, int threads)
     SgError err = {0};
     SgRenderer *r = sg_renderer_create_with_guide(s, &o, uniform_create, &err);
     cr_assert_not_null(r, "%s", err.message);
-    double sum = 0, sum2 = 0;
-    long n = 0;
-    for (int p = 0; p < passes; p++) {
-        sg_renderer_pass(r);
-        const float *last = sg_renderer_last_pass(r);
-        for (long i = 0; i < (long)o.width * o.height; i++, n++) {
-            sum += last[3 * i];
-            sum2 += (double)last[3 * i] * last[3 * i];
-        }
-    }
-    FurnaceResult fr = {.mean = sum / n, .guide_share = sg_renderer_lobe_share(r)};
-    fr.std_error = sqrt(fmax(0.0, sum2 / n - fr.mean * fr.mean) / (n - 1));
+    SgtSampleMean m = sgt_passes_mean(r, passes, (size_t)o.width * o.height);
+    FurnaceResult fr = {.mean = m.mean, .std_error = m.std_error, .guide_share = sg_renderer_lobe_share(r)};
     sg_renderer_free(r);
     sgt_scene_free(s);
     return fr;

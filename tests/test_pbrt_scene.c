@@ -32,13 +32,26 @@
 
 static const char *scene_dir;
 
+/* The folder the tests write their scenes and files in (made on first use). */
+static const char *scene_folder(void)
+{
+    if (!scene_dir)
+        scene_dir = sg_test_tmpdir();
+    return scene_dir;
+}
+
+/* path = scene_folder()/name. */
+static char *scene_file(char path[4200], const char *name)
+{
+    snprintf(path, 4200, "%s/%s", scene_folder(), name);
+    return path;
+}
+
 /* Writes scene_dir/name; the path stays valid until the next call. */
 static const char *write_scene(const char *name, const char *text)
 {
     static char path[4200];
-    if (!scene_dir)
-        scene_dir = sg_test_tmpdir();
-    snprintf(path, sizeof path, "%s/%s", scene_dir, name);
+    scene_file(path, name);
     FILE *f = fopen(path, "wb");
     cr_assert(f, "cannot write %s", path);
     cr_assert(fputs(text, f) >= 0 && fclose(f) == 0, "cannot write %s", path);
@@ -73,6 +86,15 @@ static void expect_error(const char *text, int line, const char *what)
               prefix, err.message);
     cr_expect(strstr(err.message, what), "expected \"%s\" in \"%s\"", what, err.message);
     cr_expect(!strchr(err.message, '\n'), "message is not one line");
+}
+
+/* expect_error for an error on the first statement after HEADER (line 4). */
+static void expect_first_statement_error(const char *statements, const char *what)
+{
+    char text[4096];
+    cr_assert_lt(strlen(HEADER) + strlen(statements), sizeof text);
+    snprintf(text, sizeof text, "%s%s", HEADER, statements);
+    expect_error(text, 4, what);
 }
 
 static const double *vertex(const SgScene *s, uint32_t t, int c)
@@ -180,11 +202,8 @@ Test(pbrt_transforms, instances_apply_their_transform_after_the_definition)
 Test(pbrt_shapes, trianglemesh_bilinear_and_plymesh)
 {
     /* A binary PLY whose first data byte is 0x0A, as in the bathroom. */
-    if (!scene_dir)
-        scene_dir = sg_test_tmpdir();
     char ply[4200];
-    snprintf(ply, sizeof ply, "%s/quad.ply", scene_dir);
-    FILE *f = fopen(ply, "wb");
+    FILE *f = fopen(scene_file(ply, "quad.ply"), "wb");
     cr_assert(f);
     fputs("ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\n"
           "property float y\nproperty float z\nelement face 1\n"
@@ -240,11 +259,8 @@ Test(pbrt_shapes, unsupported_kinds_warn_once_each)
 
 Test(pbrt_shapes, include_and_import_resolve_against_the_main_file)
 {
-    if (!scene_dir)
-        scene_dir = sg_test_tmpdir();
     char path[4200];
-    snprintf(path, sizeof path, "%s/parts", scene_dir);
-    mkdir(path, 0755);
+    mkdir(scene_file(path, "parts"), 0755);
     write_scene("parts/materials.pbrt",
                 "MakeNamedMaterial \"red\" \"string type\" \"diffuse\" \"rgb reflectance\" [ 0.8 0 0 ]\n");
     write_scene("parts/geometry.pbrt", "NamedMaterial \"red\"\nTranslate 0 0 2\n" TRIANGLE);
@@ -360,8 +376,6 @@ Test(pbrt_materials, textures_as_their_average)
 
 Test(pbrt_materials, image_textures_as_their_mean_linear_colour)
 {
-    if (!scene_dir)
-        scene_dir = sg_test_tmpdir();
     /* Left half (0.2, 0.4, 0.6), right half (0.6, 0.4, 0.2): mean 0.4. */
     enum { W = 64, H = 32 };
     static float rgb[W * H * 3];
@@ -370,8 +384,8 @@ Test(pbrt_materials, image_textures_as_their_mean_linear_colour)
             for (int c = 0; c < 3; c++)
                 rgb[3 * (y * W + x) + c] = x < W / 2 ? 0.2f * (1 + c) : 0.2f * (3 - c);
     char png[4200], exr[4200];
-    snprintf(png, sizeof png, "%s/wood.png", scene_dir);
-    snprintf(exr, sizeof exr, "%s/wood.exr", scene_dir);
+    scene_file(png, "wood.png");
+    scene_file(exr, "wood.exr");
     SgError err = {0};
     cr_assert(sg_image_write_png(png, W, H, rgb, 0, &err), "%s", err.message);
     cr_assert(sg_image_write_exr(exr, W, H, rgb, NULL, 0, &err), "%s", err.message);
@@ -730,43 +744,43 @@ Test(pbrt_errors, unbalanced_brackets)
     expect_error(HEADER "Shape \"trianglemesh\"\n  \"point3 P\" [ 0 0 0 1 0 0 0 1 0\n"
                         "  \"integer indices\" [ 0 1 2 ]\n",
                  5, "'[' is not closed");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0\n"
-                        "Shape \"sphere\"\n",
-                 4, "'[' is not closed");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ] ]\n", 4,
-                 "']'");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0", 4,
-                 "never closed");
-    expect_error(HEADER "Transform [ 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\nWorldBegin\n", 4,
-                 "is not closed");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0\n"
+                                 "Shape \"sphere\"\n", "'[' is not closed");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ] ]\n",
+                                 "']'");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0",
+                                 "never closed");
+    expect_first_statement_error("Transform [ 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\nWorldBegin\n",
+                                 "is not closed");
 }
 
 Test(pbrt_errors, unknown_parameter_types_and_statements)
 {
     expect_error(HEADER "\n\nShape \"sphere\" \"floot radius\" [ 1 ]\n", 6,
                  "unknown parameter type \"floot\"");
-    expect_error(HEADER "Shape \"sphere\" \"radius\" [ 1 ]\n", 4, "not a parameter declaration");
-    expect_error(HEADER "Shapes \"sphere\"\n", 4, "unknown statement \"Shapes\"");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 \"x\" 0 1 0 ]\n", 4,
-                 "expected numbers");
+    expect_first_statement_error("Shape \"sphere\" \"radius\" [ 1 ]\n",
+                                 "not a parameter declaration");
+    expect_first_statement_error("Shapes \"sphere\"\n", "unknown statement \"Shapes\"");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 \"x\" 0 1 0 ]\n",
+                                 "expected numbers");
     expect_error(HEADER "Translate 1 2\nWorldEnd\n", 5, "expected a number");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 nan 0 1 0 ]\n", 4,
-                 "expected a value, found nan");
-    expect_error(HEADER "Material \"diffuse\" \"string reflectance\" \"x\n", 4,
-                 "unterminated string");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 nan 0 1 0 ]\n",
+                                 "expected a value, found nan");
+    expect_first_statement_error("Material \"diffuse\" \"string reflectance\" \"x\n",
+                                 "unterminated string");
 }
 
 Test(pbrt_errors, missing_files_and_names)
 {
     expect_error(HEADER "\nShape \"plymesh\" \"string filename\" \"models/none.ply\"\n", 5,
                  "models/none.ply: cannot open mesh");
-    expect_error(HEADER "Include \"none.pbrt\"\n", 4, "none.pbrt: cannot open");
-    expect_error(HEADER "Include \"part.pbrt.gz\"\n", 4, "gunzip it first");
+    expect_first_statement_error("Include \"none.pbrt\"\n", "none.pbrt: cannot open");
+    expect_first_statement_error("Include \"part.pbrt.gz\"\n", "gunzip it first");
     expect_error(HEADER TRIANGLE "NamedMaterial \"nothing\"\n" TRIANGLE, 5,
                  "\"nothing\" is never defined");
-    expect_error(HEADER "ObjectInstance \"nothing\"\n", 4, "no such object");
-    expect_error(HEADER "Material \"diffuse\" \"texture reflectance\" \"none\"\n", 4,
-                 "no texture named \"none\"");
+    expect_first_statement_error("ObjectInstance \"nothing\"\n", "no such object");
+    expect_first_statement_error("Material \"diffuse\" \"texture reflectance\" \"none\"\n",
+                                 "no texture named \"none\"");
     /* An error in an included file names that file. */
     write_scene("bad.pbrt", "\nShape \"trianglemesh\" \"point3 P\" [ 0 0 0 ] \"integer indices\" [ 0 1 2 ]\n");
     SgError err;
@@ -777,22 +791,21 @@ Test(pbrt_errors, missing_files_and_names)
 Test(pbrt_errors, unbalanced_blocks)
 {
     expect_error(HEADER TRIANGLE "AttributeEnd\n", 5, "AttributeEnd without");
-    expect_error(HEADER "AttributeBegin\n" TRIANGLE, 4, "AttributeBegin has no matching");
-    expect_error(HEADER "TransformBegin\n" TRIANGLE, 4, "TransformBegin has no matching");
-    expect_error(HEADER "ObjectBegin \"a\"\n" TRIANGLE, 4, "ObjectBegin has no matching");
+    expect_first_statement_error("AttributeBegin\n" TRIANGLE, "AttributeBegin has no matching");
+    expect_first_statement_error("TransformBegin\n" TRIANGLE, "TransformBegin has no matching");
+    expect_first_statement_error("ObjectBegin \"a\"\n" TRIANGLE, "ObjectBegin has no matching");
     expect_error(HEADER "ObjectBegin \"a\"\nObjectBegin \"b\"\n", 5, "ObjectBegin inside");
-    expect_error(HEADER "ObjectEnd\n", 4, "ObjectEnd without");
+    expect_first_statement_error("ObjectEnd\n", "ObjectEnd without");
 }
 
 Test(pbrt_errors, bad_geometry)
 {
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 1 1 1 ]\n", 4,
-                 "needs \"integer indices\"");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n"
-                        "  \"integer indices\" [ 0 1 3 ]\n",
-                 4, "index 3 is out of range");
-    expect_error(HEADER "Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 ]\n", 4,
-                 "needs \"point3 P\"");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 1 1 1 ]\n",
+                                 "needs \"integer indices\"");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 0 ]\n"
+                                 "  \"integer indices\" [ 0 1 3 ]\n", "index 3 is out of range");
+    expect_first_statement_error("Shape \"trianglemesh\" \"point3 P\" [ 0 0 0 1 0 0 0 1 ]\n",
+                                 "needs \"point3 P\"");
     SgError err;
     cr_assert_null(load_text(HEADER "Shape \"curve\"\n", &err));
     cr_expect(strstr(err.message, "no triangles"), "%s", err.message);
@@ -848,16 +861,14 @@ Test(pbrt_render, staircase_mean_brightness, .timeout = 120)
     }
     fclose(f);
     cr_assert(tolerance > 0 && spp > 0 && width > 0 && height > 0, "bad reference file");
-    if (!scene_dir)
-        scene_dir = sg_test_tmpdir();
+    const char *dir = scene_folder();
     char cmd[16384], errs[8192];
     snprintf(cmd, sizeof cmd,
              "%s %s --sampling bsdf --spp %d --size %dx%d --seed 1 -o %s/stairs.exr --quiet",
-             prog, STAIRCASE, spp, width, height, scene_dir);
+             prog, STAIRCASE, spp, width, height, dir);
     int rc = sg_test_run(cmd, errs, sizeof errs);
     cr_assert_eq(rc, 0, "%s", errs);
-    snprintf(cmd, sizeof cmd, "oiiotool %s/stairs.exr --printstats 2>&1 | grep 'Stats Avg'",
-             scene_dir);
+    snprintf(cmd, sizeof cmd, "oiiotool %s/stairs.exr --printstats 2>&1 | grep 'Stats Avg'", dir);
     FILE *stats = popen(cmd, "r");
     cr_assert(stats);
     double got[3] = {-1, -1, -1};
@@ -889,10 +900,8 @@ Test(pbrt_render, checkerboard_texture_follows_the_uv)
                "    \"integer indices\" [ 0 1 2 ]\nAttributeEnd\n");
     cr_assert_not_null(s->uvs, "the quad's uv");
     SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.threads = 2;
     SgError err = {0};
-    float *rgb = sgt_render_image(s, &o, 4, &err);
+    float *rgb = sgt_render_default(s, &o, 4, &err);
     cr_assert(rgb, "%s", err.message);
     /* per column: which colour wins; the columns must split in two runs */
     int red_left = 0, red_right = 0, blue_left = 0, blue_right = 0;

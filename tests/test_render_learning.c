@@ -178,11 +178,12 @@ Test(render_learning, a_region_with_enough_samples_settles)
 }
 
 /* Vertices that report only what left them (no guided bounce): `count`
- * records alternating between radiance a and b. */
-static void feed_radiance(SgMixtureLearner *l, uint32_t region, int count, float a, float b)
+ * records, every `period`-th from the first carrying radiance `rare`, the
+ * others `usual` (period 2: alternating), from two threads in turn. */
+static void feed_radiance(SgMixtureLearner *l, uint32_t region, int count, int period, float rare, float usual)
 {
     for (int i = 0; i < count; i++) {
-        SgMixtureRecord rec = {.region = region, .radiance = i & 1 ? b : a, .weight = 1.0f};
+        SgMixtureRecord rec = {.region = region, .radiance = i % period == 0 ? rare : usual, .weight = 1.0f};
         sg_mixture_record(l, (uint32_t)(i & 1), &rec);
     }
     sg_mixture_update(l);
@@ -197,9 +198,9 @@ Test(render_learning, regions_learn_the_second_moment_of_what_leaves_them)
     uint32_t dark = sg_mixture_region(l, v3(0.9f, 0.9f, 0.9f), v3(0, 1, 0));
     uint32_t elsewhere = sg_mixture_region(l, v3(0.9f, 0.1f, 0.9f), v3(1, 0, 0));
     cr_assert_lt(sg_mixture_radiance(v, lit), 0.0f, "nothing known yet");
-    feed_radiance(l, lit, 1000, 1.0f, 3.0f);
-    feed_radiance(l, dark, 1000, 0.0f, 0.1f);
-    feed_radiance(l, sparse, 10, 50.0f, 50.0f);
+    feed_radiance(l, lit, 1000, 2, 1.0f, 3.0f);
+    feed_radiance(l, dark, 1000, 2, 0.0f, 0.1f);
+    feed_radiance(l, sparse, 10, 2, 50.0f, 50.0f);
     /* root mean square: sqrt((1 + 9) / 2), not the mean 2 */
     float got = sg_mixture_radiance(v, lit);
     cr_assert_float_eq(got, sqrtf(5.0f), 1e-5f, "lit: %g", got);
@@ -229,19 +230,15 @@ Test(render_learning, regions_learn_the_second_moment_of_what_leaves_them)
 Test(render_learning, a_region_that_missed_the_rare_light_is_not_taken_for_dark)
 {
     SgMixtureLearner *l = unit_learner();
-    const SgMixtureView *v = sg_mixture_view(l);
     /* one coarse cell (fine cells 1/8, coarse ones 4 of them) */
     uint32_t busy = sg_mixture_region(l, v3(0.05f, 0.05f, 0.05f), v3(0, 1, 0));
     uint32_t unlucky = sg_mixture_region(l, v3(0.3f, 0.3f, 0.3f), v3(0, 1, 0));
     cr_assert_neq(busy, unlucky);
-    for (int i = 0; i < 3000; i++) {
-        SgMixtureRecord rec = {.region = busy, .radiance = i % 100 == 0 ? 10.0f : 0.0f, .weight = 1.0f};
-        sg_mixture_record(l, (uint32_t)(i & 1), &rec);
-    }
-    sg_mixture_update(l);
-    feed_radiance(l, unlucky, 200, 0.0f, 0.0f);
+    feed_radiance(l, busy, 3000, 100, 10.0f, 0.0f);
+    feed_radiance(l, unlucky, 200, 2, 0.0f, 0.0f);
     double coarse_m2 = 30.0 * 100.0 / 3200.0; /* busy's 3000 and unlucky's 200 */
     float want = (float)sqrt(256.0 * coarse_m2 / (200.0 + 256.0));
+    const SgMixtureView *v = sg_mixture_view(l);
     float got = sg_mixture_radiance(v, unlucky);
     cr_log_info("unlucky region: rms %g (its coarse region's %g, its own 0)", got, sqrt(coarse_m2));
     cr_assert_float_eq(got, want, 1e-4f, "unlucky region: rms %g, want %g", got, want);

@@ -32,20 +32,8 @@ static Estimate estimate(const SgScene *s, const SgRenderOptions *o, int spp)
     SgError err = {0};
     SgRenderer *r = sg_renderer_create(s, o, &err);
     cr_assert_not_null(r, "%s", err.message);
-    double sum = 0.0, sum2 = 0.0;
-    long n = 0;
-    for (int p = 0; p < spp; p++) {
-        sg_renderer_pass(r);
-        const float *last = sg_renderer_last_pass(r);
-        for (size_t i = 0; i < (size_t)o->width * o->height; i++) {
-            double v = last[3 * i];
-            sum += v;
-            sum2 += v * v;
-            n++;
-        }
-    }
-    Estimate e = {.mean = sum / n};
-    e.std_error = sqrt(fmax(0.0, sum2 / n - e.mean * e.mean) / (n - 1));
+    SgtSampleMean m = sgt_passes_mean(r, spp, (size_t)o->width * o->height);
+    Estimate e = {.mean = m.mean, .std_error = m.std_error};
     e.lobe_share = sg_renderer_lobe_share(r);
     e.nonfinite = sg_renderer_nonfinite(r);
     sg_renderer_free(r);

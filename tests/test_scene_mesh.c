@@ -336,10 +336,8 @@ Test(mesh_render, obj_texture_the_right_way_up, .timeout = 60)
         "  \"camera\": { \"position\": [0, 0, 3], \"look_at\": [0, 0, 0], \"up\": [0, 1, 0], \"fov\": 30 },\n"
         "  \"image\": { \"width\": 32, \"height\": 32 } }"));
     SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.threads = 2;
     SgError err = {0};
-    float *rgb = sgt_render_image(s, &o, 4, &err);
+    float *rgb = sgt_render_default(s, &o, 4, &err);
     cr_assert(rgb, "%s", err.message);
     /* the mean of each quarter, away from the seams (bilinear lookups) */
     for (int qy = 0; qy < 2; qy++)

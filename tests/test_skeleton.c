@@ -111,6 +111,15 @@ static void check_skeleton(const SgMedium *m, const SgSkeleton *s, const SgSkele
                 (long)air.b1, (long)air.b2, st->cavities_broken, st->steps, st->mean_centredness);
 }
 
+/* m skeletonized under o, which must succeed, and checked (check_skeleton). */
+static void skeletonize_checked(const SgMedium *m, const SgSkeletonOptions *o, SgSkeleton *s,
+                                SgSkeletonStats *st, const char *name)
+{
+    SgError err = {0};
+    cr_assert(sg_skeletonize(m, o, s, st, &err), "%s: %s", name, err.message);
+    check_skeleton(m, s, st, name);
+}
+
 static void run_shape(SgShape shape, int scale, double min_centredness)
 {
     SgMedium m;
@@ -126,41 +135,35 @@ static void run_shape(SgShape shape, int scale, double min_centredness)
     SgSkeletonOptions o = quiet_options(2);
     SgSkeleton s;
     SgSkeletonStats st;
-    cr_assert(sg_skeletonize(&m, &o, &s, &st, &err), "%s: %s", info->name, err.message);
-    check_skeleton(&m, &s, &st, info->name);
+    skeletonize_checked(&m, &o, &s, &st, info->name);
     cr_expect(st.mean_centredness >= min_centredness, "%s at scale %d: centredness %.3f < %.2f",
               info->name, scale, st.mean_centredness, min_centredness);
     sg_skeleton_release(&s);
     sg_shape_medium_free(&m);
 }
 
-Test(skeleton, bar_4x4) { run_shape(SG_SHAPE_BAR, 1, 0.95); run_shape(SG_SHAPE_BAR, 3, 0.95); }
-Test(skeleton, cube) { run_shape(SG_SHAPE_CUBE, 1, 0.5); run_shape(SG_SHAPE_CUBE, 3, 0.5); }
-Test(skeleton, torus) { run_shape(SG_SHAPE_TORUS, 1, 0.9); run_shape(SG_SHAPE_TORUS, 2, 0.9); }
-Test(skeleton, room_one_pillar)
-{
-    run_shape(SG_SHAPE_PILLAR_ROOM, 1, 0.85);
-    run_shape(SG_SHAPE_PILLAR_ROOM, 2, 0.85);
-}
-Test(skeleton, room_three_pillars)
-{
-    run_shape(SG_SHAPE_THREE_PILLARS, 1, 0.85);
-    run_shape(SG_SHAPE_THREE_PILLARS, 2, 0.85);
-}
-Test(skeleton, ring_corridor) { run_shape(SG_SHAPE_RING, 1, 0.9); run_shape(SG_SHAPE_RING, 2, 0.9); }
-Test(skeleton, room_floating_lamp)
-{
-    run_shape(SG_SHAPE_LAMP_ROOM, 1, 0.8);
-    run_shape(SG_SHAPE_LAMP_ROOM, 2, 0.8);
-}
-Test(skeleton, u_corridor) { run_shape(SG_SHAPE_U, 1, 0.9); run_shape(SG_SHAPE_U, 2, 0.9); }
-Test(skeleton, hollow_sphere) { run_shape(SG_SHAPE_SHELL, 1, 0.8); run_shape(SG_SHAPE_SHELL, 2, 0.8); }
-Test(skeleton, two_rooms) { run_shape(SG_SHAPE_TWO_ROOMS, 1, 0.5); run_shape(SG_SHAPE_TWO_ROOMS, 2, 0.5); }
-Test(skeleton, room_floating_ring_cavity_keeps_its_loop)
-{
-    run_shape(SG_SHAPE_RING_LAMP, 1, 0.8);
-    run_shape(SG_SHAPE_RING_LAMP, 2, 0.8);
-}
+/* Every shape at scale 1 and at a finer scale: test name, shape, the finer
+ * scale, the least mean centredness its skeleton must reach. */
+#define SHAPE_CASES(X)                                                                             \
+    X(bar_4x4, SG_SHAPE_BAR, 3, 0.95)                                                              \
+    X(cube, SG_SHAPE_CUBE, 3, 0.5)                                                                 \
+    X(torus, SG_SHAPE_TORUS, 2, 0.9)                                                               \
+    X(room_one_pillar, SG_SHAPE_PILLAR_ROOM, 2, 0.85)                                              \
+    X(room_three_pillars, SG_SHAPE_THREE_PILLARS, 2, 0.85)                                         \
+    X(ring_corridor, SG_SHAPE_RING, 2, 0.9)                                                        \
+    X(room_floating_lamp, SG_SHAPE_LAMP_ROOM, 2, 0.8)                                              \
+    X(u_corridor, SG_SHAPE_U, 2, 0.9)                                                              \
+    X(hollow_sphere, SG_SHAPE_SHELL, 2, 0.8)                                                       \
+    X(two_rooms, SG_SHAPE_TWO_ROOMS, 2, 0.5)                                                       \
+    X(room_floating_ring_cavity_keeps_its_loop, SG_SHAPE_RING_LAMP, 2, 0.8)
+
+#define SHAPE_TEST(name, shape, fine_scale, min_centredness)                                       \
+    Test(skeleton, name)                                                                           \
+    {                                                                                              \
+        run_shape(shape, 1, min_centredness);                                                      \
+        run_shape(shape, fine_scale, min_centredness);                                             \
+    }
+SHAPE_CASES(SHAPE_TEST)
 
 Test(skeleton, furnished_room_small)
 {
@@ -169,9 +172,7 @@ Test(skeleton, furnished_room_small)
     SgSkeletonOptions o = quiet_options(2);
     SgSkeleton s;
     SgSkeletonStats st;
-    SgError err = {0};
-    cr_assert(sg_skeletonize(&m, &o, &s, &st, &err), "%s", err.message);
-    check_skeleton(&m, &s, &st, "furnished room");
+    skeletonize_checked(&m, &o, &s, &st, "furnished room");
     sg_skeleton_release(&s);
     sg_shape_medium_free(&m);
 }
@@ -215,9 +216,7 @@ Test(skeleton, no_hairs_on_noisy_walls)
             SgSkeletonOptions o = quiet_options(2);
             SgSkeleton s;
             SgSkeletonStats st;
-            SgError err = {0};
-            cr_assert(sg_skeletonize(&m, &o, &s, &st, &err), "%s", err.message);
-            check_skeleton(&m, &s, &st, noisy ? "noisy" : "clean");
+            skeletonize_checked(&m, &o, &s, &st, noisy ? "noisy" : "clean");
             leaves[noisy] = free_leaves(&s);
             sg_skeleton_release(&s);
             sg_shape_medium_free(&m);
@@ -242,9 +241,7 @@ Test(skeleton, unfiltered_skeleton_is_hairy)
         o.filter_scale = filtered ? 1.0 : 0.0;
         SgSkeleton s;
         SgSkeletonStats st;
-        SgError err = {0};
-        cr_assert(sg_skeletonize(&m, &o, &s, &st, &err), "%s", err.message);
-        check_skeleton(&m, &s, &st, filtered ? "filtered" : "unfiltered");
+        skeletonize_checked(&m, &o, &s, &st, filtered ? "filtered" : "unfiltered");
         leaves[filtered] = free_leaves(&s);
         sg_skeleton_release(&s);
     }
@@ -300,9 +297,7 @@ Test(skeleton, camera_constraint)
         o.camera_constraint = with;
         SgSkeleton s;
         SgSkeletonStats st;
-        SgError err = {0};
-        cr_assert(sg_skeletonize(&m, &o, &s, &st, &err));
-        check_skeleton(&m, &s, &st, with ? "U with camera" : "U");
+        skeletonize_checked(&m, &o, &s, &st, with ? "U with camera" : "U");
         int cameras = 0;
         for (uint32_t i = 0; i < s.node_count; i++)
             if (s.nodes[i].kind == SG_NODE_CAMERA) {
@@ -389,6 +384,46 @@ Test(topology, hand_made_sets)
 
 /* ---- distance and opening against brute force ---- */
 
+static uint32_t squared_distance(const int a[3], const int b[3])
+{
+    int d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    return (uint32_t)(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+}
+
+/* Brute force: the squared distance from medium voxel v to the nearest
+ * voxel outside the medium (the padding counts). */
+static uint32_t brute_distance2(const SgGrid *g, size_t v)
+{
+    int c[3];
+    sg_grid_coords(g, v, c);
+    uint32_t best = UINT32_MAX;
+    for (int z = -1; z <= g->nz; z++)
+        for (int y = -1; y <= g->ny; y++)
+            for (int x = -1; x <= g->nx; x++) {
+                uint32_t d = squared_distance(c, (int[3]){x, y, z});
+                if (!sg_grid_get(g, x, y, z) && d < best)
+                    best = d;
+            }
+    return best;
+}
+
+/* Brute force: the largest squared radius d2[q] of the medium's balls
+ * (centre q, radius its distance) that hold medium voxel v. */
+static uint32_t brute_opening2(const SgGrid *g, const uint32_t *d2, size_t v)
+{
+    int c[3], p[3];
+    sg_grid_coords(g, v, c);
+    uint32_t best = 0;
+    for (size_t q = 0; q < sg_grid_count(g); q++) {
+        if (!g->voxels[q] || d2[q] <= best)
+            continue;
+        sg_grid_coords(g, q, p);
+        if (squared_distance(c, p) < d2[q])
+            best = d2[q];
+    }
+    return best;
+}
+
 Test(distance, exact_edt_and_opening_bound)
 {
     SgMedium m;
@@ -401,26 +436,9 @@ Test(distance, exact_edt_and_opening_bound)
     size_t n = sg_grid_count(g);
     uint32_t *d2 = calloc(n, sizeof *d2);
     cr_assert_not_null(d2);
-    /* brute force: nearest voxel outside the medium (the padding counts) */
-    for (int k = 0; k < g->nz; k++)
-        for (int j = 0; j < g->ny; j++)
-            for (int i = 0; i < g->nx; i++) {
-                size_t v = sg_grid_index(g, i, j, k);
-                if (!g->voxels[v])
-                    continue;
-                uint32_t best = UINT32_MAX;
-                for (int z = -1; z <= g->nz; z++)
-                    for (int y = -1; y <= g->ny; y++)
-                        for (int x = -1; x <= g->nx; x++) {
-                            if (sg_grid_get(g, x, y, z))
-                                continue;
-                            uint32_t d = (uint32_t)((x - i) * (x - i) + (y - j) * (y - j) +
-                                                    (z - k) * (z - k));
-                            if (d < best)
-                                best = d;
-                        }
-                d2[v] = best;
-            }
+    for (size_t v = 0; v < n; v++)
+        if (g->voxels[v])
+            d2[v] = brute_distance2(g, v);
     for (size_t v = 0; v < n; v++) {
         uint16_t expect = g->voxels[v] ? (uint16_t)(8.0 * sqrt(d2[v]) + 0.5) : 0;
         cr_assert_eq(dist8[v], expect, "distance at %zu: %u, brute force %u", v, dist8[v], expect);
@@ -428,31 +446,16 @@ Test(distance, exact_edt_and_opening_bound)
     /* opening: exact = max R(q) over balls containing v */
     double error_sum = 0;
     size_t count = 0, exact_hits = 0;
-    for (int k = 0; k < g->nz; k++)
-        for (int j = 0; j < g->ny; j++)
-            for (int i = 0; i < g->nx; i++) {
-                size_t v = sg_grid_index(g, i, j, k);
-                if (!g->voxels[v])
-                    continue;
-                uint32_t best = 0;
-                for (int z = 0; z < g->nz; z++)
-                    for (int y = 0; y < g->ny; y++)
-                        for (int x = 0; x < g->nx; x++) {
-                            uint32_t r2 = d2[sg_grid_index(g, x, y, z)];
-                            if (!g->voxels[sg_grid_index(g, x, y, z)] || r2 <= best)
-                                continue;
-                            uint32_t d = (uint32_t)((x - i) * (x - i) + (y - j) * (y - j) +
-                                                    (z - k) * (z - k));
-                            if (d < r2)
-                                best = r2;
-                        }
-                uint16_t exact = (uint16_t)(8.0 * sqrt(best) + 0.5);
-                cr_assert(open8[v] <= exact, "opening overestimated at %zu", v);
-                cr_assert(open8[v] >= dist8[v], "opening below the distance at %zu", v);
-                error_sum += (exact - open8[v]) / 8.0;
-                exact_hits += open8[v] == exact;
-                count++;
-            }
+    for (size_t v = 0; v < n; v++) {
+        if (!g->voxels[v])
+            continue;
+        uint16_t exact = (uint16_t)(8.0 * sqrt(brute_opening2(g, d2, v)) + 0.5);
+        cr_assert(open8[v] <= exact, "opening overestimated at %zu", v);
+        cr_assert(open8[v] >= dist8[v], "opening below the distance at %zu", v);
+        error_sum += (exact - open8[v]) / 8.0;
+        exact_hits += open8[v] == exact;
+        count++;
+    }
     double mean_error = error_sum / (double)count;
     cr_log_info("opening: mean underestimate %.3f voxel, exact at %.1f%% of %zu voxels",
                 mean_error, 100.0 * (double)exact_hits / (double)count, count);

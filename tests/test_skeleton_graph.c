@@ -197,6 +197,24 @@ static void expect_refused(const char *text, const char *why)
     "element edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n"
 #define ROW0 "0 0 0 1 1 1 0 1 0 -1\n"
 
+/* The accepted file below (HEAD ROW0, then its second vertex row and its
+ * edge) refused with field `field` of that row (0-9) set to value (-1:
+ * none) and `edges` after it. */
+static void expect_refused_second_row(int field, const char *value, const char *edges,
+                                      const char *why)
+{
+    static const char *const good_row[10] = {"1", "0", "0", "2", "1", "1", "1", "1", "0", "3"};
+    char text[1024];
+    size_t n = (size_t)snprintf(text, sizeof text, "%s", HEAD ROW0);
+    for (int f = 0; f < 10; f++) {
+        const char *v = f == field ? value : good_row[f];
+        n += (size_t)snprintf(text + n, sizeof text - n, "%s%s", f ? " " : "", v);
+    }
+    cr_assert_lt(n + strlen(edges) + 1, sizeof text);
+    snprintf(text + n, sizeof text - n, "\n%s", edges);
+    expect_refused(text, why);
+}
+
 Test(skeleton_graph, ascii_reference_is_valid)
 {
     /* The malformed cases below differ from this accepted file by one thing. */
@@ -219,18 +237,23 @@ Test(skeleton_graph, refuses_malformed_ascii)
     expect_refused("ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nend_header\n",
                    "missing properties");
     expect_refused(HEAD ROW0, "truncated vertices");
-    expect_refused(HEAD ROW0 "1 0 0 2 1 1 1 1 0 3\n0", "truncated edges");
-    expect_refused(HEAD ROW0 "1 0 0 2 1 1 1 1 0 3\n0 2\n", "edge index out of range");
-    expect_refused(HEAD ROW0 "1 0 0 2 1 1 1 1 0 3\n0 -1\n", "negative edge index");
-    expect_refused(HEAD ROW0 "1 0 0 2 1 1 1 1 0 3\n1 1\n", "self loop");
-    expect_refused(HEAD ROW0 "nan 0 0 2 1 1 1 1 0 3\n0 1\n", "NaN position");
-    expect_refused(HEAD ROW0 "inf 0 0 2 1 1 1 1 0 3\n0 1\n", "infinite position");
-    expect_refused(HEAD ROW0 "1 0 0 2 1 1 1 -1 0 3\n0 1\n", "negative radius");
-    expect_refused(HEAD ROW0 "1 0 0 2 1 1 7 1 0 3\n0 1\n", "unknown kind");
-    expect_refused(HEAD ROW0 "1 0 0 2 1 1 256 1 0 3\n0 1\n", "uchar overflow");
-    expect_refused(HEAD ROW0 "1 0 0 2 1 1 1 1 0 -2\n0 1\n", "light below -1");
-    expect_refused(HEAD ROW0 "1 0 0 2.5 1 1 1 1 0 3\n0 1\n", "float where int expected");
-    expect_refused(HEAD ROW0 "1 0 0 2 1 1 1 1x 0 3\n0 1\n", "garbage number");
+    /* the edges after the good vertices */
+    static const char *const edges[][2] = {{"0", "truncated edges"},
+                                           {"0 2\n", "edge index out of range"},
+                                           {"0 -1\n", "negative edge index"},
+                                           {"1 1\n", "self loop"}};
+    for (size_t i = 0; i < sizeof edges / sizeof edges[0]; i++)
+        expect_refused_second_row(-1, NULL, edges[i][0], edges[i][1]);
+    /* one field of the second vertex row: x y z i j k kind radius lifespan light */
+    static const struct {
+        int field;
+        const char *value, *why;
+    } fields[] = {{0, "nan", "NaN position"},   {0, "inf", "infinite position"},
+                  {7, "-1", "negative radius"}, {6, "7", "unknown kind"},
+                  {6, "256", "uchar overflow"}, {9, "-2", "light below -1"},
+                  {7, "1x", "garbage number"},  {3, "2.5", "float where int expected"}};
+    for (size_t i = 0; i < sizeof fields / sizeof fields[0]; i++)
+        expect_refused_second_row(fields[i].field, fields[i].value, "0 1\n", fields[i].why);
     expect_refused("ply\nformat ascii 1.0\nelement vertex 1\nproperty int x\nproperty float "
                    "y\nproperty float z\nproperty int i\nproperty int j\nproperty int k\n"
                    "property uchar kind\nproperty float radius\nproperty int lifespan\n"

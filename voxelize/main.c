@@ -32,33 +32,43 @@ static void usage(FILE *out)
             SG_VOXELIZE_DEFAULT_RESOLUTION);
 }
 
+typedef struct OwnOptions {
+    SgVoxelizeOptions *options;
+    bool key;
+} OwnOptions;
+
+static SgCliArg own_option(void *ctx, int argc, char **argv, int *i)
+{
+    OwnOptions *own = ctx;
+    const char *a = argv[*i];
+    if (!strcmp(a, "--resolution") && *i + 1 < argc) {
+        if (sg_parse_int(argv[++*i], 1, 4096, &own->options->resolution))
+            return SG_CLI_TAKEN;
+        fprintf(stderr, "voxelize: --resolution takes a whole number in [1, 4096]\n");
+        return SG_CLI_BAD;
+    }
+    if (!strcmp(a, "--key")) {
+        own->key = true;
+        return SG_CLI_TAKEN;
+    }
+    return SG_CLI_OTHER;
+}
+
 int main(int argc, char **argv)
 {
     SgVoxelizeOptions options = {0};
-    bool key = false;
-    SgStepArguments args = {.program = "voxelize", .usage = usage, .max_inputs = 1};
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        if (!strcmp(a, "--resolution") && i + 1 < argc) {
-            if (!sg_parse_int(argv[++i], 1, 4096, &options.resolution)) {
-                fprintf(stderr, "voxelize: --resolution takes a whole number in [1, 4096]\n");
-                return 2;
-            }
-        } else if (!strcmp(a, "--key")) {
-            key = true;
-        } else {
-            SgCliArg got = sg_cli_step_argument(&args, argc, argv, &i);
-            if (got != SG_CLI_TAKEN)
-                return got == SG_CLI_HELP ? 0 : 2;
-        }
-    }
+    OwnOptions own = {.options = &options};
+    SgStepArguments args = {.program = "voxelize", .usage = usage, .min_inputs = 1, .max_inputs = 1};
+    SgCliArg got = sg_cli_step_arguments(&args, argc, argv, own_option, &own);
+    if (got != SG_CLI_TAKEN)
+        return got == SG_CLI_HELP ? 0 : 2;
     const char *scene_path = args.inputs[0], *out_path = args.out_path;
-    bool quiet = args.quiet;
-    options.threads = args.threads;
-    if (!scene_path || (!out_path && !key)) {
+    bool quiet = args.quiet, key = own.key;
+    if (!out_path && !key) {
         usage(stderr);
         return 2;
     }
+    options.threads = args.threads;
 
     SgError err = {0};
     double t0 = sg_seconds();

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "progress.h"
+#include "row_runs.h"
 #include "threads.h"
 #include "union_find.h"
 #include "vecmath.h"
@@ -205,68 +206,14 @@ void sg_voxelize_surface(const SgScene *scene, SgGrid *grid, int threads)
 /* ---- air components by runs --------------------------------------------- */
 
 /* The air of each row (fixed j, k) as maximal runs of x; runs of
- * neighbouring rows that touch, even diagonally, are 26-connected. Union-find
- * over runs is far cheaper than a voxel-by-voxel flood. */
-typedef struct Runs {
-    uint32_t count, capacity;
-    uint32_t *start, *end; /* inclusive x range */
-    uint32_t *parent;
-    uint32_t *row_first;   /* ny*nz+1 offsets */
-} Runs;
-
-static void runs_release(Runs *r)
+ * neighbouring rows that touch, even diagonally, are 26-connected. */
+static bool build_runs(const SgGrid *g, SgRowRuns *r, SgError *err)
 {
-    free(r->start);
-    free(r->end);
-    free(r->parent);
-    free(r->row_first);
-    memset(r, 0, sizeof *r);
-}
-
-static bool runs_push(Runs *r, uint32_t i0, uint32_t i1)
-{
-    if (r->count == r->capacity) {
-        uint32_t cap = r->capacity ? 2 * r->capacity : 4096;
-        uint32_t *s = realloc(r->start, cap * sizeof *s);
-        if (s)
-            r->start = s;
-        uint32_t *e = realloc(r->end, cap * sizeof *e);
-        if (e)
-            r->end = e;
-        if (!s || !e)
-            return false;
-        r->capacity = cap;
-    }
-    r->start[r->count] = i0;
-    r->end[r->count] = i1;
-    r->count++;
-    return true;
-}
-
-/* Runs of rows ra and rb that overlap once widened by one voxel. */
-static void connect_rows(Runs *r, uint32_t ra, uint32_t rb)
-{
-    uint32_t a = r->row_first[ra], a_end = r->row_first[ra + 1];
-    uint32_t b = r->row_first[rb], b_end = r->row_first[rb + 1];
-    while (a < a_end && b < b_end) {
-        if (r->start[b] <= r->end[a] + 1 && r->start[a] <= r->end[b] + 1)
-            sg_set_union(r->parent, a, b);
-        if (r->end[a] < r->end[b])
-            a++;
-        else
-            b++;
-    }
-}
-
-static bool build_runs(const SgGrid *g, Runs *r, SgError *err)
-{
-    memset(r, 0, sizeof *r);
     size_t rows = (size_t)g->ny * g->nz;
-    r->row_first = malloc((rows + 1) * sizeof(uint32_t));
-    if (!r->row_first)
+    if (!sg_row_runs_begin(r, rows))
         return sg_fail(err, "out of memory for the air's runs");
     for (size_t row = 0; row < rows; row++) {
-        r->row_first[row] = r->count;
+        sg_row_runs_start_row(r, row);
         const uint8_t *v = g->voxels + row * (size_t)g->nx;
         int i = 0;
         while (i < g->nx) {
@@ -277,49 +224,35 @@ static bool build_runs(const SgGrid *g, Runs *r, SgError *err)
             int i0 = i;
             while (i < g->nx && !v[i])
                 i++;
-            if (!runs_push(r, (uint32_t)i0, (uint32_t)(i - 1)))
+            if (!sg_row_runs_push(r, (uint32_t)i0, (uint32_t)(i - 1)))
                 return sg_fail(err, "out of memory for the air's runs");
         }
     }
-    r->row_first[rows] = r->count;
-    r->parent = malloc((r->count ? r->count : 1) * sizeof(uint32_t));
-    if (!r->parent)
+    if (!sg_row_runs_end(r))
         return sg_fail(err, "out of memory for the air's runs");
-    for (uint32_t i = 0; i < r->count; i++)
-        r->parent[i] = i;
     for (int k = 0; k < g->nz; k++)
         for (int j = 0; j < g->ny; j++) {
             uint32_t row = (uint32_t)(j + g->ny * k);
             /* Half of the 8 neighbouring rows; the rest see this one. */
             if (j > 0)
-                connect_rows(r, row, row - 1);
+                sg_row_runs_connect(r, row, row - 1, 1, NULL, NULL);
             if (k > 0) {
                 uint32_t below = row - (uint32_t)g->ny;
-                connect_rows(r, row, below);
+                sg_row_runs_connect(r, row, below, 1, NULL, NULL);
                 if (j > 0)
-                    connect_rows(r, row, below - 1);
+                    sg_row_runs_connect(r, row, below - 1, 1, NULL, NULL);
                 if (j + 1 < g->ny)
-                    connect_rows(r, row, below + 1);
+                    sg_row_runs_connect(r, row, below + 1, 1, NULL, NULL);
             }
         }
     return true;
 }
 
 /* The run holding air voxel (i,j,k), or UINT32_MAX. */
-static uint32_t run_of(const SgGrid *g, const Runs *r, int i, int j, int k)
+static uint32_t run_of(const SgGrid *g, const SgRowRuns *r, int i, int j, int k)
 {
-    uint32_t row = (uint32_t)(j + g->ny * k);
-    uint32_t lo = r->row_first[row], hi = r->row_first[row + 1];
-    while (lo < hi) {
-        uint32_t mid = (lo + hi) / 2;
-        if (r->end[mid] < (uint32_t)i)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    if (lo < r->row_first[row + 1] && r->start[lo] <= (uint32_t)i && (uint32_t)i <= r->end[lo])
-        return lo;
-    return UINT32_MAX;
+    uint32_t run = sg_row_runs_at(r, (size_t)j + (size_t)g->ny * k, (uint32_t)i);
+    return run != UINT32_MAX && (uint32_t)i <= r->run[run].end ? run : UINT32_MAX;
 }
 
 /* ---- lights ------------------------------------------------------------- */
@@ -438,9 +371,9 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
         }
     }
 
-    Runs runs;
+    SgRowRuns runs;
     if (!build_runs(g, &runs, err)) {
-        runs_release(&runs);
+        sg_row_runs_release(&runs);
         sg_medium_release(medium);
         return false;
     }
@@ -448,7 +381,7 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
      * front of each of its triangles (a long emitter may face two rooms). */
     uint8_t *keep = calloc(runs.count ? runs.count : 1, 1);
     if (!keep) {
-        runs_release(&runs);
+        sg_row_runs_release(&runs);
         sg_medium_release(medium);
         return sg_fail(err, "%s: out of memory", scene->path);
     }
@@ -516,12 +449,13 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
         uint8_t *v = g->voxels + row * (size_t)g->nx;
         for (uint32_t r = runs.row_first[row]; r < runs.row_first[row + 1]; r++)
             if (keep[sg_set_find(runs.parent, r)]) {
-                memset(v + runs.start[r], 1, runs.end[r] - runs.start[r] + 1);
-                stats->medium_voxels += runs.end[r] - runs.start[r] + 1;
+                uint32_t length = runs.run[r].end - runs.run[r].start + 1;
+                memset(v + runs.run[r].start, 1, length);
+                stats->medium_voxels += length;
             }
     }
     free(keep);
-    runs_release(&runs);
+    sg_row_runs_release(&runs);
     stats->seconds_fill = sg_seconds() - t0;
     sg_progress_end(&progress);
 

@@ -8,36 +8,40 @@
 #include <string.h>
 
 #include "input_file.h"
+#include "memory.h"
 #include "pbrt_parser.h"
 
 /* Grows *array to hold needed items of size item. */
 bool pbrt_reserve(Parser *p, void **array, size_t *capacity, size_t needed, size_t item)
 {
-    if (needed <= *capacity)
-        return true;
-    size_t cap = *capacity ? *capacity : 16;
-    while (cap < needed)
-        cap *= 2;
-    void *grown = realloc(*array, cap * item);
-    if (!grown)
+    if (!sg_reserve(array, capacity, needed, item, 16))
         return sg_fail(p->err, "%s: out of memory", p->core.path);
-    *array = grown;
-    *capacity = cap;
     return true;
+}
+
+/* "file:line" of a place in the sources, or the main file's path when
+ * there is none. */
+static void write_place(const Parser *p, const Source *src, int line, char *where, size_t size)
+{
+    if (src)
+        snprintf(where, size, "%s:%d", src->path, line);
+    else
+        snprintf(where, size, "%s", p->core.path);
 }
 
 bool pbrt_fail_at(Parser *p, const Token *t, const char *fmt, ...)
 {
+    /* without a token's place, the error is where reading stopped */
+    bool placed = t && t->source;
+    char where[4200]; /* as long as a warning's place */
+    write_place(p, placed ? t->source : p->last_source, placed ? t->line : p->last_line, where,
+                sizeof where);
     char cause[900];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(cause, sizeof cause, fmt, ap);
     va_end(ap);
-    const Source *src = t && t->source ? t->source : p->last_source;
-    int line = t && t->source ? t->line : p->last_line;
-    if (src)
-        return sg_fail(p->err, "%s:%d: %s", src->path, line, cause);
-    return sg_fail(p->err, "%s: %s", p->core.path, cause);
+    return sg_fail(p->err, "%s: %s", where, cause);
 }
 
 void pbrt_warn_at(Parser *p, const Token *t, const char *fmt, ...)
@@ -56,10 +60,7 @@ void pbrt_warn_at(Parser *p, const Token *t, const char *fmt, ...)
         return;
     Warning *w = &p->warnings[p->warning_count++];
     snprintf(w->kind, sizeof w->kind, "%s", kind);
-    if (t && t->source)
-        snprintf(w->where, sizeof w->where, "%s:%d", t->source->path, t->line);
-    else
-        snprintf(w->where, sizeof w->where, "%s", p->core.path);
+    write_place(p, t ? t->source : NULL, t ? t->line : 0, w->where, sizeof w->where);
     w->count = 1;
 }
 
