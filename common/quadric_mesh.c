@@ -43,6 +43,19 @@ static bool grid_mesh(const void *shape, int rows, int columns, GridPoint point,
     return true;
 }
 
+void sg_quadric_triangle(const SgQuadricMesh *m, uint32_t t, double n[3], double centroid[3])
+{
+    const uint32_t *id = m->indices + 3 * (size_t)t;
+    const double *a = m->positions + 3 * (size_t)id[0], *b = m->positions + 3 * (size_t)id[1],
+                 *c = m->positions + 3 * (size_t)id[2];
+    double e1[3], e2[3];
+    d3_sub(b, a, e1);
+    d3_sub(c, a, e2);
+    d3_cross(e1, e2, n);
+    for (int k = 0; k < 3; k++)
+        centroid[k] = (a[k] + b[k] + c[k]) / 3.0;
+}
+
 /* Drops the triangles that collapsed where a ring is a point (a disk's
  * centre, a sphere's poles), then turns every triangle to face outward:
  * toward +z (axis_z), away from the z axis (radial_xy) or from the origin. */
@@ -50,30 +63,19 @@ static void face_outward(SgQuadricMesh *m, bool axis_z, bool radial_xy)
 {
     uint32_t kept = 0;
     for (uint32_t t = 0; t < m->triangle_count; t++) {
-        const uint32_t *id = m->indices + 3 * (size_t)t;
-        const double *a = m->positions + 3 * (size_t)id[0], *b = m->positions + 3 * (size_t)id[1],
-                     *c = m->positions + 3 * (size_t)id[2];
-        double e1[3], e2[3], n[3];
-        d3_sub(b, a, e1);
-        d3_sub(c, a, e2);
-        d3_cross(e1, e2, n);
+        double n[3], out[3];
+        sg_quadric_triangle(m, t, n, out);
         if (d3_dot(n, n) > 0.0) {
             for (int k = 0; k < 3; k++)
-                m->indices[3 * (size_t)kept + k] = id[k];
+                m->indices[3 * (size_t)kept + k] = m->indices[3 * (size_t)t + k];
             kept++;
         }
     }
     m->triangle_count = kept;
     for (uint32_t t = 0; t < m->triangle_count; t++) {
         uint32_t *id = m->indices + 3 * (size_t)t;
-        const double *a = m->positions + 3 * (size_t)id[0], *b = m->positions + 3 * (size_t)id[1],
-                     *c = m->positions + 3 * (size_t)id[2];
-        double e1[3], e2[3], n[3], out[3];
-        d3_sub(b, a, e1);
-        d3_sub(c, a, e2);
-        d3_cross(e1, e2, n);
-        for (int k = 0; k < 3; k++)
-            out[k] = (a[k] + b[k] + c[k]) / 3.0;
+        double n[3], out[3];
+        sg_quadric_triangle(m, t, n, out);
         if (axis_z)
             out[0] = out[1] = 0.0, out[2] = 1.0;
         else if (radial_xy)
@@ -90,11 +92,8 @@ double sg_quadric_mesh_area(const SgQuadricMesh *m)
 {
     double area = 0.0;
     for (uint32_t t = 0; t < m->triangle_count; t++) {
-        const uint32_t *id = m->indices + 3 * (size_t)t;
-        double e1[3], e2[3], n[3];
-        d3_sub(m->positions + 3 * (size_t)id[1], m->positions + 3 * (size_t)id[0], e1);
-        d3_sub(m->positions + 3 * (size_t)id[2], m->positions + 3 * (size_t)id[0], e2);
-        d3_cross(e1, e2, n);
+        double n[3], c[3];
+        sg_quadric_triangle(m, t, n, c);
         area += 0.5 * d3_length(n);
     }
     return area;

@@ -36,6 +36,8 @@ bool sg_quadric_cylinder(double radius, double z_min, double z_max, double phi_m
 double sg_quadric_disk_area(double radius, double inner_radius, double phi_max);
 double sg_quadric_sphere_area(double radius, double z_min, double z_max, double phi_max);
 double sg_quadric_cylinder_area(double radius, double z_min, double z_max, double phi_max);
+/* Triangle t's (unnormalized) winding normal and its centroid. */
+void sg_quadric_triangle(const SgQuadricMesh *mesh, uint32_t t, double normal[3], double centroid[3]);
 /* The mesh's area (sum of its triangles'). */
 double sg_quadric_mesh_area(const SgQuadricMesh *mesh);
 void sg_quadric_mesh_free(SgQuadricMesh *mesh);

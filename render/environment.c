@@ -127,13 +127,13 @@ bool environment_init(Environment *e, const float *rgb, int width, int height, S
         e->to_world[c] = v3((float)light_to_world[0][c], (float)light_to_world[1][c], (float)light_to_world[2][c]);
     size_t n = (size_t)width * height;
     e->texels = malloc(n * sizeof *e->texels);
-    e->weight = malloc(n * sizeof *e->weight);
-    e->col_cdf = malloc(n * sizeof *e->col_cdf);
-    e->row_cdf = malloc((size_t)height * sizeof *e->row_cdf);
-    if (!e->texels || !e->weight || !e->col_cdf || !e->row_cdf) {
+    e->weight = malloc((2 * n + (size_t)height) * sizeof *e->weight);
+    if (!e->texels || !e->weight) {
         environment_free(e);
         return sg_fail(err, "%s: out of memory for the environment map", path);
     }
+    e->col_cdf = e->weight + n;
+    e->row_cdf = e->col_cdf + n;
     /* each texel's share: its luminance times the solid angle it covers */
     double total = 0.0, mean[3] = {0, 0, 0};
     for (int y = 0; y < height; y++) {
@@ -219,9 +219,7 @@ bool environment_load(Environment *e, const SgLightSource *light, SgError *err)
 void environment_free(Environment *e)
 {
     free(e->texels);
-    free(e->weight);
-    free(e->col_cdf);
-    free(e->row_cdf);
+    free(e->weight); /* and the two tables after it */
     memset(e, 0, sizeof *e);
 }
 

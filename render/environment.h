@@ -17,9 +17,9 @@ typedef struct Environment {
     int width, height;
     SgEnvironmentLayout layout; /* equal-area or lat-long, never by-shape */
     Vec3 *texels;     /* width x height, row 0 at the top, times the colour */
-    double *row_cdf;  /* height: cumulative row weights, last = 1 */
+    double *weight;   /* height x width: texel probabilities (sum 1); one block with: */
     double *col_cdf;  /* height x width: cumulative weights within each row */
-    double *weight;   /* height x width: texel probabilities (sum 1) */
+    double *row_cdf;  /* height: cumulative row weights, last = 1 */
     Vec3 to_world[3]; /* columns: light space's x, y, z in the world */
     Vec3 mean;        /* the map's mean radiance over the sphere */
 } Environment;

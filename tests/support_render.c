@@ -221,3 +221,13 @@ SgtSampleMean sgt_passes_mean(SgRenderer *r, int passes, size_t pixels)
     m.std_error = sqrt(fmax(0.0, sum2 / n - m.mean * m.mean) / (n - 1));
     return m;
 }
+
+SgRenderOptions sgt_options(const SgScene *s, SgSampling mode)
+{
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.sampling = mode;
+    o.threads = 2;
+    o.seed = 7;
+    return o;
+}

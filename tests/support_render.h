@@ -44,6 +44,9 @@ typedef struct SgtSampleMean {
 } SgtSampleMean;
 SgtSampleMean sgt_passes_mean(SgRenderer *r, int passes, size_t pixels);
 
+/* s's default options for `mode`, on 2 threads with seed 7 (the tests' usual). */
+SgRenderOptions sgt_options(const SgScene *s, SgSampling mode);
+
 /* s rendered `passes` passes under o: its image, 3 floats a pixel (the
  * caller frees it), or NULL with err set. */
 float *sgt_render_image(const SgScene *s, const SgRenderOptions *o, int passes, SgError *err);

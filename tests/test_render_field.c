@@ -21,11 +21,7 @@ static SgtFixedPoint furnace_point = {{0.0, 1.4, 1.9}};
 
 static SgRenderOptions field_options(const SgScene *s, SgSampling mode, int training)
 {
-    SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.sampling = mode;
-    o.threads = 2;
-    o.seed = 7;
+    SgRenderOptions o = sgt_options(s, mode);
     o.training_passes = training;
     o.importance.importance_point = sgt_fixed_point_guide;
     o.importance.ctx = &furnace_point;

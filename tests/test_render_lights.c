@@ -22,35 +22,20 @@
 
 /* ---- rendering a window of pixels ------------------------------------------ */
 
-typedef struct Estimate {
-    double mean, std_error; /* channel 0 over every sample of the pixels */
-} Estimate;
+typedef SgtSampleMean Estimate;
 
+/* The mean of the image (channel 0) over `passes` passes of `mode`, seed 7,
+ * 2 threads, paths up to 16 long. */
 static Estimate render_mean(const SgScene *s, SgSampling mode, int passes)
 {
-    SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.sampling = mode;
-    o.seed = 7;
-    o.threads = 2;
+    SgRenderOptions o = sgt_options(s, mode);
     o.max_depth = 16;
     SgError err = {0};
     SgRenderer *r = sg_renderer_create(s, &o, &err);
     cr_assert(r, "renderer: %s", err.message);
-    double sum = 0.0, sum2 = 0.0;
-    size_t n = (size_t)o.width * o.height;
-    for (int i = 0; i < passes; i++) {
-        sg_renderer_pass(r);
-        const float *px = sg_renderer_last_pass(r);
-        for (size_t k = 0; k < n; k++) {
-            sum += px[3 * k];
-            sum2 += (double)px[3 * k] * px[3 * k];
-        }
-    }
+    Estimate e = sgt_passes_mean(r, passes, (size_t)o.width * o.height);
     sg_renderer_free(r);
-    double count = (double)n * passes, mean = sum / count;
-    double var = fmax(sum2 / count - mean * mean, 0.0);
-    return (Estimate){mean, sqrt(var / count)};
+    return e;
 }
 
 static void expect_near(Estimate e, double want, double rel_floor, const char *what)
@@ -303,15 +288,8 @@ Test(render_lights, quadric_meshes_have_true_area_and_face_out)
         cr_expect(m.triangle_count >= 64, "%s: only %u triangles", cases[k].what, m.triangle_count);
         uint32_t inward = 0;
         for (uint32_t t = 0; t < m.triangle_count; t++) {
-            const uint32_t *id = m.indices + 3 * (size_t)t;
-            const double *p0 = m.positions + 3 * (size_t)id[0], *p1 = m.positions + 3 * (size_t)id[1],
-                         *p2 = m.positions + 3 * (size_t)id[2];
-            double e1[3], e2[3], n[3], out[3];
-            d3_sub(p1, p0, e1);
-            d3_sub(p2, p0, e2);
-            d3_cross(e1, e2, n);
-            for (int a = 0; a < 3; a++)
-                out[a] = (p0[a] + p1[a] + p2[a]) / 3;
+            double n[3], out[3];
+            sg_quadric_triangle(&m, t, n, out);
             if (cases[k].shape == 0)
                 out[0] = out[1] = 0, out[2] = 1;
             else if (cases[k].shape == 2)
@@ -338,6 +316,15 @@ static SgScene *load_text(const char *name, const char *text, SgError *err)
     return s;
 }
 
+/* load_text that must succeed. */
+static SgScene *load_ok(const char *name, const char *text)
+{
+    SgError err = {0};
+    SgScene *s = load_text(name, text, &err);
+    cr_assert(s, "%s", err.message);
+    return s;
+}
+
 #define PBRT_ROOM                                                                                                   \
     "Scale -1 1 1\nLookAt 0 1 -3  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\nFilm \"rgb\" \"integer xresolution\" 8 " \
     "\"integer yresolution\" 8\nWorldBegin\n"                                                                       \
@@ -345,8 +332,7 @@ static SgScene *load_text(const char *name, const char *text, SgError *err)
 
 Test(render_lights, pbrt_light_sources_read_as_pbrt_v4_does)
 {
-    SgError err = {0};
-    SgScene *s = load_text("sources.pbrt",
+    SgScene *s = load_ok("sources.pbrt",
                            PBRT_ROOM "LightSource \"point\" \"rgb I\" [1 2 3] \"float power\" 100 \"point3 from\" [0 2 0]\n"
                                      "AttributeBegin\nTranslate 1 0 0\n"
                                      "LightSource \"spot\" \"rgb I\" [1 1 1] \"float scale\" 2 \"float coneangle\" 40 "
@@ -356,9 +342,7 @@ Test(render_lights, pbrt_light_sources_read_as_pbrt_v4_does)
                                      "\"point3 from\" [0 1 1] \"point3 to\" [0 0 0]\n"
                                      "Rotate -90 1 0 0\n"
                                      "LightSource \"infinite\" \"rgb L\" [0.5 0.5 0.5] \"float scale\" 2 "
-                                     "\"point3 portal\" [-1 -1 2  1 -1 2  1 1 2  -1 1 2]\n",
-                           &err);
-    cr_assert(s, "%s", err.message);
+                                     "\"point3 portal\" [-1 -1 2  1 -1 2  1 1 2  -1 1 2]\n");
     cr_assert_eq(s->light_source_count, 4);
     const SgLightSource *p = &s->light_sources[0], *spot = &s->light_sources[1], *sun = &s->light_sources[2],
                         *sky = &s->light_sources[3];
@@ -378,14 +362,11 @@ Test(render_lights, pbrt_light_sources_read_as_pbrt_v4_does)
 
 Test(render_lights, pbrt_disk_lamp_has_its_true_area)
 {
-    SgError err = {0};
-    SgScene *s = load_text("disk.pbrt",
+    SgScene *s = load_ok("disk.pbrt",
                            PBRT_ROOM "AttributeBegin\nTranslate 0 2 0\nRotate 90 1 0 0\n"
                                      "AreaLightSource \"diffuse\" \"rgb L\" [4 4 4]\n"
                                      "Shape \"disk\" \"float radius\" 0.25\nAttributeEnd\n"
-                                     "Shape \"sphere\" \"float radius\" 0.3\nShape \"cylinder\" \"float radius\" 0.1\n",
-                           &err);
-    cr_assert(s, "%s", err.message);
+                                     "Shape \"sphere\" \"float radius\" 0.3\nShape \"cylinder\" \"float radius\" 0.1\n");
     cr_assert_eq(s->light_count, 1);
     cr_expect(fabs(s->lights[0].area - M_PI * 0.0625) < 1e-9, "disk area %.12g", s->lights[0].area);
     /* Rotate 90 about x takes the disk's +z to -y: it shines down */
@@ -397,17 +378,14 @@ Test(render_lights, pbrt_disk_lamp_has_its_true_area)
 
 Test(render_lights, json_light_sources)
 {
-    SgError err = {0};
-    SgScene *s = load_text("sources.json",
+    SgScene *s = load_ok("sources.json",
                            "{\"lights\": [{\"type\": \"quad\", \"corners\": [[0,2,0],[1,2,0],[1,2,1],[0,2,1]], "
                            "\"radiance\": [1,1,1]},"
                            "{\"type\": \"sky\", \"radiance\": [0.2,0.3,0.4], \"up\": [0,0,2]},"
                            "{\"type\": \"sun\", \"irradiance\": [3,3,3], \"direction\": [0,-2,0], \"angular_radius\": 0.5},"
                            "{\"type\": \"point\", \"intensity\": [1,1,1], \"scale\": 4, \"position\": [0,1,0]},"
                            "{\"type\": \"spot\", \"intensity\": [1,1,1], \"position\": [0,1,0], \"direction\": [0,-1,0], "
-                           "\"cone_angle\": 20}]}",
-                           &err);
-    cr_assert(s, "%s", err.message);
+                           "\"cone_angle\": 20}]}");
     cr_assert_eq(s->light_source_count, 4);
     cr_expect(s->light_sources[0].kind == SG_LIGHT_INFINITE && s->light_sources[0].rgb[2] == 0.4f);
     cr_expect(fabs(s->light_sources[0].light_to_world[2][2] - 1) < 1e-12, "up is the map's z");

@@ -36,6 +36,14 @@ static const char *prog(const char *name)
     return sg_test_program(name, bufs[k], sizeof bufs[k]);
 }
 
+static SgScene *load_scene(const char *path)
+{
+    SgError e = {0};
+    SgScene *s = sg_scene_load(path, &e);
+    cr_assert(s, "%s", e.message);
+    return s;
+}
+
 /* voxelize, skeletonize, importance into dir; returns the cache path */
 static const char *precompute(const char *scene, const char *dir)
 {
@@ -105,9 +113,7 @@ static void agreement(const char *scene, double bias_lo, double bias_hi)
         cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
     const char *dir = sg_test_tmpdir();
     const char *cache = precompute(scene, dir);
-    SgError e = {0};
-    SgScene *loaded = sg_scene_load(scene, &e);
-    cr_assert(loaded, "%s", e.message);
+    SgScene *loaded = load_scene(scene);
     double mb, sb, mg, sg, ms, ss;
     image_means(loaded, scene, cache, SG_SAMPLING_BSDF, 8, 16, &mb, &sb);
     image_means(loaded, scene, cache, SG_SAMPLING_GUIDED, 8, 16, &mg, &sg);
@@ -271,8 +277,7 @@ Test(render_pipeline, guided_follows_the_sky_through_a_window, .timeout = 240)
     const char *scene = sky_room(dir, true);
     const char *cache_path = precompute(scene, dir);
     SgError e = {0};
-    SgScene *loaded = sg_scene_load(scene, &e);
-    cr_assert(loaded, "%s", e.message);
+    SgScene *loaded = load_scene(scene);
     cr_assert_eq(sg_scene_guide_light_count(loaded), 1, "the outside is the one light");
 
     SgImportanceCache *cache = sg_cache_open(cache_path, &e);
@@ -333,8 +338,7 @@ Test(render_pipeline, a_room_with_no_opening_is_not_lit_by_the_sky)
     const char *dir = sg_test_tmpdir();
     const char *scene = sky_room(dir, false);
     SgError e = {0};
-    SgScene *loaded = sg_scene_load(scene, &e);
-    cr_assert(loaded, "%s", e.message);
+    SgScene *loaded = load_scene(scene);
     SgMedium medium;
     SgVoxelizeStats stats;
     SgVoxelizeOptions options = {.resolution = 48, .threads = 1};
