@@ -15,6 +15,7 @@
 
 #include "quadric_mesh.h"
 #include "scene_builder.h"
+#include "../render/environment.h"
 #include "../render/renderer.h"
 #include "support_files.h"
 #include "support_render.h"
@@ -438,6 +439,31 @@ Test(render_lights, renderer_refuses_a_missing_sky_image_and_no_light)
     cr_expect(!r && strstr(err.message, "/nonexistent/sky.exr"), "%s", err.message);
     sg_renderer_free(r);
     sgt_scene_free(s);
+
+    /* a portal whose corners lie on a line */
+    s = floor_scene(0.5f, (const double[3]){0, 0, 0});
+    sky = constant_sky(1.0f);
+    const double line[4][3] = {{0, 2, 0}, {1, 2, 0}, {2, 2, 0}, {3, 2, 0}};
+    memcpy(sky.portal, line, sizeof line);
+    sky.has_portal = true;
+    add_source(s, &sky);
+    sgt_finish(s);
+    sg_render_options_default(&o, s);
+    o.sampling = SG_SAMPLING_BSDF;
+    err = (SgError){0};
+    r = sg_renderer_create(s, &o, &err);
+    cr_expect(!r && strstr(err.message, "portal is degenerate"), "%s", err.message);
+    sg_renderer_free(r);
+    sgt_scene_free(s);
+
+    /* an image neither square nor 2:1 */
+    float texels[3 * 3 * 2] = {0};
+    Environment e;
+    const double turn[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    err = (SgError){0};
+    cr_expect(!environment_init(&e, texels, 3, 2, SG_ENVIRONMENT_BY_SHAPE, (const float[3]){1, 1, 1}, turn, "odd.exr",
+                                &err));
+    cr_expect(strstr(err.message, "odd.exr") && strstr(err.message, "3x2"), "%s", err.message);
 
     s = floor_scene(0.5f, (const double[3]){0, 0, 0});
     sgt_finish(s);
