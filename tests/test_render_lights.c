@@ -159,6 +159,23 @@ Test(render_lights, floor_under_window_is_rho_L_F)
     sgt_scene_free(s);
 }
 
+/* Open PGL learns from the sky's samples and the rays that leave through
+ * the window as from any light: the same closed form. */
+Test(render_lights, openpgl_under_window_is_rho_L_F)
+{
+    const SgSamplingMode *mode = sg_sampling_mode(SG_SAMPLING_OPENPGL);
+    SgError why = {0};
+    if (mode->available && !mode->available(&why))
+        cr_skip_test("%s", why.message);
+    SgScene *s = window_room(0.6f);
+    SgLightSource sky = constant_sky(2.0f);
+    add_source(s, &sky);
+    sgt_finish(s);
+    double F = 4 * corner_form_factor(0.5, 0.3, 2.0);
+    expect_near(render_mean(s, SG_SAMPLING_OPENPGL, 512), 0.6 * 2.0 * F, 0.0, "openpgl under a window");
+    sgt_scene_free(s);
+}
+
 /* The same through the window drawn as a portal: the same answer, and far
  * less noise than light samples spread over the whole sky. */
 Test(render_lights, floor_under_window_through_its_portal)
