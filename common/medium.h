@@ -24,8 +24,10 @@ typedef struct SgMediumLight {
     float radiance[3];
     int seed[3];        /* the air voxel in front of the emitter: flood-fill seed
                            and skeleton constraint; (-1,-1,-1) if sealed */
-    bool outside;       /* the sky and sun: every air voxel of the grid's
-                           outside margin is this light (SgGuideLight) */
+    bool outside;       /* the sky: every air voxel of the grid's outside
+                           margin is this light (SgGuideLight) */
+    bool sun;           /* a sun (normal: the way its rays travel): every
+                           medium voxel its rays reach through the medium */
 } SgMediumLight;
 
 typedef struct SgMedium {

@@ -121,6 +121,8 @@ extern "C" bool sg_medium_write(const SgMedium *m, const char *path, SgError *er
                             openvdb::Vec3IMetadata(openvdb::Vec3i(l.seed[0], l.seed[1], l.seed[2])));
             if (l.outside) // only where there is one: files of closed scenes stay as they were
                 meta.insertMeta(light_key(k, "outside"), openvdb::BoolMetadata(true));
+            if (l.sun)
+                meta.insertMeta(light_key(k, "sun"), openvdb::BoolMetadata(true));
         }
         if (m->outside_margin > 0)
             meta.insertMeta("outside_margin", openvdb::Int32Metadata(m->outside_margin));
@@ -308,6 +310,8 @@ extern "C" bool sg_medium_read(SgMedium *m, const char *path, SgError *err)
                     l.power = std::isfinite(power) ? power : 0;
                     bool outside = false;
                     l.outside = get_meta(*meta, light_key(k, "outside").c_str(), outside) && outside;
+                    bool sun = false;
+                    l.sun = get_meta(*meta, light_key(k, "sun").c_str(), sun) && sun;
                 }
             }
         }

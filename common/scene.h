@@ -205,19 +205,20 @@ typedef struct SgScene {
 
 /* What the precompute takes as its lights and the guide follows, in this
  * order: the area lights (SgLight, same index), the point and spot lights,
- * then, where a sky or a sun shines, the outside (one for both: the air
- * beyond the scene's bounds). */
+ * the outside where a sky shines (the air beyond the scene's bounds,
+ * reached through the openings), then each sun (the air its rays reach). */
 typedef enum SgGuideLightKind {
     SG_GUIDE_LIGHT_AREA,
     SG_GUIDE_LIGHT_POINT,   /* a point or spot light */
-    SG_GUIDE_LIGHT_OUTSIDE, /* the sky and the sun, reached through the openings */
+    SG_GUIDE_LIGHT_OUTSIDE, /* the sky, reached through the openings */
+    SG_GUIDE_LIGHT_SUN,     /* a distant light: the air its rays reach, through the openings it shines through */
 } SgGuideLightKind;
 
 typedef struct SgGuideLight {
     SgGuideLightKind kind;
-    uint32_t index;     /* area: the SgLight; point: the SgLightSource; outside: unused */
-    double position[3]; /* area: centroid; point: its position; outside: unused */
-    double normal[3];   /* area: mean normal; spot: its axis; else 0 */
+    uint32_t index;     /* area: the SgLight; point, sun: the SgLightSource; outside: unused */
+    double position[3]; /* area: centroid; point: its position; outside, sun: unused */
+    double normal[3];   /* area: mean normal; spot: its axis; sun: the way its rays travel; else 0 */
     double power;       /* for choosing which light to follow (an image sky: its colour's, the map unread) */
 } SgGuideLight;
 

@@ -22,9 +22,26 @@ static uint32_t point_count(const SgScene *s)
     return n;
 }
 
+static uint32_t kind_count(const SgScene *s, SgLightSourceKind kind)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < s->light_source_count; i++)
+        n += s->light_sources[i].kind == kind;
+    return n;
+}
+
 uint32_t sg_scene_guide_light_count(const SgScene *s)
 {
-    return s->light_count + point_count(s) + (sg_scene_lit_from_outside(s) ? 1u : 0u);
+    return s->light_count + point_count(s) + (kind_count(s, SG_LIGHT_INFINITE) ? 1u : 0u) +
+           kind_count(s, SG_LIGHT_DISTANT);
+}
+
+static double bounding_radius2(const SgScene *s)
+{
+    double r2 = 0;
+    for (int a = 0; a < 3; a++)
+        r2 += 0.25 * (s->bounds_max[a] - s->bounds_min[a]) * (s->bounds_max[a] - s->bounds_min[a]);
+    return r2;
 }
 
 SgGuideLight sg_scene_guide_light(const SgScene *s, uint32_t i)
@@ -57,19 +74,30 @@ SgGuideLight sg_scene_guide_light(const SgScene *s, uint32_t i)
                                             : 2 * M_PI * lum * (1 - 0.5 * (l->cos_falloff_start + l->cos_cone));
         return g;
     }
-    /* the outside: what the sky and the sun send through a disk of the
-     * scene's size (pi r^2 E for a sun, pi r^2 pi L for a sky) */
-    g.kind = SG_GUIDE_LIGHT_OUTSIDE;
-    double r2 = 0;
-    for (int a = 0; a < 3; a++)
-        r2 += 0.25 * (s->bounds_max[a] - s->bounds_min[a]) * (s->bounds_max[a] - s->bounds_min[a]);
+    /* the outside: what the skies send through a disk of the scene's size
+     * (pi r^2 pi L) */
+    double r2 = bounding_radius2(s);
+    if (kind_count(s, SG_LIGHT_INFINITE)) {
+        if (i-- == 0) {
+            g.kind = SG_GUIDE_LIGHT_OUTSIDE;
+            for (uint32_t k = 0; k < s->light_source_count; k++) {
+                const SgLightSource *l = &s->light_sources[k];
+                if (l->kind == SG_LIGHT_INFINITE)
+                    g.power += M_PI * r2 * M_PI * sg_luminance(l->rgb[0], l->rgb[1], l->rgb[2]);
+            }
+            return g;
+        }
+    }
+    /* each sun: pi r^2 E */
     for (uint32_t k = 0; k < s->light_source_count; k++) {
         const SgLightSource *l = &s->light_sources[k];
-        double lum = sg_luminance(l->rgb[0], l->rgb[1], l->rgb[2]);
-        if (l->kind == SG_LIGHT_DISTANT)
-            g.power += M_PI * r2 * lum;
-        else if (l->kind == SG_LIGHT_INFINITE)
-            g.power += M_PI * r2 * M_PI * lum;
+        if (l->kind != SG_LIGHT_DISTANT || i-- > 0)
+            continue;
+        g.kind = SG_GUIDE_LIGHT_SUN;
+        g.index = k;
+        memcpy(g.normal, l->direction, sizeof g.normal);
+        g.power = M_PI * r2 * sg_luminance(l->rgb[0], l->rgb[1], l->rgb[2]);
+        return g;
     }
     return g;
 }

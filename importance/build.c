@@ -151,6 +151,8 @@ typedef struct PointPass {
     float *points; /* node_count * light_count * 3 */
     uint32_t light, light_count;
     double tolerance;
+    const double *toward_sun; /* a sun's: its nodes look toward it; NULL: another light */
+    double reach;             /* how far toward it (the grid's diagonal) */
 } PointPass;
 
 enum { POINT_CHUNK = 32 };
@@ -168,8 +170,30 @@ static void point_chunk(void *ctx, uint64_t chunk, int thread)
             out[0] = out[1] = out[2] = 0;
             continue;
         }
+        if (p->toward_sun && p->dist[n] == 0) { /* in the sun's rays: toward the sun itself */
+            for (int a = 0; a < 3; a++)
+                out[a] = (float)(p->skeleton->nodes[n].position[a] + p->reach * p->toward_sun[a]);
+            continue;
+        }
         sg_importance_point(p->vis, p->skeleton, p->pred, p->dist, (uint32_t)n,
                             p->light_position, p->tolerance, out);
+    }
+}
+
+/* Whether a sun's rays reach voxel v through the medium: a walk from its
+ * centre toward the sun, half a voxel a step, that leaves the grid before
+ * it meets a voxel that is not medium. */
+static bool sunlit(const SgGrid *g, const int v[3], const double toward_sun[3])
+{
+    double x[3] = {v[0] + 0.5, v[1] + 0.5, v[2] + 0.5};
+    for (;;) {
+        for (int a = 0; a < 3; a++)
+            x[a] += 0.5 * toward_sun[a];
+        int i = (int)floor(x[0]), j = (int)floor(x[1]), k = (int)floor(x[2]);
+        if (!sg_grid_inside(g, i, j, k))
+            return true;
+        if (!g->voxels[sg_grid_index(g, i, j, k)])
+            return false;
     }
 }
 
@@ -319,9 +343,11 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
         /* The light's nodes: those the skeleton marks with it; failing
          * that, the node nearest to the light's seed voxel. */
         uint32_t count = 0;
+        double toward_sun[3] = {-ml->normal[0], -ml->normal[1], -ml->normal[2]};
         for (uint32_t n = 0; n < N; n++)
             if ((skeleton->nodes[n].kind == SG_NODE_LIGHT && skeleton->nodes[n].light == (int)k) ||
-                (ml->outside && in_margin(grid, medium->outside_margin, skeleton->nodes[n].voxel)))
+                (ml->outside && in_margin(grid, medium->outside_margin, skeleton->nodes[n].voxel)) ||
+                (ml->sun && sunlit(grid, skeleton->nodes[n].voxel, toward_sun)))
                 sources[count++] = n;
         if (count == 0 && sg_grid_inside(grid, ml->seed[0], ml->seed[1], ml->seed[2])) {
             uint32_t n = sg_label_at(&labels, ml->seed[0], ml->seed[1], ml->seed[2]);
@@ -333,8 +359,10 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
         cl->node = sources[0];
         cl->component = component[sources[0]];
         sg_graph_shortest_paths(&graph, sources, count, dist, pred, heap);
+        double diagonal = grid->voxel_size * sqrt((double)grid->nx * grid->nx + (double)grid->ny * grid->ny +
+                                                  (double)grid->nz * grid->nz);
         PointPass pp = {&vis, skeleton, component, cl->component, pred, dist, ml->position,
-                        points, k, L, tolerance};
+                        points, k, L, tolerance, ml->sun ? toward_sun : NULL, diagonal};
         sg_parallel_for((N + POINT_CHUNK - 1) / POINT_CHUNK, threads, point_chunk, &pp);
         stats.lights_reachable++;
         sg_progress_update(&progress, k + 1);

@@ -241,7 +241,15 @@ Test(render_pipeline, the_renderers_reading_of_the_cache_matches_the_guide_funct
 /* A closed room 4 x 2 x 4 whose walls are black, a floor of albedo 0.6, and
  * (window) a 1 x 0.6 opening in the ceiling above the floor's centre; a
  * constant sky of radiance 2; the camera looks at the floor's centre. */
+static const char *lit_room(const char *dir, bool window, const char *lights);
+
 static const char *sky_room(const char *dir, bool window)
+{
+    return lit_room(dir, window, "[{\"type\": \"sky\", \"radiance\": [2, 2, 2]}]");
+}
+
+/* The same room under `lights` (a JSON array). */
+static const char *lit_room(const char *dir, bool window, const char *lights)
 {
     static char scene[4200];
     SgTestText obj = {0};
@@ -256,11 +264,13 @@ static const char *sky_room(const char *dir, bool window)
     sg_test_write(dir, "room.obj", obj.data);
     free(obj.data);
     sg_test_write(dir, "room.mtl", "newmtl floor\nKd 0.6 0.6 0.6\nnewmtl wall\nKd 0 0 0\n");
-    char *path = sg_test_write(dir, "room.json",
-                               "{\"mesh\": \"room.obj\", \"camera\": {\"position\": [0.05, 1.0, 0], "
-                               "\"look_at\": [0, 0, 0], \"up\": [0, 0, 1], \"fov\": 0.2},"
-                               "\"image\": {\"width\": 80, \"height\": 60}, \"voxel\": {\"resolution\": 48},"
-                               "\"lights\": [{\"type\": \"sky\", \"radiance\": [2, 2, 2]}]}");
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"mesh\": \"room.obj\", \"camera\": {\"position\": [0.05, 1.0, 0], "
+             "\"look_at\": [0, 0, 0], \"up\": [0, 0, 1], \"fov\": 0.2},"
+             "\"image\": {\"width\": 80, \"height\": 60}, \"voxel\": {\"resolution\": 48}, \"lights\": %s}",
+             lights);
+    char *path = sg_test_write(dir, "room.json", json);
     snprintf(scene, sizeof scene, "%s", path);
     return scene;
 }
@@ -350,5 +360,43 @@ Test(render_pipeline, a_room_with_no_opening_is_not_lit_by_the_sky)
     cr_expect_eq(medium.outside_margin, SG_VOXELIZE_OUTSIDE_MARGIN);
     cr_expect(medium.light_count == 1 && medium.lights[0].outside);
     sg_medium_release(&medium);
+    sg_scene_free(loaded);
+}
+
+/* A sun straight down through the window: its own guide light, whose nodes
+ * are those its rays reach. From the floor away from its beam the
+ * importance point leads toward the beam; inside the beam it looks at the
+ * sun. With a sky too, the sky is the outside light and the sun the next. */
+Test(render_pipeline, the_suns_importance_points_lead_into_its_rays, .timeout = 120)
+{
+    if (!have_programs())
+        cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
+    const char *dir = sg_test_tmpdir();
+    const char *scene = lit_room(dir, true, "[{\"type\": \"sun\", \"irradiance\": [5, 5, 5], "
+                                            "\"direction\": [0, -1, 0]}]");
+    const char *cache_path = precompute(scene, dir);
+    SgScene *loaded = load_scene(scene);
+    cr_assert_eq(sg_scene_guide_light_count(loaded), 1);
+    cr_expect_eq(sg_scene_guide_light(loaded, 0).kind, SG_GUIDE_LIGHT_SUN);
+    SgError e = {0};
+    SgImportanceCache *cache = sg_cache_open(cache_path, &e);
+    cr_assert(cache, "%s", e.message);
+    double q[3];
+    const double beam[3] = {0.0, 1.0, 0.0}, corner[3] = {1.5, 0.3, 1.5};
+    cr_assert(sg_cache_importance_point(cache, beam, 0, q));
+    cr_expect(q[1] > 3.0 && fabs(q[0]) < 0.5 && fabs(q[2]) < 0.5, "in the beam, toward the sun: (%g, %g, %g)", q[0],
+              q[1], q[2]);
+    cr_assert(sg_cache_importance_point(cache, corner, 0, q));
+    cr_expect(hypot(q[0], q[2]) < hypot(corner[0], corner[2]) - 0.5, "from the corner toward the beam: (%g, %g, %g)",
+              q[0], q[1], q[2]);
+    sg_cache_close(cache);
+    sg_scene_free(loaded);
+
+    scene = lit_room(dir, true, "[{\"type\": \"sun\", \"irradiance\": [5, 5, 5], \"direction\": [0, -1, 0]},"
+                                "{\"type\": \"sky\", \"radiance\": [1, 1, 1]}]");
+    loaded = load_scene(scene);
+    cr_assert_eq(sg_scene_guide_light_count(loaded), 2);
+    cr_expect(sg_scene_guide_light(loaded, 0).kind == SG_GUIDE_LIGHT_OUTSIDE &&
+              sg_scene_guide_light(loaded, 1).kind == SG_GUIDE_LIGHT_SUN);
     sg_scene_free(loaded);
 }

@@ -361,9 +361,12 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
         else if (l.kind == SG_GUIDE_LIGHT_POINT)
             memcpy(ml->radiance, scene->light_sources[l.index].rgb, sizeof ml->radiance);
         ml->power = l.power;
-        if (l.kind == SG_GUIDE_LIGHT_OUTSIDE) {
+        if (l.kind == SG_GUIDE_LIGHT_OUTSIDE || l.kind == SG_GUIDE_LIGHT_SUN) {
             /* a corner of the margin: air, joined to all the outside */
-            ml->outside = true;
+            ml->outside = l.kind == SG_GUIDE_LIGHT_OUTSIDE;
+            ml->sun = l.kind == SG_GUIDE_LIGHT_SUN;
+            if (ml->sun)
+                memcpy(ml->radiance, scene->light_sources[l.index].rgb, sizeof ml->radiance);
             ml->seed[0] = ml->seed[1] = ml->seed[2] = 0;
             sg_grid_voxel_center(g, 0, 0, 0, ml->position);
         } else if (!find_seed(g, l.position, l.normal, ml->seed)) {
