@@ -80,15 +80,18 @@ static bool ring_push(Ring *b, uint16_t v)
 typedef struct Tile {
     int x0, y0, z0;     /* padded coordinates of its halo's low corner */
     int ex, ey, ez;     /* its voxels per axis (TILE, less at the far ends) */
-    Buffer seeds;       /* distance << 32 | padded voxel index, for its next run */
-    Buffer outbox;      /* padded index, key: improvements of its halo */
+    bool dirty;         /* some key changed since its last run */
     bool ran;
+    int out_thread;     /* its last run's outbox entries: */
+    size_t out_begin, out_end; /* work[out_thread].outbox.items[begin, end) */
 } Tile;
 
-/* A thread's tile copy and buckets. */
+/* A thread's tile copy, seeds, buckets and outbox. */
 typedef struct Workspace {
     void *local;        /* TL^3 keys */
+    Buffer seeds;       /* distance << 16 | local index */
     Ring ring[RING];
+    Buffer outbox;      /* padded index and key of halo voxels that improved */
     uint64_t relaxed;   /* voxels settled */
     bool failed;
     bool overflow;      /* a distance did not fit the key */
@@ -104,6 +107,7 @@ typedef struct Labeller {
     size_t px, py, plane; /* padded sizes; padded voxels per z plane */
     int tx, ty, tz;     /* tiles per axis */
     Tile *tiles;
+    uint32_t *changed;  /* per tile TILE^2 rows of TILE bits: keys changed since its run */
     Tile **phase;       /* the tiles of the running phase */
     Workspace *work;
     int threads;
@@ -115,11 +119,13 @@ static int compare_u64(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* The tile holding padded voxel g (not on the padding frame). */
-static size_t tile_of(const Labeller *L, size_t g)
+/* Marks padded voxel g (not on the padding frame) as changed in its tile. */
+static void mark_changed(Labeller *L, size_t g)
 {
     size_t x = g % L->px - 1, y = g / L->px % L->py - 1, z = g / L->plane - 1;
-    return x / TILE + (size_t)L->tx * (y / TILE + (size_t)L->ty * (z / TILE));
+    size_t tile = x / TILE + (size_t)L->tx * (y / TILE + (size_t)L->ty * (z / TILE));
+    L->tiles[tile].dirty = true;
+    L->changed[tile * TILE * TILE + y % TILE + TILE * (z % TILE)] |= (uint32_t)1 << (x % TILE);
 }
 
 /* An outbox entry: padded index and key, one word when the key is 32 bits. */
@@ -183,8 +189,9 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
     int threads_used = sg_thread_count(threads);
     Tile *tiles = L ? calloc(tile_count, sizeof *tiles) : NULL;
     Tile **phase = L ? malloc(tile_count * sizeof *phase) : NULL;
+    uint32_t *changed = L ? calloc(tile_count * TILE * TILE, sizeof *changed) : NULL;
     Workspace *work = L ? calloc((size_t)threads_used, sizeof *work) : NULL;
-    bool ok = L && key && tiles && phase && work;
+    bool ok = L && key && tiles && phase && changed && work;
     for (int t = 0; ok && t < threads_used; t++)
         ok = (work[t].local = malloc((size_t)TL * TL * TL * key_size)) != NULL;
     if (!ok) {
@@ -194,6 +201,7 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
         free(key);
         free(tiles);
         free(phase);
+        free(changed);
         free(work);
         return sg_fail(err, "out of memory for the nearest-node labels (%zu voxels)", total);
     }
@@ -206,6 +214,7 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
     L->tz = tz;
     L->tiles = tiles;
     L->phase = phase;
+    L->changed = changed;
     L->work = work;
     L->threads = threads_used;
     sg_memory_prefer_huge_pages(key, total * key_size);
@@ -254,7 +263,7 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
         /* a lower node may already stand on this voxel */
         if (!(wide ? seed_64(L, v, s) : seed_32(L, v, s)))
             continue;
-        ok = buffer_push(&tiles[tile_of(L, v)].seeds, v);
+        mark_changed(L, v);
     }
 
     /* Rounds of 8 phases: the tiles of one parity along each axis run at
@@ -276,7 +285,7 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
                 for (int j = parity >> 1 & 1; j < ty; j += 2)
                     for (int i = parity & 1; i < tx; i += 2) {
                         Tile *t = &tiles[i + (size_t)tx * (j + (size_t)ty * k)];
-                        if (t->seeds.count > 0)
+                        if (t->dirty)
                             phase[count++] = t;
                     }
             if (count == 0)
@@ -290,8 +299,12 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
                 settled += work[t].relaxed;
             }
             sg_progress_update(&progress, settled < medium ? settled : medium);
-            if (ok && !*overflow)
-                ok = wide ? apply_64(L, count) : apply_32(L, count);
+            if (ok && !*overflow) {
+                if (wide)
+                    apply_64(L, count);
+                else
+                    apply_32(L, count);
+            }
         }
     }
     sg_progress_end(&progress);
@@ -303,17 +316,16 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
                                                  : count_labelled_32(L, total))
                                          : 0;
     uint64_t node_mask = L->node_mask;
-    for (size_t t = 0; t < tile_count; t++) {
-        free(tiles[t].seeds.items);
-        free(tiles[t].outbox.items);
-    }
     for (int t = 0; t < threads_used; t++) {
         free(work[t].local);
+        free(work[t].seeds.items);
+        free(work[t].outbox.items);
         for (int r = 0; r < RING; r++)
             free(work[t].ring[r].items);
     }
     free(tiles);
     free(phase);
+    free(changed);
     free(work);
     free(L);
     if (!ok || *overflow) {

@@ -3,12 +3,13 @@
  * defined. A key is distance << L->shift | node; a node field of all ones
  * is "no node". Internal to labels.c. */
 
-/* Dijkstra inside one tile from its seeds (sorted by distance, fed into the
- * ring as the distance reaches them), on a copy of the tile and its
- * one-voxel halo: the copy stays in the core's cache where the whole key
- * array does not. A key that improves in the halo belongs to a
- * neighbouring tile: it goes to this tile's outbox, applied after the
- * phase. Only the tile's own voxels are copied back. */
+/* Dijkstra inside one tile, on a copy of the tile and its one-voxel halo:
+ * the copy stays in the core's cache where the whole key array does not.
+ * Its seeds are its voxels whose keys changed since its last run (marked
+ * in its bitmap), fed into the ring as the distance reaches them. Keys
+ * that improve in the halo belong to neighbouring tiles: after the run
+ * they go to the thread's outbox, applied after the phase. Only the
+ * tile's own voxels are copied back. */
 static void PASS(run_tile)(void *ctx, uint64_t index, int thread)
 {
     Labeller *L = ctx;
@@ -21,25 +22,34 @@ static void PASS(run_tile)(void *ctx, uint64_t index, int thread)
     const size_t px = L->px, plane = L->plane;
     const int ex = t->ex, ey = t->ey, ez = t->ez;
     const size_t origin = (size_t)t->x0 + px * ((size_t)t->y0 + L->py * (size_t)t->z0);
-    if (t->seeds.count == 0)
-        return;
+    uint32_t *changed = L->changed + (size_t)(t - L->tiles) * TILE * TILE;
     /* copy in: local (x, y, z) is padded voxel origin + (x, y, z) */
     for (int z = 0; z < ez + 2; z++)
         for (int y = 0; y < ey + 2; y++)
             memcpy(local + TL * (y + TL * z), key + origin + px * (size_t)y + plane * (size_t)z,
                    (size_t)(ex + 2) * sizeof *local);
+    w->seeds.count = 0;
+    for (int r = 0; r < TILE * TILE; r++) {
+        uint32_t bits = changed[r];
+        changed[r] = 0;
+        while (bits) {
+            int x = __builtin_ctz(bits);
+            bits &= bits - 1;
+            unsigned v = (unsigned)(x + 1 + TL * (r % TILE + 1 + TL * (r / TILE + 1)));
+            if (!buffer_push(&w->seeds, (uint64_t)(local[v] >> shift) << 16 | v))
+                w->failed = true;
+        }
+    }
+    t->dirty = false;
     const bool ran = t->ran;
-    Buffer *out = &t->outbox;
-    uint64_t *seeds = t->seeds.items;
-    const size_t seed_count = t->seeds.count;
+    uint64_t *seeds = w->seeds.items;
+    const size_t seed_count = w->seeds.count;
     qsort(seeds, seed_count, sizeof *seeds, compare_u64);
     size_t next_seed = 0, pending = 0;
-    uint32_t d = (uint32_t)(seeds[0] >> 32);
-    for (;;) {
-        while (next_seed < seed_count && (uint32_t)(seeds[next_seed] >> 32) == d) {
-            size_t g = (size_t)(uint32_t)seeds[next_seed] - origin;
-            int z = (int)(g / plane), y = (int)(g % plane / px), x = (int)(g % px);
-            if (!ring_push(&w->ring[d % RING], (uint16_t)(x + TL * (y + TL * z))))
+    uint32_t d = seed_count ? (uint32_t)(seeds[0] >> 16) : 0;
+    while (seed_count) {
+        while (next_seed < seed_count && (uint32_t)(seeds[next_seed] >> 16) == d) {
+            if (!ring_push(&w->ring[d % RING], (uint16_t)seeds[next_seed]))
                 w->failed = true;
             next_seed++;
             pending++;
@@ -47,7 +57,7 @@ static void PASS(run_tile)(void *ctx, uint64_t index, int thread)
         if (pending == 0) {
             if (next_seed == seed_count)
                 break;
-            d = (uint32_t)(seeds[next_seed] >> 32);
+            d = (uint32_t)(seeds[next_seed] >> 16);
             continue;
         }
         Ring *b = &w->ring[d % RING];
@@ -77,17 +87,14 @@ static void PASS(run_tile)(void *ctx, uint64_t index, int thread)
                 if (edge) {
                     unsigned ux = u % TL, uy = u / TL % TL, uz = u / (TL * TL);
                     if (ux == 0 || uy == 0 || uz == 0 || ux == (unsigned)ex + 1 ||
-                        uy == (unsigned)ey + 1 || uz == (unsigned)ez + 1) {
-                        size_t g = origin + ux + px * uy + plane * uz;
-                        if (!OUTBOX_PUSH(out, g, want))
-                            w->failed = true;
-                        continue;
-                    }
+                        uy == (unsigned)ey + 1 || uz == (unsigned)ez + 1)
+                        continue; /* the halo: sent after the run */
                 }
-                /* In a tile's first run every voxel it reached was queued
-                 * at its distance when it got it (seeds included): a lower
-                 * node at the same distance needs no new entry. Later runs
-                 * start from keys settled before, so any change is queued. */
+                /* In a tile's first run every voxel with a key was a seed,
+                 * queued at its distance, and every voxel reached since was
+                 * queued when it got its distance: a lower node at the same
+                 * distance needs no new entry. Later runs start from keys
+                 * settled before, so any change is queued. */
                 if ((cur >> shift) > nd || ran) {
                     if (!ring_push(&w->ring[nd % RING], (uint16_t)u))
                         w->failed = true;
@@ -103,40 +110,45 @@ static void PASS(run_tile)(void *ctx, uint64_t index, int thread)
         for (int y = 1; y <= ey; y++)
             memcpy(key + origin + 1 + px * (size_t)y + plane * (size_t)z, local + 1 + TL * (y + TL * z),
                    (size_t)ex * sizeof *local);
+    /* the halo's improvements, once each (its keys do not change during
+     * the phase: the tiles around are not running) */
+    t->out_thread = thread;
+    t->out_begin = w->outbox.count;
+    for (int z = 0; z < ez + 2; z++)
+        for (int y = 0; y < ey + 2; y++) {
+            bool face = z == 0 || z == ez + 1 || y == 0 || y == ey + 1;
+            for (int x = 0; x < ex + 2; x += face || x == ex + 1 ? 1 : ex + 1) {
+                unsigned u = (unsigned)(x + TL * (y + TL * z));
+                size_t g = origin + (size_t)x + px * (size_t)y + plane * (size_t)z;
+                if (local[u] < key[g] && !OUTBOX_PUSH(&w->outbox, g, local[u]))
+                    w->failed = true;
+            }
+        }
+    t->out_end = w->outbox.count;
     t->ran = true;
-    t->seeds.count = 0;
-    if (t->seeds.cap > 65536) { /* a wide front passed: do not keep the slack */
-        free(t->seeds.items);
-        t->seeds = (Buffer){0};
-    }
 }
 
-/* Applies a phase's outboxes, in tile order: a key that improves seeds its
- * tile. The keys after this do not depend on the order (each is a minimum),
- * and the order is fixed, so neither do the seeds. */
-static bool PASS(apply)(Labeller *L, size_t tiles)
+/* Applies a phase's outboxes, in tile order: a key that improves marks its
+ * voxel in its tile's bitmap. The keys after this do not depend on the
+ * order (each is a minimum), nor do the marks. */
+static void PASS(apply)(Labeller *L, size_t tiles)
 {
     KEY_T *key = L->key;
-    bool ok = true;
     for (size_t i = 0; i < tiles; i++) {
-        Buffer *out = &L->phase[i]->outbox;
-        for (size_t j = 0; j < out->count; j += OUTBOX_WORDS) {
+        const Tile *t = L->phase[i];
+        const Buffer *out = &L->work[t->out_thread].outbox;
+        for (size_t j = t->out_begin; j < t->out_end; j += OUTBOX_WORDS) {
             size_t g;
             uint64_t want;
             OUTBOX_READ(out->items + j, g, want);
             if (want < key[g]) {
                 key[g] = (KEY_T)want;
-                ok = ok && buffer_push(&L->tiles[tile_of(L, g)].seeds,
-                                       (want >> L->shift) << 32 | g);
+                mark_changed(L, g);
             }
         }
-        out->count = 0;
-        if (out->cap > 65536) {
-            free(out->items);
-            *out = (Buffer){0};
-        }
     }
-    return ok;
+    for (int t = 0; t < L->threads; t++)
+        L->work[t].outbox.count = 0;
 }
 
 /* Blocked cells everywhere, unseen on the medium; counts the medium. */
