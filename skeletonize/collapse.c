@@ -29,6 +29,7 @@
 #include "union_find.h"
 
 #define KINDS 18
+#define SORT_BUCKETS 4096
 #define SQUARE_BITS 0x68u /* masks 3, 5, 6 */
 
 typedef struct U32Vec {
@@ -74,9 +75,12 @@ static inline size_t cell_slot(const CellSet *s, uint32_t cell)
     return (size_t)(((uint64_t)cell * 0x9E3779B97F4A7C15ull) >> (64 - s->bits));
 }
 
+/* Masks of dimension 0 and 1 (0, 1, 2, 4) as bits. */
+#define LOW_DIM_MASKS 0x17u
+
 static inline bool cell_set_has(const CellSet *s, uint32_t cell)
 {
-    if (!s->high_dims && sg_cell_dim(cell & 7) >= 2)
+    if (!s->high_dims && !(LOW_DIM_MASKS >> (cell & 7) & 1))
         return false;
     size_t mask = ((size_t)1 << s->bits) - 1;
     for (size_t i = cell_slot(s, cell);; i = (i + 1) & mask) {
@@ -151,7 +155,9 @@ struct Collapse {
     U32Vec queue_a[KINDS], queue_b[KINDS];
     U32Vec *cur, *next; /* this step's and next step's queues */
     U32Vec pairs;       /* f, g, f, g, ... */
-    U32Vec sort_scratch; /* radix sort of a queue */
+    U32Vec sort_scratch; /* ordering a queue */
+    size_t sort_count[SORT_BUCKETS + 1];
+    uint64_t cell_limit;  /* cell ids are below this */
     EdgeVec live;       /* isolated edges not yet kept */
     EdgeVec kept;       /* isolated edges in the constraint set */
     const uint16_t *dist8, *open8; /* lattice layout: voxel at its lower corner */
@@ -232,40 +238,43 @@ static inline bool has(const uint8_t *bits, size_t v, unsigned m)
 
 /* Kind (0..17) of the free pair with face f, or -1 if f is not a free,
  * removable face; *g receives the coface. */
-static inline int free_kind(const Collapse *c, uint32_t f, uint32_t *g)
+/* Inlined into its callers: a call saved and restored six registers,
+ * which on the collapse's hundreds of millions of tests was a seventh of
+ * its instructions. */
+static inline __attribute__((always_inline)) int free_kind(const Collapse *c, uint32_t f,
+                                                           uint32_t *g)
 {
     size_t v = f >> 3;
     unsigned m = f & 7;
     const uint8_t *cells = c->cells;
-    if (!has(cells, v, m) || cell_set_has(&c->cons, f))
+    if (!has(cells, v, m))
         return -1;
-    int count = 0, axis = 0, ori = 0;
-    size_t gv = 0;
-    unsigned gm = 0;
-    for (int a = 0; a < 3; a++) {
-        unsigned bit = 1u << a;
-        if (m & bit)
-            continue;
-        unsigned cm = m | bit;
-        if (has(cells, v, cm)) {
-            if (++count > 1)
-                return -1;
-            gv = v, gm = cm, axis = a, ori = 0;
-        }
-        size_t w = v - c->st[a];
-        if (has(cells, w, cm)) {
-            if (++count > 1)
-                return -1;
-            gv = w, gm = cm, axis = a, ori = 1;
-        }
-    }
-    if (count != 1 || cell_set_has(&c->cons, (uint32_t)(gv * 8 + gm)))
+    /* the cofaces as bits, no branch per axis: bit 2a, the coface along
+     * axis a owned by v; bit 2a + 1, the one owned by v - st[a] (axes of m
+     * masked off) */
+    unsigned here = cells[v];
+    unsigned word = (here >> (m | 1) & 1) | (cells[v - c->st[0]] >> (m | 1) & 1) << 1 |
+                    (here >> (m | 2) & 1) << 2 | (cells[v - c->st[1]] >> (m | 2) & 1) << 3 |
+                    (here >> (m | 4) & 1) << 4 | (cells[v - c->st[2]] >> (m | 4) & 1) << 5;
+    static const uint8_t coface_axes[8] = {0x3f, 0x3c, 0x33, 0x30, 0x0f, 0x0c, 0x03, 0x00};
+    word &= coface_axes[m];
+    if (word == 0 || (word & (word - 1)) != 0)
+        return -1; /* no coface, or more than one */
+    int bit = __builtin_ctz(word);
+    int axis = bit >> 1, ori = bit & 1;
+    unsigned gm = m | 1u << axis;
+    size_t gv = v - (ori ? c->st[axis] : 0);
+    /* the constraints last: most faces tested have no or two cofaces */
+    if (cell_set_has(&c->cons, f) || cell_set_has(&c->cons, (uint32_t)(gv * 8 + gm)))
         return -1;
     *g = (uint32_t)(gv * 8 + gm);
-    return axis * 6 + ori * 3 + (3 - sg_cell_dim(gm));
+    /* sub-step of the pair: coface dimension 3, 2, 1 -> 0, 1, 2 */
+    static const uint8_t coface_rank[8] = {0, 2, 2, 1, 2, 1, 1, 0};
+    return axis * 6 + ori * 3 + coface_rank[gm];
 }
 
-static inline void consider(const Collapse *c, Sink *sk, uint32_t h)
+static inline __attribute__((always_inline)) void consider(const Collapse *c, Sink *sk,
+                                                           uint32_t h)
 {
     uint32_t g;
     int k = free_kind(c, h, &g);
@@ -486,36 +495,36 @@ static void run_substep_parallel(Collapse *c, U32Vec *q)
     }
 }
 
-/* Sorts a queue by cell id (LSD radix, 11 bits a pass), so that the
- * sub-step walks the border in memory order: a queue gathers the faces
- * freed by up to 18 earlier sub-steps, each in its own sweep of the grid,
- * and on a grid larger than the cache every sweep reloads the lines the
- * others loaded. The result depends on the queue's set only (header). */
+/* Orders a queue by windows of cell ids (one counting pass on the high
+ * bits: SORT_BUCKETS windows over the lattice), so that the sub-step walks
+ * the border in memory order: a queue gathers the faces freed by up to 18
+ * earlier sub-steps, each in its own sweep of the grid, and on a grid
+ * larger than the cache every sweep reloads the lines the others loaded.
+ * Within a window (a few lattice rows) the order is left as it came: the
+ * window's cells stay in cache, and a full sort took three passes. The
+ * result depends on the queue's set only (header). */
 static void sort_queue(Collapse *c, U32Vec *q)
 {
     if (q->n < 4096)
         return;
     if (!vec_reserve((void **)&c->sort_scratch.a, &c->sort_scratch.cap, q->n, sizeof *q->a))
         return; /* unsorted is still correct */
-    uint32_t *from = q->a, *to = c->sort_scratch.a;
-    for (int shift = 0; shift < 33; shift += 11) {
-        size_t count[2048 + 1] = {0};
-        for (size_t i = 0; i < q->n; i++)
-            count[(from[i] >> shift & 2047) + 1]++;
-        for (int b = 0; b < 2048; b++)
-            count[b + 1] += count[b];
-        for (size_t i = 0; i < q->n; i++)
-            to[count[from[i] >> shift & 2047]++] = from[i];
-        uint32_t *t = from;
-        from = to;
-        to = t;
-    }
-    /* three passes: the sorted keys are in the scratch; swap the buffers */
-    U32Vec sorted = {from, q->n, from == q->a ? q->cap : c->sort_scratch.cap};
-    if (from != q->a) {
-        c->sort_scratch = (U32Vec){q->a, 0, q->cap};
-        *q = sorted;
-    }
+    int shift = 0;
+    while ((c->cell_limit >> shift) >= SORT_BUCKETS)
+        shift++;
+    const uint32_t *from = q->a;
+    uint32_t *to = c->sort_scratch.a;
+    size_t *count = c->sort_count;
+    memset(count, 0, (SORT_BUCKETS + 1) * sizeof *count);
+    for (size_t i = 0; i < q->n; i++)
+        count[(from[i] >> shift) + 1]++;
+    for (int b = 0; b < SORT_BUCKETS; b++)
+        count[b + 1] += count[b];
+    for (size_t i = 0; i < q->n; i++)
+        to[count[from[i] >> shift]++] = from[i];
+    U32Vec sorted = {to, q->n, c->sort_scratch.cap};
+    c->sort_scratch = (U32Vec){q->a, 0, q->cap};
+    *q = sorted;
 }
 
 static void run_substep(Collapse *c, int s)
@@ -840,6 +849,7 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
         c.st[a] = cx->stride[a];
     c.cur = c.queue_a;
     c.next = c.queue_b;
+    c.cell_limit = (uint64_t)cx->vertex_count * 8;
     bool ok = false;
     if (!cell_set_init(&c.cons)) {
         c.oom = true;
