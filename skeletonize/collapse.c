@@ -94,7 +94,7 @@ static inline bool cell_set_has(const CellSet *s, uint32_t cell)
 
 static bool cell_set_add(CellSet *s, uint32_t cell)
 {
-    if (2 * (s->count + 1) > ((size_t)1 << s->bits)) {
+    if (4 * (s->count + 1) > ((size_t)1 << s->bits)) { /* a quarter full: short misses */
         CellSet grown = {NULL, 0, s->bits + 1, s->high_dims};
         grown.slot = malloc(((size_t)1 << grown.bits) * sizeof *grown.slot);
         if (!grown.slot)
@@ -288,11 +288,11 @@ static inline void consider_faces(const Collapse *c, Sink *sk, uint32_t cell)
 {
     size_t v = cell >> 3;
     unsigned m = cell & 7;
-    for (int a = 0; a < 3; a++) {
-        unsigned bit = 1u << a;
-        if (!(m & bit))
-            continue;
-        unsigned fm = m ^ bit;
+    /* over the axes of m (as many in every call of a sub-step: a branch on
+     * each axis mispredicted) */
+    for (unsigned axes = m; axes; axes &= axes - 1) {
+        int a = __builtin_ctz(axes);
+        unsigned fm = m ^ 1u << a;
         consider(c, sk, (uint32_t)(v * 8 + fm));
         consider(c, sk, (uint32_t)((v + c->st[a]) * 8 + fm));
     }
@@ -302,12 +302,13 @@ static uint16_t edge_opening(const Collapse *c, size_t v, unsigned m)
 {
     /* the voxels holding edge (v, m): cubes at v - d, d sharing no axis with m */
     uint16_t best = 0;
-    for (unsigned d = 0; d < 8; d++) {
-        if (d & m)
-            continue;
-        size_t w = v - ((d & 1) ? c->st[0] : 0) - ((d & 2) ? c->st[1] : 0) - ((d & 4) ? c->st[2] : 0);
+    unsigned free_axes = 7u & ~m;
+    for (unsigned d = free_axes;; d = (d - 1) & free_axes) { /* the subsets of free_axes */
+        size_t w = v - (d & 1) * c->st[0] - (d >> 1 & 1) * c->st[1] - (d >> 2 & 1) * c->st[2];
         if (c->open8[w] > best)
             best = c->open8[w];
+        if (d == 0)
+            break;
     }
     return best;
 }
@@ -317,23 +318,20 @@ static void note_isolated_edges(const Collapse *c, Sink *sk, uint32_t square)
 {
     size_t v = square >> 3;
     unsigned m = square & 7;
-    for (int a = 0; a < 3; a++) {
-        unsigned bit = 1u << a;
-        if (!(m & bit))
-            continue;
-        unsigned em = m ^ bit;
+    for (unsigned axes = m; axes; axes &= axes - 1) {
+        int a = __builtin_ctz(axes);
+        unsigned em = m ^ 1u << a;
         size_t ends[2] = {v, v + c->st[a]};
         for (int i = 0; i < 2; i++) {
             size_t w = ends[i];
             if (!has(c->cells, w, em))
                 continue;
+            /* its squares: along each other axis, owned by w or below */
             bool isolated = true;
-            for (int b = 0; b < 3 && isolated; b++) {
-                unsigned bb = 1u << b;
-                if (em & bb)
-                    continue;
-                if (has(c->cells, w, em | bb) || has(c->cells, w - c->st[b], em | bb))
-                    isolated = false;
+            for (unsigned other = 7u & ~em; other; other &= other - 1) {
+                int b = __builtin_ctz(other);
+                unsigned sm = em | 1u << b;
+                isolated &= !(has(c->cells, w, sm) | has(c->cells, w - c->st[b], sm));
             }
             if (isolated && !vec_push_edge(sk->noted, (SgIsolatedEdge){(uint32_t)(w * 8 + em),
                                                                       c->step, -1,
