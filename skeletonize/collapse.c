@@ -236,6 +236,22 @@ static inline bool has(const uint8_t *bits, size_t v, unsigned m)
     return bits[v] >> m & 1;
 }
 
+/* For a face mask m: bit m | 1 << a of byte 0 and of byte 1 + a, for each
+ * axis a not in m (free_kind's coface word). */
+#define COFACE_BITS(m, a) ((m) >> (a) & 1 ? 0u : (1u << ((m) | 1u << (a))) * (1u | 1u << (8 * ((a) + 1))))
+#define COFACE_MASK(m) (COFACE_BITS(m, 0) | COFACE_BITS(m, 1) | COFACE_BITS(m, 2))
+static const uint32_t coface_bits[8] = {COFACE_MASK(0u), COFACE_MASK(1u), COFACE_MASK(2u),
+                                        COFACE_MASK(3u), COFACE_MASK(4u), COFACE_MASK(5u),
+                                        COFACE_MASK(6u), COFACE_MASK(7u)};
+
+static inline uint32_t coface_word(const Collapse *c, size_t v, unsigned m)
+{
+    const uint8_t *cells = c->cells;
+    uint32_t word = (uint32_t)cells[v] | (uint32_t)cells[v - c->st[0]] << 8 |
+                    (uint32_t)cells[v - c->st[1]] << 16 | (uint32_t)cells[v - c->st[2]] << 24;
+    return word & coface_bits[m];
+}
+
 /* Kind (0..17) of the free pair with face f, or -1 if f is not a free,
  * removable face; *g receives the coface. */
 /* Inlined into its callers: a call saved and restored six registers,
@@ -249,21 +265,18 @@ static inline __attribute__((always_inline)) int free_kind(const Collapse *c, ui
     const uint8_t *cells = c->cells;
     if (!has(cells, v, m))
         return -1;
-    /* the cofaces as bits, no branch per axis: bit 2a, the coface along
-     * axis a owned by v; bit 2a + 1, the one owned by v - st[a] (axes of m
-     * masked off) */
-    unsigned here = cells[v];
-    unsigned word = (here >> (m | 1) & 1) | (cells[v - c->st[0]] >> (m | 1) & 1) << 1 |
-                    (here >> (m | 2) & 1) << 2 | (cells[v - c->st[1]] >> (m | 2) & 1) << 3 |
-                    (here >> (m | 4) & 1) << 4 | (cells[v - c->st[2]] >> (m | 4) & 1) << 5;
-    static const uint8_t coface_axes[8] = {0x3f, 0x3c, 0x33, 0x30, 0x0f, 0x0c, 0x03, 0x00};
-    word &= coface_axes[m];
+    /* The cofaces as bits of one word, with no branch per axis: byte 0 is
+     * v's cells (the cofaces above f), byte 1 + a the cells of the vertex
+     * below v along axis a (the coface below along a); coface_bits[m] keeps
+     * the coface masks m | 1 << a, for the axes a not in m. */
+    uint32_t word = coface_word(c, v, m);
     if (word == 0 || (word & (word - 1)) != 0)
         return -1; /* no coface, or more than one */
     int bit = __builtin_ctz(word);
-    int axis = bit >> 1, ori = bit & 1;
-    unsigned gm = m | 1u << axis;
-    size_t gv = v - (ori ? c->st[axis] : 0);
+    unsigned gm = (unsigned)bit & 7;
+    int below = bit >> 3; /* 0: above; 1 + a: below along a */
+    int axis = __builtin_ctz(gm ^ m), ori = below != 0;
+    size_t gv = v - (below ? c->st[axis] : 0);
     /* the constraints last: most faces tested have no or two cofaces */
     if (cell_set_has(&c->cons, f) || cell_set_has(&c->cons, (uint32_t)(gv * 8 + gm)))
         return -1;
@@ -326,14 +339,8 @@ static void note_isolated_edges(const Collapse *c, Sink *sk, uint32_t square)
             size_t w = ends[i];
             if (!has(c->cells, w, em))
                 continue;
-            /* its squares: along each other axis, owned by w or below */
-            bool isolated = true;
-            for (unsigned other = 7u & ~em; other; other &= other - 1) {
-                int b = __builtin_ctz(other);
-                unsigned sm = em | 1u << b;
-                isolated &= !(has(c->cells, w, sm) | has(c->cells, w - c->st[b], sm));
-            }
-            if (isolated && !vec_push_edge(sk->noted, (SgIsolatedEdge){(uint32_t)(w * 8 + em),
+            /* no square left: no coface */
+            if (coface_word(c, w, em) == 0 && !vec_push_edge(sk->noted, (SgIsolatedEdge){(uint32_t)(w * 8 + em),
                                                                       c->step, -1,
                                                                       edge_opening(c, w, em)}))
                 sk->oom = true;
