@@ -339,10 +339,10 @@ static void note_isolated_edges(const Collapse *c, Sink *sk, uint32_t square)
             size_t w = ends[i];
             if (!has(c->cells, w, em))
                 continue;
-            /* no square left: no coface */
-            if (coface_word(c, w, em) == 0 && !vec_push_edge(sk->noted, (SgIsolatedEdge){(uint32_t)(w * 8 + em),
-                                                                      c->step, -1,
-                                                                      edge_opening(c, w, em)}))
+            if (coface_word(c, w, em) != 0)
+                continue; /* a square is left */
+            SgIsolatedEdge e = {(uint32_t)(w * 8 + em), c->step, -1, edge_opening(c, w, em)};
+            if (!vec_push_edge(sk->noted, e))
                 sk->oom = true;
         }
     }
