@@ -10,13 +10,19 @@
  * any order of relaxations that reaches it gives the same labels (among
  * nodes at the shortest distance the lowest id wins).
  *
- * Parallel without locks: the grid is cut into z slabs of equal medium, one
- * per thread; each slab runs its own Dijkstra touching only its voxels.
- * Then the keys across each slab boundary are relaxed (serially, two planes
- * per boundary), the voxels that improved seed the next round, and the
- * slabs run again until nothing crosses: usually two or three rounds, the
- * later ones touching only the bands where a node on the other side is
- * nearer. Same fixpoint, so the same bytes for any thread count.
+ * By tiles, in cache, on every core: the grid is cut into tiles of 32^3
+ * voxels. A tile runs its own Dijkstra on a copy of itself and its
+ * one-voxel halo (157 KB with 32-bit keys: in the core's L2 cache, where a
+ * Dijkstra over the whole key array missed the cache on nearly every
+ * neighbour), from its seeds: the voxels whose keys changed since its last
+ * run (a bit each in the tile's bitmap). Keys that improve in its halo are
+ * sent after the run and, once applied, seed the tiles that own them.
+ * Rounds of 8 phases: in a phase the tiles of one parity along x, y and z
+ * run at once on the threads (no two of them share a voxel or a halo
+ * voxel), then their outboxes are applied in tile order; rounds go on
+ * until no tile has a seed, usually five to seven. A voxel can be settled
+ * more than once (a nearer node arrives from another tile later); the
+ * fixpoint is the same, so are the bytes, for any thread count.
  *
  * Keys are 32 bits when the node ids leave room for the distances met
  * (node in the low bits, distance above: the same order as the 64-bit
