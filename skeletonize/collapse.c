@@ -437,6 +437,10 @@ static bool append_u32(U32Vec *dst, U32Vec *src)
     memcpy(dst->a + dst->n, src->a, src->n * sizeof *src->a);
     dst->n += src->n;
     src->n = 0;
+    if (src->cap > (1u << 16)) { /* a worker's copy of a large queue: do not keep it */
+        free(src->a);
+        *src = (U32Vec){0};
+    }
     return true;
 }
 
@@ -478,6 +482,10 @@ static void run_substep_parallel(Collapse *c, U32Vec *q)
             c->pairs.a[2 * at + 1] = p->a[i + 1];
         }
         p->n = 0;
+        if (p->cap > (1u << 16)) {
+            free(p->a);
+            *p = (U32Vec){0};
+        }
     }
     for (size_t i = c->slab_count; i > 0; i--) /* back to slab starts */
         start[i] = start[i - 1];
