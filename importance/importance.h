@@ -42,7 +42,7 @@ typedef struct SgImportanceOptions {
 typedef struct SgImportanceStats {
     uint64_t medium_voxels;
     uint64_t labelled_voxels; /* medium voxels reached from some node */
-    uint32_t label_rounds;    /* slab rounds of the nearest-node propagation */
+    uint32_t label_rounds;    /* rounds of tile phases of the nearest-node propagation */
     uint64_t label_settled;   /* voxels settled over all rounds */
     uint32_t nodes, components, lights, lights_reachable;
     uint64_t blocks, palette_entries, bytes;

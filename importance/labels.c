@@ -10,13 +10,19 @@
  * any order of relaxations that reaches it gives the same labels (among
  * nodes at the shortest distance the lowest id wins).
  *
- * Parallel without locks: the grid is cut into z slabs of equal medium, one
- * per thread; each slab runs its own Dijkstra touching only its voxels.
- * Then the keys across each slab boundary are relaxed (serially, two planes
- * per boundary), the voxels that improved seed the next round, and the
- * slabs run again until nothing crosses: usually two or three rounds, the
- * later ones touching only the bands where a node on the other side is
- * nearer. Same fixpoint, so the same bytes for any thread count.
+ * By tiles, in cache, on every core: the grid is cut into tiles of 32^3
+ * voxels. A tile runs its own Dijkstra on a copy of itself and its
+ * one-voxel halo (157 KB with 32-bit keys: in the core's L2 cache, where a
+ * Dijkstra over the whole key array missed the cache on nearly every
+ * neighbour), from its seeds: the voxels whose keys changed since its last
+ * run (a bit each in the tile's bitmap). Keys that improve in its halo are
+ * sent after the run and, once applied, seed the tiles that own them.
+ * Rounds of 8 phases: in a phase the tiles of one parity along x, y and z
+ * run at once on the threads (no two of them share a voxel or a halo
+ * voxel), then their outboxes are applied in tile order; rounds go on
+ * until no tile has a seed, usually five to seven. A voxel can be settled
+ * more than once (a nearer node arrives from another tile later); the
+ * fixpoint is the same, so are the bytes, for any thread count.
  *
  * Keys are 32 bits when the node ids leave room for the distances met
  * (node in the low bits, distance above: the same order as the 64-bit
@@ -33,8 +39,10 @@
 #include "memory.h"
 #include "threads.h"
 
-enum { W_FACE = 29, W_EDGE = 41, W_CORNER = 50, RING = 64, MAX_SLABS = 16 };
-
+enum { W_FACE = 29, W_EDGE = 41, W_CORNER = 50, RING = 64 };
+/* Tiles of TILE^3 voxels; a tile and its halo, TL^3 keys, fit a core's L2
+ * cache and their indices 16 bits. */
+enum { TILE = 32, TL = TILE + 2 };
 
 typedef struct Buffer {
     uint64_t *items;
@@ -44,7 +52,7 @@ typedef struct Buffer {
 static bool buffer_push(Buffer *b, uint64_t v)
 {
     if (b->count == b->cap) {
-        size_t cap = b->cap ? b->cap * 2 : 1024;
+        size_t cap = b->cap ? b->cap * 2 : 256;
         uint64_t *grown = realloc(b->items, cap * sizeof *grown);
         if (!grown)
             return false;
@@ -55,26 +63,60 @@ static bool buffer_push(Buffer *b, uint64_t v)
     return true;
 }
 
-typedef struct Slab {
-    size_t lo, hi;      /* padded indices of its voxels: whole z planes */
-    Buffer seeds;       /* distance << 32 | voxel, for the next round */
-    Buffer ring[RING];  /* Dial's buckets (voxel indices in the low 32 bits) */
-    uint64_t relaxed;   /* voxels settled, over all rounds */
+/* One of Dial's buckets: local voxel indices. */
+typedef struct Ring {
+    uint16_t *items;
+    size_t count, cap;
+} Ring;
+
+static bool ring_push(Ring *b, uint16_t v)
+{
+    if (b->count == b->cap) {
+        size_t cap = b->cap ? b->cap * 2 : 1024;
+        uint16_t *grown = realloc(b->items, cap * sizeof *grown);
+        if (!grown)
+            return false;
+        b->items = grown;
+        b->cap = cap;
+    }
+    b->items[b->count++] = v;
+    return true;
+}
+
+typedef struct Tile {
+    int x0, y0, z0;     /* padded coordinates of its halo's low corner */
+    int ex, ey, ez;     /* its voxels per axis (TILE, less at the far ends) */
+    bool dirty;         /* some key changed since its last run */
+    bool ran;
+    int out_thread;     /* its last run's outbox entries: */
+    size_t out_begin, out_end; /* work[out_thread].outbox.items[begin, end) */
+} Tile;
+
+/* A thread's tile copy, seeds, buckets and outbox. */
+typedef struct Workspace {
+    void *local;        /* TL^3 keys */
+    Buffer seeds;       /* distance << 16 | local index */
+    Ring ring[RING];
+    Buffer outbox;      /* padded index and key of halo voxels that improved */
+    uint64_t relaxed;   /* voxels settled */
     bool failed;
     bool overflow;      /* a distance did not fit the key */
-} Slab;
+} Workspace;
 
 typedef struct Labeller {
     void *key;          /* uint32_t or uint64_t per padded voxel */
     int shift;          /* key = distance << shift | node */
     uint64_t node_mask; /* node field; all ones: no node */
     uint32_t distance_limit;
-    long off[26];
+    int local_off[26];
     uint32_t weight[26];
-    size_t plane; /* padded voxels per z plane */
-    bool first_round;
-    int slab_count;
-    Slab slabs[MAX_SLABS];
+    size_t px, py, plane; /* padded sizes; padded voxels per z plane */
+    int tx, ty, tz;     /* tiles per axis */
+    Tile *tiles;
+    uint32_t *changed;  /* per tile TILE^2 rows of TILE bits: keys changed since its run */
+    Tile **phase;       /* the tiles of the running phase */
+    Workspace *work;
+    int threads;
 } Labeller;
 
 static int compare_u64(const void *a, const void *b)
@@ -83,16 +125,38 @@ static int compare_u64(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* Marks padded voxel g (not on the padding frame) as changed in its tile. */
+static void mark_changed(Labeller *L, size_t g)
+{
+    size_t x = g % L->px - 1, y = g / L->px % L->py - 1, z = g / L->plane - 1;
+    size_t tile = x / TILE + (size_t)L->tx * (y / TILE + (size_t)L->ty * (z / TILE));
+    L->tiles[tile].dirty = true;
+    L->changed[tile * TILE * TILE + y % TILE + TILE * (z % TILE)] |= (uint32_t)1 << (x % TILE);
+}
+
+/* An outbox entry: padded index and key, one word when the key is 32 bits. */
 #define KEY_T uint32_t
 #define PASS(name) name##_32
+#define OUTBOX_WORDS 1
+#define OUTBOX_PUSH(b, g, want) buffer_push(b, (uint64_t)(g) << 32 | (want))
+#define OUTBOX_READ(p, g, want) ((g) = (size_t)((p)[0] >> 32), (want) = (p)[0] & 0xffffffffu)
 #include "labels_pass.h"
 #undef KEY_T
 #undef PASS
+#undef OUTBOX_WORDS
+#undef OUTBOX_PUSH
+#undef OUTBOX_READ
 #define KEY_T uint64_t
 #define PASS(name) name##_64
+#define OUTBOX_WORDS 2
+#define OUTBOX_PUSH(b, g, want) (buffer_push(b, g) && buffer_push(b, want))
+#define OUTBOX_READ(p, g, want) ((g) = (size_t)(p)[0], (want) = (p)[1])
 #include "labels_pass.h"
 #undef KEY_T
 #undef PASS
+#undef OUTBOX_WORDS
+#undef OUTBOX_PUSH
+#undef OUTBOX_READ
 
 void sg_label_grid_release(SgLabelGrid *g)
 {
@@ -122,18 +186,44 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
      * in the inner loop. */
     const size_t px = (size_t)grid->nx + 2, py = (size_t)grid->ny + 2, pz = (size_t)grid->nz + 2;
     const size_t total = px * py * pz;
+    const size_t key_size = wide ? sizeof(uint64_t) : sizeof(uint32_t);
     Labeller *L = calloc(1, sizeof *L);
-    void *key = malloc(total * (wide ? sizeof(uint64_t) : sizeof(uint32_t)));
-    uint64_t *plane_medium = calloc(pz, sizeof *plane_medium);
-    if (!L || !key || !plane_medium) {
+    void *key = malloc(total * key_size);
+    int tx = (grid->nx + TILE - 1) / TILE, ty = (grid->ny + TILE - 1) / TILE,
+        tz = (grid->nz + TILE - 1) / TILE;
+    size_t tile_count = (size_t)tx * (size_t)ty * (size_t)tz;
+    int threads_used = sg_thread_count(threads);
+    Tile *tiles = L ? calloc(tile_count, sizeof *tiles) : NULL;
+    Tile **phase = L ? malloc(tile_count * sizeof *phase) : NULL;
+    uint32_t *changed = L ? calloc(tile_count * TILE * TILE, sizeof *changed) : NULL;
+    Workspace *work = L ? calloc((size_t)threads_used, sizeof *work) : NULL;
+    bool ok = L && key && tiles && phase && changed && work;
+    for (int t = 0; ok && t < threads_used; t++)
+        ok = (work[t].local = malloc((size_t)TL * TL * TL * key_size)) != NULL;
+    if (!ok) {
+        for (int t = 0; work && t < threads_used; t++)
+            free(work[t].local);
         free(L);
         free(key);
-        free(plane_medium);
+        free(tiles);
+        free(phase);
+        free(changed);
+        free(work);
         return sg_fail(err, "out of memory for the nearest-node labels (%zu voxels)", total);
     }
     L->key = key;
+    L->px = px;
+    L->py = py;
     L->plane = px * py;
-    sg_memory_prefer_huge_pages(key, total * (wide ? sizeof(uint64_t) : sizeof(uint32_t)));
+    L->tx = tx;
+    L->ty = ty;
+    L->tz = tz;
+    L->tiles = tiles;
+    L->phase = phase;
+    L->changed = changed;
+    L->work = work;
+    L->threads = threads_used;
+    sg_memory_prefer_huge_pages(key, total * key_size);
     if (wide) {
         L->shift = 32;
         L->node_mask = 0xffffffffu;
@@ -147,13 +237,7 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
             L->distance_limit = distance_limit;
     }
 
-    uint64_t medium = 0;
-    if (wide)
-        fill_64(L, grid, px, py, total, plane_medium);
-    else
-        fill_32(L, grid, px, py, total, plane_medium);
-    for (size_t z = 0; z < pz; z++)
-        medium += plane_medium[z];
+    uint64_t medium = wide ? fill_64(L, grid, px, py, total) : fill_32(L, grid, px, py, total);
     int n = 0;
     for (int dz = -1; dz <= 1; dz++)
         for (int dy = -1; dy <= 1; dy++)
@@ -161,36 +245,22 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
                 int axes = (dx != 0) + (dy != 0) + (dz != 0);
                 if (axes == 0)
                     continue;
-                L->off[n] = dx + (long)px * (dy + (long)py * dz);
+                L->local_off[n] = dx + TL * (dy + TL * dz);
                 L->weight[n] = axes == 1 ? W_FACE : axes == 2 ? W_EDGE : W_CORNER;
                 n++;
             }
+    for (int k = 0; k < tz; k++)
+        for (int j = 0; j < ty; j++)
+            for (int i = 0; i < tx; i++) {
+                Tile *t = &tiles[i + (size_t)tx * (j + (size_t)ty * k)];
+                t->x0 = i * TILE;
+                t->y0 = j * TILE;
+                t->z0 = k * TILE;
+                t->ex = grid->nx - t->x0 < TILE ? grid->nx - t->x0 : TILE;
+                t->ey = grid->ny - t->y0 < TILE ? grid->ny - t->y0 : TILE;
+                t->ez = grid->nz - t->z0 < TILE ? grid->nz - t->z0 : TILE;
+            }
 
-    /* Slabs of whole z planes holding about equal medium. */
-    int slabs = sg_thread_count(threads);
-    if (slabs > MAX_SLABS)
-        slabs = MAX_SLABS;
-    if (slabs > grid->nz / 8)
-        slabs = grid->nz / 8 > 1 ? grid->nz / 8 : 1;
-    size_t z = 1;
-    uint64_t acc = 0;
-    for (int s = 0; s < slabs; s++) {
-        L->slabs[s].lo = z * L->plane;
-        uint64_t goal = medium * (uint64_t)(s + 1) / (uint64_t)slabs;
-        if (s == slabs - 1) {
-            z = pz - 1;
-        } else {
-            /* Leave at least one plane to each later slab. */
-            size_t limit = pz - 1 - (size_t)(slabs - 1 - s);
-            while (z < limit && (acc + plane_medium[z] <= goal || z * L->plane == L->slabs[s].lo))
-                acc += plane_medium[z++];
-        }
-        L->slabs[s].hi = z * L->plane;
-    }
-    L->slab_count = slabs;
-    free(plane_medium);
-
-    bool ok = true;
     for (uint32_t s = 0; ok && s < skeleton->node_count; s++) {
         const int *c = skeleton->nodes[s].voxel;
         if (!sg_grid_inside(grid, c[0], c[1], c[2]) || !sg_grid_get(grid, c[0], c[1], c[2]))
@@ -199,55 +269,70 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
         /* a lower node may already stand on this voxel */
         if (!(wide ? seed_64(L, v, s) : seed_32(L, v, s)))
             continue;
-        for (int t = 0; t < slabs; t++)
-            if (v >= L->slabs[t].lo && v < L->slabs[t].hi)
-                ok = buffer_push(&L->slabs[t].seeds, v);
+        mark_changed(L, v);
     }
 
+    /* Rounds of 8 phases: the tiles of one parity along each axis run at
+     * once (no two of them touch: each reads its halo, in tiles of other
+     * parities, and writes its own voxels), then their outboxes are
+     * applied in tile order. Which thread runs a tile changes nothing. */
+    SgThreadPool *pool = sg_thread_pool_create(threads_used);
     SgProgress progress;
     sg_progress_begin(&progress, "nearest nodes", medium);
     uint32_t rounds = 0;
     uint64_t settled = 0;
-    for (int round = 0; ok && !*overflow; round++) {
+    bool more = true;
+    while (ok && !*overflow && more) {
+        more = false;
         rounds++;
-        L->first_round = round == 0;
-        sg_parallel_for((uint64_t)slabs, slabs, wide ? run_slab_64 : run_slab_32, L);
-        uint64_t relaxed = 0;
-        for (int s = 0; s < slabs; s++) {
-            ok = ok && !L->slabs[s].failed;
-            *overflow |= L->slabs[s].overflow;
-            relaxed += L->slabs[s].relaxed;
+        for (int parity = 0; parity < 8 && ok && !*overflow; parity++) {
+            size_t count = 0;
+            for (int k = parity >> 2 & 1; k < tz; k += 2)
+                for (int j = parity >> 1 & 1; j < ty; j += 2)
+                    for (int i = parity & 1; i < tx; i += 2) {
+                        Tile *t = &tiles[i + (size_t)tx * (j + (size_t)ty * k)];
+                        if (t->dirty)
+                            phase[count++] = t;
+                    }
+            if (count == 0)
+                continue;
+            more = true;
+            sg_thread_pool_run(pool, count, wide ? run_tile_64 : run_tile_32, L);
+            settled = 0;
+            for (int t = 0; t < threads_used; t++) {
+                ok = ok && !work[t].failed;
+                *overflow |= work[t].overflow;
+                settled += work[t].relaxed;
+            }
+            sg_progress_update(&progress, settled < medium ? settled : medium);
+            if (ok && !*overflow) {
+                if (wide)
+                    apply_64(L, count);
+                else
+                    apply_32(L, count);
+            }
         }
-        settled = relaxed;
-        sg_progress_update(&progress, relaxed < medium ? relaxed : medium);
-        bool more = false;
-        for (int s = 0; ok && s + 1 < slabs; s++) {
-            size_t last_a = L->slabs[s].hi - L->plane, first_b = L->slabs[s].hi;
-            if (wide)
-                ok = exchange_64(L, last_a, first_b, &L->slabs[s + 1], px) &&
-                     exchange_64(L, first_b, last_a, &L->slabs[s], px);
-            else
-                ok = exchange_32(L, last_a, first_b, &L->slabs[s + 1], px) &&
-                     exchange_32(L, first_b, last_a, &L->slabs[s], px);
-        }
-        for (int s = 0; s < slabs; s++) {
-            more |= L->slabs[s].seeds.count > 0;
-            *overflow |= L->slabs[s].overflow;
-        }
-        if (!more)
-            break;
     }
     sg_progress_end(&progress);
+    sg_thread_pool_free(pool);
+    if (rounds > 0 && !more)
+        rounds--; /* the last round found nothing to do */
 
     uint64_t labelled = ok && !*overflow ? (wide ? count_labelled_64(L, total)
                                                  : count_labelled_32(L, total))
                                          : 0;
     uint64_t node_mask = L->node_mask;
-    for (int s = 0; s < MAX_SLABS; s++) {
-        free(L->slabs[s].seeds.items);
+    for (int t = 0; t < threads_used; t++) {
+        free(work[t].local);
+        free(work[t].seeds.items);
+        free(work[t].outbox.items);
         for (int r = 0; r < RING; r++)
-            free(L->slabs[s].ring[r].items);
+            free(work[t].ring[r].items);
     }
+    free(tiles);
+    free(phase);
+    free(changed);
+    free(work);
     free(L);
     if (!ok || *overflow) {
         free(key);

@@ -21,7 +21,7 @@ typedef struct SgLabelGrid {
     bool widened;              /* 32-bit keys were tried and a distance did not fit */
     uint64_t medium_voxels;
     uint64_t labelled_voxels;
-    uint32_t rounds;           /* slab rounds until the boundaries were stable */
+    uint32_t rounds;           /* rounds of tile phases until no tile had a seed */
     uint64_t settled;          /* voxels settled over all rounds (>= labelled) */
 } SgLabelGrid;
 

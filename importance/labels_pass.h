@@ -3,64 +3,102 @@
  * defined. A key is distance << L->shift | node; a node field of all ones
  * is "no node". Internal to labels.c. */
 
-/* Dijkstra inside one slab from its seeds (sorted by distance, fed into the
- * ring as the distance reaches them). */
-static void PASS(run_slab)(void *ctx, uint64_t index, int thread)
+/* Dijkstra inside one tile, on a copy of the tile and its one-voxel halo:
+ * the copy stays in the core's cache where the whole key array does not.
+ * Its seeds are its voxels whose keys changed since its last run (marked
+ * in its bitmap), fed into the ring as the distance reaches them. Keys
+ * that improve in the halo belong to neighbouring tiles: after the run
+ * they go to the thread's outbox, applied after the phase. Only the
+ * tile's own voxels are copied back. */
+static void PASS(run_tile)(void *ctx, uint64_t index, int thread)
 {
-    (void)thread;
     Labeller *L = ctx;
-    Slab *s = &L->slabs[index];
+    Tile *t = L->phase[index];
+    Workspace *w = &L->work[thread];
     KEY_T *key = L->key;
+    KEY_T *local = w->local;
     const int shift = L->shift;
     const uint64_t node_mask = L->node_mask;
-    if (s->seeds.count == 0)
-        return;
-    qsort(s->seeds.items, s->seeds.count, sizeof *s->seeds.items, compare_u64);
+    const size_t px = L->px, plane = L->plane;
+    const int ex = t->ex, ey = t->ey, ez = t->ez;
+    const size_t origin = (size_t)t->x0 + px * ((size_t)t->y0 + L->py * (size_t)t->z0);
+    uint32_t *changed = L->changed + (size_t)(t - L->tiles) * TILE * TILE;
+    /* copy in: local (x, y, z) is padded voxel origin + (x, y, z) */
+    for (int z = 0; z < ez + 2; z++)
+        for (int y = 0; y < ey + 2; y++)
+            memcpy(local + TL * (y + TL * z), key + origin + px * (size_t)y + plane * (size_t)z,
+                   (size_t)(ex + 2) * sizeof *local);
+    w->seeds.count = 0;
+    for (int r = 0; r < TILE * TILE; r++) {
+        uint32_t bits = changed[r];
+        changed[r] = 0;
+        while (bits) {
+            int x = __builtin_ctz(bits);
+            bits &= bits - 1;
+            unsigned v = (unsigned)(x + 1 + TL * (r % TILE + 1 + TL * (r / TILE + 1)));
+            if (!buffer_push(&w->seeds, (uint64_t)(local[v] >> shift) << 16 | v))
+                w->failed = true;
+        }
+    }
+    t->dirty = false;
+    const bool ran = t->ran;
+    uint64_t *seeds = w->seeds.items;
+    const size_t seed_count = w->seeds.count;
+    qsort(seeds, seed_count, sizeof *seeds, compare_u64);
     size_t next_seed = 0, pending = 0;
-    uint32_t d = (uint32_t)(s->seeds.items[0] >> 32);
-    for (;;) {
-        while (next_seed < s->seeds.count && (uint32_t)(s->seeds.items[next_seed] >> 32) == d) {
-            if (!buffer_push(&s->ring[d % RING], (uint32_t)s->seeds.items[next_seed]))
-                s->failed = true;
+    uint32_t d = seed_count ? (uint32_t)(seeds[0] >> 16) : 0;
+    while (seed_count) {
+        while (next_seed < seed_count && (uint32_t)(seeds[next_seed] >> 16) == d) {
+            if (!ring_push(&w->ring[d % RING], (uint16_t)seeds[next_seed]))
+                w->failed = true;
             next_seed++;
             pending++;
         }
         if (pending == 0) {
-            if (next_seed == s->seeds.count)
+            if (next_seed == seed_count)
                 break;
-            d = (uint32_t)(s->seeds.items[next_seed] >> 32);
+            d = (uint32_t)(seeds[next_seed] >> 16);
             continue;
         }
-        Buffer *b = &s->ring[d % RING];
+        Ring *b = &w->ring[d % RING];
         for (size_t q = 0; q < b->count; q++) {
-            uint32_t v = (uint32_t)b->items[q];
-            uint64_t k = key[v];
+            unsigned v = b->items[q];
+            uint64_t k = local[v];
             if ((k >> shift) != d)
                 continue; /* superseded by a shorter path */
-            s->relaxed++;
+            w->relaxed++;
             uint64_t label = k & node_mask;
+            unsigned x = v % TL, y = v / TL % TL, z = v / (TL * TL);
+            /* next to the halo: some neighbours are other tiles' */
+            bool edge = x == 1 || y == 1 || z == 1 || x == (unsigned)ex || y == (unsigned)ey ||
+                        z == (unsigned)ez;
             for (int e = 0; e < 26; e++) {
-                size_t u = (size_t)((long)v + L->off[e]);
-                if (u < s->lo || u >= s->hi)
-                    continue; /* the neighbouring slab's: exchanged later */
+                unsigned u = (unsigned)((int)v + L->local_off[e]);
                 uint32_t nd = d + L->weight[e];
                 uint64_t want = (uint64_t)nd << shift | label;
-                uint64_t cur = key[u];
-                if (want < cur) {
-                    if (nd > L->distance_limit) {
-                        s->overflow = true; /* the caller retries with 64-bit keys */
-                        continue;
-                    }
-                    key[u] = (KEY_T)want;
-                    /* In the first round every reached voxel was queued at
-                     * its distance when it got it: a lower node at the same
-                     * distance needs no new entry. Later rounds start from
-                     * keys set before, so any change is queued. */
-                    if ((cur >> shift) > nd || !L->first_round) {
-                        if (!buffer_push(&s->ring[nd % RING], u))
-                            s->failed = true;
-                        pending++;
-                    }
+                uint64_t cur = local[u];
+                if (want >= cur)
+                    continue;
+                if (nd > L->distance_limit) {
+                    w->overflow = true; /* the caller retries with 64-bit keys */
+                    continue;
+                }
+                local[u] = (KEY_T)want;
+                if (edge) {
+                    unsigned ux = u % TL, uy = u / TL % TL, uz = u / (TL * TL);
+                    if (ux == 0 || uy == 0 || uz == 0 || ux == (unsigned)ex + 1 ||
+                        uy == (unsigned)ey + 1 || uz == (unsigned)ez + 1)
+                        continue; /* the halo: sent after the run */
+                }
+                /* In a tile's first run every voxel with a key was a seed,
+                 * queued at its distance, and every voxel reached since was
+                 * queued when it got its distance: a lower node at the same
+                 * distance needs no new entry. Later runs start from keys
+                 * settled before, so any change is queued. */
+                if ((cur >> shift) > nd || ran) {
+                    if (!ring_push(&w->ring[nd % RING], (uint16_t)u))
+                        w->failed = true;
+                    pending++;
                 }
             }
         }
@@ -68,51 +106,57 @@ static void PASS(run_slab)(void *ctx, uint64_t index, int thread)
         b->count = 0;
         d++;
     }
-    s->seeds.count = 0;
+    for (int z = 1; z <= ez; z++)
+        for (int y = 1; y <= ey; y++)
+            memcpy(key + origin + 1 + px * (size_t)y + plane * (size_t)z, local + 1 + TL * (y + TL * z),
+                   (size_t)ex * sizeof *local);
+    /* the halo's improvements, once each (its keys do not change during
+     * the phase: the tiles around are not running) */
+    t->out_thread = thread;
+    t->out_begin = w->outbox.count;
+    for (int z = 0; z < ez + 2; z++)
+        for (int y = 0; y < ey + 2; y++) {
+            bool face = z == 0 || z == ez + 1 || y == 0 || y == ey + 1;
+            for (int x = 0; x < ex + 2; x += face || x == ex + 1 ? 1 : ex + 1) {
+                unsigned u = (unsigned)(x + TL * (y + TL * z));
+                size_t g = origin + (size_t)x + px * (size_t)y + plane * (size_t)z;
+                if (local[u] < key[g] && !OUTBOX_PUSH(&w->outbox, g, local[u]))
+                    w->failed = true;
+            }
+        }
+    t->out_end = w->outbox.count;
+    t->ran = true;
 }
 
-/* Relaxes plane `from` into the adjacent plane `to` (z differs by one),
- * seeding `slab` with every voxel that improved. */
-static bool PASS(exchange)(Labeller *L, size_t from, size_t to, Slab *slab, size_t px)
+/* Applies a phase's outboxes, in tile order: a key that improves marks its
+ * voxel in its tile's bitmap. The keys after this do not depend on the
+ * order (each is a minimum), nor do the marks. */
+static void PASS(apply)(Labeller *L, size_t tiles)
 {
     KEY_T *key = L->key;
-    const int shift = L->shift;
-    const uint64_t node_mask = L->node_mask;
-    long dz = to > from ? (long)L->plane : -(long)L->plane;
-    bool ok = true;
-    for (size_t v = from; v < from + L->plane; v++) {
-        uint64_t k = key[v];
-        if ((k & node_mask) == node_mask)
-            continue; /* blocked or not reached */
-        uint32_t d = (uint32_t)(k >> shift);
-        for (int dy = -1; dy <= 1; dy++)
-            for (int dx = -1; dx <= 1; dx++) {
-                long o = dz + dx + (long)px * dy;
-                size_t u = (size_t)((long)v + o);
-                if (u < to || u >= to + L->plane)
-                    continue;
-                uint32_t nd = d + (dx == 0 && dy == 0 ? W_FACE : dx == 0 || dy == 0 ? W_EDGE
-                                                                                    : W_CORNER);
-                uint64_t want = (uint64_t)nd << shift | (k & node_mask);
-                if (want < key[u]) {
-                    if (nd > L->distance_limit) {
-                        slab->overflow = true;
-                        continue;
-                    }
-                    key[u] = (KEY_T)want;
-                    ok = ok && buffer_push(&slab->seeds, (uint64_t)nd << 32 | u);
-                }
+    for (size_t i = 0; i < tiles; i++) {
+        const Tile *t = L->phase[i];
+        const Buffer *out = &L->work[t->out_thread].outbox;
+        for (size_t j = t->out_begin; j < t->out_end; j += OUTBOX_WORDS) {
+            size_t g;
+            uint64_t want;
+            OUTBOX_READ(out->items + j, g, want);
+            if (want < key[g]) {
+                key[g] = (KEY_T)want;
+                mark_changed(L, g);
             }
+        }
     }
-    return ok;
+    for (int t = 0; t < L->threads; t++)
+        L->work[t].outbox.count = 0;
 }
 
-/* Blocked cells everywhere, unseen on the medium; counts medium per plane. */
-static void PASS(fill)(Labeller *L, const SgGrid *grid, size_t px, size_t py, size_t total,
-                       uint64_t *plane_medium)
+/* Blocked cells everywhere, unseen on the medium; counts the medium. */
+static uint64_t PASS(fill)(Labeller *L, const SgGrid *grid, size_t px, size_t py, size_t total)
 {
     KEY_T *key = L->key;
     const KEY_T blocked = (KEY_T)L->node_mask, unseen = (KEY_T)~(KEY_T)0;
+    uint64_t medium = 0;
     for (size_t v = 0; v < total; v++)
         key[v] = blocked;
     for (int k = 0; k < grid->nz; k++)
@@ -122,9 +166,10 @@ static void PASS(fill)(Labeller *L, const SgGrid *grid, size_t px, size_t py, si
             for (int i = 0; i < grid->nx; i++)
                 if (row[i]) {
                     krow[i] = unseen;
-                    plane_medium[k + 1]++;
+                    medium++;
                 }
         }
+    return medium;
 }
 
 /* Seeds voxel v with node s unless a lower node stands there already. */

@@ -31,6 +31,7 @@
 #include "union_find.h"
 
 #define KINDS 18
+#define SORT_BUCKETS 4096
 #define SQUARE_BITS 0x68u /* masks 3, 5, 6 */
 
 typedef struct U32Vec {
@@ -76,9 +77,12 @@ static inline size_t cell_slot(const CellSet *s, uint32_t cell)
     return (size_t)(((uint64_t)cell * 0x9E3779B97F4A7C15ull) >> (64 - s->bits));
 }
 
+/* Masks of dimension 0 and 1 (0, 1, 2, 4) as bits. */
+#define LOW_DIM_MASKS 0x17u
+
 static inline bool cell_set_has(const CellSet *s, uint32_t cell)
 {
-    if (!s->high_dims && sg_cell_dim(cell & 7) >= 2)
+    if (!s->high_dims && !(LOW_DIM_MASKS >> (cell & 7) & 1))
         return false;
     size_t mask = ((size_t)1 << s->bits) - 1;
     for (size_t i = cell_slot(s, cell);; i = (i + 1) & mask) {
@@ -92,7 +96,7 @@ static inline bool cell_set_has(const CellSet *s, uint32_t cell)
 
 static bool cell_set_add(CellSet *s, uint32_t cell)
 {
-    if (2 * (s->count + 1) > ((size_t)1 << s->bits)) {
+    if (4 * (s->count + 1) > ((size_t)1 << s->bits)) { /* a quarter full: short misses */
         CellSet grown = {NULL, 0, s->bits + 1, s->high_dims};
         grown.slot = malloc(((size_t)1 << grown.bits) * sizeof *grown.slot);
         if (!grown.slot)
@@ -153,7 +157,9 @@ struct Collapse {
     U32Vec queue_a[KINDS], queue_b[KINDS];
     U32Vec *cur, *next; /* this step's and next step's queues */
     U32Vec pairs;       /* f, g, f, g, ... */
-    U32Vec sort_scratch; /* radix sort of a queue */
+    U32Vec sort_scratch; /* ordering a queue */
+    size_t sort_count[SORT_BUCKETS + 1];
+    uint64_t cell_limit;  /* cell ids are below this */
     EdgeVec live;       /* isolated edges not yet kept */
     EdgeVec kept;       /* isolated edges in the constraint set */
     const uint16_t *dist8, *open8; /* lattice layout: voxel at its lower corner */
@@ -220,42 +226,58 @@ static inline bool has(const uint8_t *bits, size_t v, unsigned m)
     return bits[v] >> m & 1;
 }
 
+/* For a face mask m: bit m | 1 << a of byte 0 and of byte 1 + a, for each
+ * axis a not in m (free_kind's coface word). */
+#define COFACE_BITS(m, a) ((m) >> (a) & 1 ? 0u : (1u << ((m) | 1u << (a))) * (1u | 1u << (8 * ((a) + 1))))
+#define COFACE_MASK(m) (COFACE_BITS(m, 0) | COFACE_BITS(m, 1) | COFACE_BITS(m, 2))
+static const uint32_t coface_bits[8] = {COFACE_MASK(0u), COFACE_MASK(1u), COFACE_MASK(2u),
+                                        COFACE_MASK(3u), COFACE_MASK(4u), COFACE_MASK(5u),
+                                        COFACE_MASK(6u), COFACE_MASK(7u)};
+
+static inline uint32_t coface_word(const Collapse *c, size_t v, unsigned m)
+{
+    const uint8_t *cells = c->cells;
+    uint32_t word = (uint32_t)cells[v] | (uint32_t)cells[v - c->st[0]] << 8 |
+                    (uint32_t)cells[v - c->st[1]] << 16 | (uint32_t)cells[v - c->st[2]] << 24;
+    return word & coface_bits[m];
+}
+
 /* Kind (0..17) of the free pair with face f, or -1 if f is not a free,
  * removable face; *g receives the coface. */
-static inline int free_kind(const Collapse *c, uint32_t f, uint32_t *g)
+/* Inlined into its callers: a call saved and restored six registers,
+ * which on the collapse's hundreds of millions of tests was a seventh of
+ * its instructions. */
+static inline __attribute__((always_inline)) int free_kind(const Collapse *c, uint32_t f,
+                                                           uint32_t *g)
 {
     size_t v = f >> 3;
     unsigned m = f & 7;
     const uint8_t *cells = c->cells;
-    if (!has(cells, v, m) || cell_set_has(&c->cons, f))
+    if (!has(cells, v, m))
         return -1;
-    int count = 0, axis = 0, ori = 0;
-    size_t gv = 0;
-    unsigned gm = 0;
-    for (int a = 0; a < 3; a++) {
-        unsigned bit = 1u << a;
-        if (m & bit)
-            continue;
-        unsigned cm = m | bit;
-        if (has(cells, v, cm)) {
-            if (++count > 1)
-                return -1;
-            gv = v, gm = cm, axis = a, ori = 0;
-        }
-        size_t w = v - c->st[a];
-        if (has(cells, w, cm)) {
-            if (++count > 1)
-                return -1;
-            gv = w, gm = cm, axis = a, ori = 1;
-        }
-    }
-    if (count != 1 || cell_set_has(&c->cons, (uint32_t)(gv * 8 + gm)))
+    /* The cofaces as bits of one word, with no branch per axis: byte 0 is
+     * v's cells (the cofaces above f), byte 1 + a the cells of the vertex
+     * below v along axis a (the coface below along a); coface_bits[m] keeps
+     * the coface masks m | 1 << a, for the axes a not in m. */
+    uint32_t word = coface_word(c, v, m);
+    if (word == 0 || (word & (word - 1)) != 0)
+        return -1; /* no coface, or more than one */
+    int bit = __builtin_ctz(word);
+    unsigned gm = (unsigned)bit & 7;
+    int below = bit >> 3; /* 0: above; 1 + a: below along a */
+    int axis = __builtin_ctz(gm ^ m), ori = below != 0;
+    size_t gv = v - (below ? c->st[axis] : 0);
+    /* the constraints last: most faces tested have no or two cofaces */
+    if (cell_set_has(&c->cons, f) || cell_set_has(&c->cons, (uint32_t)(gv * 8 + gm)))
         return -1;
     *g = (uint32_t)(gv * 8 + gm);
-    return axis * 6 + ori * 3 + (3 - sg_cell_dim(gm));
+    /* sub-step of the pair: coface dimension 3, 2, 1 -> 0, 1, 2 */
+    static const uint8_t coface_rank[8] = {0, 2, 2, 1, 2, 1, 1, 0};
+    return axis * 6 + ori * 3 + coface_rank[gm];
 }
 
-static inline void consider(const Collapse *c, Sink *sk, uint32_t h)
+static inline __attribute__((always_inline)) void consider(const Collapse *c, Sink *sk,
+                                                           uint32_t h)
 {
     uint32_t g;
     int k = free_kind(c, h, &g);
@@ -272,11 +294,11 @@ static inline int cell_faces(const Collapse *c, uint32_t cell, uint32_t faces[6]
     size_t v = cell >> 3;
     unsigned m = cell & 7;
     int n = 0;
-    for (int a = 0; a < 3; a++) {
-        unsigned bit = 1u << a;
-        if (!(m & bit))
-            continue;
-        unsigned fm = m ^ bit;
+    /* over the axes of m by its set bits (as many in every call of a
+     * sub-step: a branch on each axis mispredicted) */
+    for (unsigned axes = m; axes; axes &= axes - 1) {
+        int a = __builtin_ctz(axes);
+        unsigned fm = m ^ 1u << a;
         faces[n++] = (uint32_t)(v * 8 + fm);
         faces[n++] = (uint32_t)((v + c->st[a]) * 8 + fm);
     }
@@ -295,12 +317,13 @@ static uint16_t edge_opening(const Collapse *c, size_t v, unsigned m)
 {
     /* the voxels holding edge (v, m): cubes at v - d, d sharing no axis with m */
     uint16_t best = 0;
-    for (unsigned d = 0; d < 8; d++) {
-        if (d & m)
-            continue;
-        size_t w = v - ((d & 1) ? c->st[0] : 0) - ((d & 2) ? c->st[1] : 0) - ((d & 4) ? c->st[2] : 0);
+    unsigned free_axes = 7u & ~m;
+    for (unsigned d = free_axes;; d = (d - 1) & free_axes) { /* the subsets of free_axes */
+        size_t w = v - (d & 1) * c->st[0] - (d >> 1 & 1) * c->st[1] - (d >> 2 & 1) * c->st[2];
         if (c->open8[w] > best)
             best = c->open8[w];
+        if (d == 0)
+            break;
     }
     return best;
 }
@@ -313,18 +336,8 @@ static void note_isolated_edges(const Collapse *c, Sink *sk, uint32_t square)
     for (int i = 0; i < n; i++) {
         size_t w = edges[i] >> 3;
         unsigned em = edges[i] & 7;
-        if (!has(c->cells, w, em))
-            continue;
-        bool isolated = true;
-        for (int b = 0; b < 3 && isolated; b++) {
-            unsigned bb = 1u << b;
-            if (em & bb)
-                continue;
-            if (has(c->cells, w, em | bb) || has(c->cells, w - c->st[b], em | bb))
-                isolated = false;
-        }
-        if (!isolated)
-            continue;
+        if (!has(c->cells, w, em) || coface_word(c, w, em) != 0)
+            continue; /* gone, or a square is left */
         SgIsolatedEdge noted = {edges[i], c->step, -1, edge_opening(c, w, em)};
         if (!vec_push_edge(sk->noted, noted))
             sk->oom = true;
@@ -420,6 +433,10 @@ static bool append_u32(U32Vec *dst, U32Vec *src)
     memcpy(dst->a + dst->n, src->a, src->n * sizeof *src->a);
     dst->n += src->n;
     src->n = 0;
+    if (src->cap > (1u << 16)) { /* a worker's copy of a large queue: do not keep it */
+        free(src->a);
+        *src = (U32Vec){0};
+    }
     return true;
 }
 
@@ -461,6 +478,10 @@ static void run_substep_parallel(Collapse *c, U32Vec *q)
             c->pairs.a[2 * at + 1] = p->a[i + 1];
         }
         p->n = 0;
+        if (p->cap > (1u << 16)) {
+            free(p->a);
+            *p = (U32Vec){0};
+        }
     }
     for (size_t i = c->slab_count; i > 0; i--) /* back to slab starts */
         start[i] = start[i - 1];
@@ -483,36 +504,36 @@ static void run_substep_parallel(Collapse *c, U32Vec *q)
     }
 }
 
-/* Sorts a queue by cell id (LSD radix, 11 bits a pass), so that the
- * sub-step walks the border in memory order: a queue gathers the faces
- * freed by up to 18 earlier sub-steps, each in its own sweep of the grid,
- * and on a grid larger than the cache every sweep reloads the lines the
- * others loaded. The result depends on the queue's set only (header). */
+/* Orders a queue by windows of cell ids (one counting pass on the high
+ * bits: SORT_BUCKETS windows over the lattice), so that the sub-step walks
+ * the border in memory order: a queue gathers the faces freed by up to 18
+ * earlier sub-steps, each in its own sweep of the grid, and on a grid
+ * larger than the cache every sweep reloads the lines the others loaded.
+ * Within a window (a few lattice rows) the order is left as it came: the
+ * window's cells stay in cache, and a full sort took three passes. The
+ * result depends on the queue's set only (header). */
 static void sort_queue(Collapse *c, U32Vec *q)
 {
     if (q->n < 4096)
         return;
     if (!sg_reserve((void **)&c->sort_scratch.a, &c->sort_scratch.cap, q->n, sizeof *q->a, VEC_FIRST))
         return; /* unsorted is still correct */
-    uint32_t *from = q->a, *to = c->sort_scratch.a;
-    for (int shift = 0; shift < 33; shift += 11) {
-        size_t count[2048 + 1] = {0};
-        for (size_t i = 0; i < q->n; i++)
-            count[(from[i] >> shift & 2047) + 1]++;
-        for (int b = 0; b < 2048; b++)
-            count[b + 1] += count[b];
-        for (size_t i = 0; i < q->n; i++)
-            to[count[from[i] >> shift & 2047]++] = from[i];
-        uint32_t *t = from;
-        from = to;
-        to = t;
-    }
-    /* three passes: the sorted keys are in the scratch; swap the buffers */
-    U32Vec sorted = {from, q->n, from == q->a ? q->cap : c->sort_scratch.cap};
-    if (from != q->a) {
-        c->sort_scratch = (U32Vec){q->a, 0, q->cap};
-        *q = sorted;
-    }
+    int shift = 0;
+    while ((c->cell_limit >> shift) >= SORT_BUCKETS)
+        shift++;
+    const uint32_t *from = q->a;
+    uint32_t *to = c->sort_scratch.a;
+    size_t *count = c->sort_count;
+    memset(count, 0, (SORT_BUCKETS + 1) * sizeof *count);
+    for (size_t i = 0; i < q->n; i++)
+        count[(from[i] >> shift) + 1]++;
+    for (int b = 0; b < SORT_BUCKETS; b++)
+        count[b + 1] += count[b];
+    for (size_t i = 0; i < q->n; i++)
+        to[count[from[i] >> shift]++] = from[i];
+    U32Vec sorted = {to, q->n, c->sort_scratch.cap};
+    c->sort_scratch = (U32Vec){q->a, 0, q->cap};
+    *q = sorted;
 }
 
 static void run_substep(Collapse *c, int s)
@@ -783,6 +804,7 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
         c.st[a] = cx->stride[a];
     c.cur = c.queue_a;
     c.next = c.queue_b;
+    c.cell_limit = (uint64_t)cx->vertex_count * 8;
     bool ok = false;
     if (!cell_set_init(&c.cons)) {
         c.oom = true;

@@ -30,18 +30,28 @@ static size_t lattice_index3(const SgComplex *cx, const int p[3])
     return sg_complex_vertex(cx, p[0], p[1], p[2]);
 }
 
+/* Grid layout to lattice layout in place: the array grows to the lattice
+ * (realloc, usually without a copy) and the rows move up, the last first
+ * (a row's place in the lattice is never below its place in the grid, and
+ * never below the end of any row still to move), with the padding zeroed
+ * behind them. A second array beside the first was the step's peak. */
 static bool to_lattice(const SgComplex *cx, const SgGrid *g, uint16_t **values, SgError *err)
 {
-    uint16_t *lat = calloc(cx->vertex_count, sizeof *lat);
+    uint16_t *lat = realloc(*values, cx->vertex_count * sizeof *lat);
     if (!lat)
         return sg_fail(err, "skeleton: out of memory");
-    sg_memory_prefer_huge_pages(lat, cx->vertex_count * sizeof *lat);
-    for (int k = 0; k < g->nz; k++)
-        for (int j = 0; j < g->ny; j++)
-            memcpy(lat + sg_complex_vertex(cx, 0, j, k), *values + sg_grid_index(g, 0, j, k),
-                   (size_t)g->nx * sizeof *lat);
-    free(*values);
     *values = lat;
+    sg_memory_prefer_huge_pages(lat, cx->vertex_count * sizeof *lat);
+    const size_t nx = (size_t)g->nx;
+    size_t end = cx->vertex_count; /* lat[end ..] is in place */
+    for (int k = g->nz - 1; k >= 0; k--)
+        for (int j = g->ny - 1; j >= 0; j--) {
+            size_t to = sg_complex_vertex(cx, 0, j, k), from = sg_grid_index(g, 0, j, k);
+            memmove(lat + to, lat + from, nx * sizeof *lat);
+            memset(lat + to + nx, 0, (end - to - nx) * sizeof *lat);
+            end = to;
+        }
+    memset(lat, 0, end * sizeof *lat);
     return true;
 }
 
