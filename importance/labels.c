@@ -49,18 +49,19 @@ typedef struct Buffer {
     size_t count, cap;
 } Buffer;
 
+/* Room for one more item of `size` bytes at the end of *items: its
+ * address, or NULL when memory runs out. */
+static void *push_slot(void **items, size_t *count, size_t *cap, size_t size, size_t first)
+{
+    if (*count == *cap && !sg_reserve(items, cap, *count + 1, size, first))
+        return NULL;
+    return (char *)*items + size * (*count)++;
+}
+
 static bool buffer_push(Buffer *b, uint64_t v)
 {
-    if (b->count == b->cap) {
-        size_t cap = b->cap ? b->cap * 2 : 256;
-        uint64_t *grown = realloc(b->items, cap * sizeof *grown);
-        if (!grown)
-            return false;
-        b->items = grown;
-        b->cap = cap;
-    }
-    b->items[b->count++] = v;
-    return true;
+    uint64_t *slot = push_slot((void **)&b->items, &b->count, &b->cap, sizeof v, 256);
+    return slot && (*slot = v, true);
 }
 
 /* One of Dial's buckets: local voxel indices. */
@@ -71,16 +72,8 @@ typedef struct Ring {
 
 static bool ring_push(Ring *b, uint16_t v)
 {
-    if (b->count == b->cap) {
-        size_t cap = b->cap ? b->cap * 2 : 1024;
-        uint16_t *grown = realloc(b->items, cap * sizeof *grown);
-        if (!grown)
-            return false;
-        b->items = grown;
-        b->cap = cap;
-    }
-    b->items[b->count++] = v;
-    return true;
+    uint16_t *slot = push_slot((void **)&b->items, &b->count, &b->cap, sizeof v, 1024);
+    return slot && (*slot = v, true);
 }
 
 typedef struct Tile {

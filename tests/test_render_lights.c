@@ -148,14 +148,28 @@ static SgScene *window_room(float rho)
     return s;
 }
 
-Test(render_lights, floor_under_window_is_rho_L_F)
+/* The window room under a constant sky of radiance 2 (a portal over the
+ * window where `portal`), and the floor's closed form rho L F. */
+static SgScene *window_room_under_sky(bool portal, double *closed_form)
 {
     SgScene *s = window_room(0.6f);
     SgLightSource sky = constant_sky(2.0f);
+    if (portal) {
+        const double corners[4][3] = {{-0.5, 2, -0.3}, {0.5, 2, -0.3}, {0.5, 2, 0.3}, {-0.5, 2, 0.3}};
+        memcpy(sky.portal, corners, sizeof corners);
+        sky.has_portal = true;
+    }
     add_source(s, &sky);
     sgt_finish(s);
-    double F = 4 * corner_form_factor(0.5, 0.3, 2.0);
-    expect_near(render_mean(s, SG_SAMPLING_BSDF, 512), 0.6 * 2.0 * F, 0.0, "floor under a window");
+    *closed_form = 0.6 * 2.0 * 4 * corner_form_factor(0.5, 0.3, 2.0);
+    return s;
+}
+
+Test(render_lights, floor_under_window_is_rho_L_F)
+{
+    double want;
+    SgScene *s = window_room_under_sky(false, &want);
+    expect_near(render_mean(s, SG_SAMPLING_BSDF, 512), want, 0.0, "floor under a window");
     sgt_scene_free(s);
 }
 
@@ -167,12 +181,9 @@ Test(render_lights, openpgl_under_window_is_rho_L_F)
     SgError why = {0};
     if (mode->available && !mode->available(&why))
         cr_skip_test("%s", why.message);
-    SgScene *s = window_room(0.6f);
-    SgLightSource sky = constant_sky(2.0f);
-    add_source(s, &sky);
-    sgt_finish(s);
-    double F = 4 * corner_form_factor(0.5, 0.3, 2.0);
-    expect_near(render_mean(s, SG_SAMPLING_OPENPGL, 512), 0.6 * 2.0 * F, 0.0, "openpgl under a window");
+    double want;
+    SgScene *s = window_room_under_sky(false, &want);
+    expect_near(render_mean(s, SG_SAMPLING_OPENPGL, 512), want, 0.0, "openpgl under a window");
     sgt_scene_free(s);
 }
 
@@ -180,16 +191,10 @@ Test(render_lights, openpgl_under_window_is_rho_L_F)
  * less noise than light samples spread over the whole sky. */
 Test(render_lights, floor_under_window_through_its_portal)
 {
-    SgScene *s = window_room(0.6f);
-    SgLightSource sky = constant_sky(2.0f);
-    const double portal[4][3] = {{-0.5, 2, -0.3}, {0.5, 2, -0.3}, {0.5, 2, 0.3}, {-0.5, 2, 0.3}};
-    memcpy(sky.portal, portal, sizeof portal);
-    sky.has_portal = true;
-    add_source(s, &sky);
-    sgt_finish(s);
-    double F = 4 * corner_form_factor(0.5, 0.3, 2.0);
+    double want;
+    SgScene *s = window_room_under_sky(true, &want);
     Estimate with = render_mean(s, SG_SAMPLING_BSDF, 512);
-    expect_near(with, 0.6 * 2.0 * F, 0.0, "floor under a window, through its portal");
+    expect_near(with, want, 0.0, "floor under a window, through its portal");
     s->light_sources[0].has_portal = false;
     Estimate without = render_mean(s, SG_SAMPLING_BSDF, 512);
     cr_log_info("window: %.6f +- %.2g through the portal, %.6f +- %.2g without", with.mean, with.std_error,
@@ -441,21 +446,25 @@ Test(render_lights, bad_lights_are_refused_with_the_cause)
     }
 }
 
+/* The renderer must refuse s (which it frees) with `cause` in its message. */
+static void expect_refused(SgScene *s, const char *cause)
+{
+    sgt_finish(s);
+    SgRenderOptions o = sgt_options(s, SG_SAMPLING_BSDF);
+    SgError err = {0};
+    SgRenderer *r = sg_renderer_create(s, &o, &err);
+    cr_expect(!r && strstr(err.message, cause), "want \"%s\": %s", cause, err.message);
+    sg_renderer_free(r);
+    sgt_scene_free(s);
+}
+
 Test(render_lights, renderer_refuses_a_missing_sky_image_and_no_light)
 {
     SgScene *s = floor_scene(0.5f, (const double[3]){0, 0, 0});
     SgLightSource sky = constant_sky(1.0f);
     sky.image_path = "/nonexistent/sky.exr";
     add_source(s, &sky);
-    sgt_finish(s);
-    SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.sampling = SG_SAMPLING_BSDF;
-    SgError err = {0};
-    SgRenderer *r = sg_renderer_create(s, &o, &err);
-    cr_expect(!r && strstr(err.message, "/nonexistent/sky.exr"), "%s", err.message);
-    sg_renderer_free(r);
-    sgt_scene_free(s);
+    expect_refused(s, "/nonexistent/sky.exr");
 
     /* a portal whose corners lie on a line */
     s = floor_scene(0.5f, (const double[3]){0, 0, 0});
@@ -464,31 +473,17 @@ Test(render_lights, renderer_refuses_a_missing_sky_image_and_no_light)
     memcpy(sky.portal, line, sizeof line);
     sky.has_portal = true;
     add_source(s, &sky);
-    sgt_finish(s);
-    sg_render_options_default(&o, s);
-    o.sampling = SG_SAMPLING_BSDF;
-    err = (SgError){0};
-    r = sg_renderer_create(s, &o, &err);
-    cr_expect(!r && strstr(err.message, "portal is degenerate"), "%s", err.message);
-    sg_renderer_free(r);
-    sgt_scene_free(s);
+    expect_refused(s, "portal is degenerate");
+
+    /* no light at all */
+    expect_refused(floor_scene(0.5f, (const double[3]){0, 0, 0}), "no light");
 
     /* an image neither square nor 2:1 */
     float texels[3 * 3 * 2] = {0};
     Environment e;
     const double turn[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    err = (SgError){0};
+    SgError err = {0};
     cr_expect(!environment_init(&e, texels, 3, 2, SG_ENVIRONMENT_BY_SHAPE, (const float[3]){1, 1, 1}, turn, "odd.exr",
                                 &err));
     cr_expect(strstr(err.message, "odd.exr") && strstr(err.message, "3x2"), "%s", err.message);
-
-    s = floor_scene(0.5f, (const double[3]){0, 0, 0});
-    sgt_finish(s);
-    sg_render_options_default(&o, s);
-    o.sampling = SG_SAMPLING_BSDF;
-    err = (SgError){0};
-    r = sg_renderer_create(s, &o, &err);
-    cr_expect(!r && strstr(err.message, "no light"), "%s", err.message);
-    sg_renderer_free(r);
-    sgt_scene_free(s);
 }
