@@ -6,22 +6,6 @@
 #include "color.h"
 #include "scene.h"
 
-bool sg_scene_lit_from_outside(const SgScene *s)
-{
-    for (uint32_t i = 0; i < s->light_source_count; i++)
-        if (s->light_sources[i].kind == SG_LIGHT_INFINITE || s->light_sources[i].kind == SG_LIGHT_DISTANT)
-            return true;
-    return false;
-}
-
-static uint32_t point_count(const SgScene *s)
-{
-    uint32_t n = 0;
-    for (uint32_t i = 0; i < s->light_source_count; i++)
-        n += s->light_sources[i].kind == SG_LIGHT_POINT || s->light_sources[i].kind == SG_LIGHT_SPOT;
-    return n;
-}
-
 static uint32_t kind_count(const SgScene *s, SgLightSourceKind kind)
 {
     uint32_t n = 0;
@@ -30,9 +14,15 @@ static uint32_t kind_count(const SgScene *s, SgLightSourceKind kind)
     return n;
 }
 
+bool sg_scene_lit_from_outside(const SgScene *s)
+{
+    return kind_count(s, SG_LIGHT_INFINITE) || kind_count(s, SG_LIGHT_DISTANT);
+}
+
 uint32_t sg_scene_guide_light_count(const SgScene *s)
 {
-    return s->light_count + point_count(s) + (kind_count(s, SG_LIGHT_INFINITE) ? 1u : 0u) +
+    return s->light_count + kind_count(s, SG_LIGHT_POINT) + kind_count(s, SG_LIGHT_SPOT) +
+           (kind_count(s, SG_LIGHT_INFINITE) ? 1u : 0u) +
            kind_count(s, SG_LIGHT_DISTANT);
 }
 

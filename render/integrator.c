@@ -7,12 +7,6 @@
 #include "roulette.h"
 #include "sampling.h"
 
-static inline float power_heuristic(float a, float b)
-{
-    float a2 = a * a, b2 = b * b;
-    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
-}
-
 /* ---- the path's state ------------------------------------------------------ */
 
 /* Between vertices. */
@@ -124,7 +118,7 @@ static void add_emission(Path *p, const Hit *h, const Material *m, float cos_o, 
     if (!p->ps.specular_bounce) {
         Vec3 dp = v3_sub(h->p, p->ps.prev_p);
         float pl = light_set_pdf(it->lights, it->geo->tris[h->tri].light, v3_dot(dp, dp), -cos_o);
-        w = power_heuristic(p->ps.prev_pdf, pl);
+        w = sg_power_heuristic(p->ps.prev_pdf, pl);
     }
     p->radiance = v3_add(p->radiance, v3_scale(v3_mul(p->ps.beta, m->emission), w));
     if (seg)
@@ -188,8 +182,8 @@ typedef struct LightSample {
 } LightSample;
 
 /* Next-event estimation toward a point, spot, distant or infinite light
- * (index among the sources). A delta light's sample has pdf 0 here: it
- * takes no MIS weight, which the caller gives where pdf > 0. */
+ * (index among the sources). A delta light's sample is marked so: no
+ * bounce can find it, so the caller gives it no MIS weight. */
 static LightSample sample_light_source(const Integrator *it, const BounceVertex *v, uint32_t source,
                                        bool lit_below_horizon, float u0, float u1, float u2, PathStats *st)
 {
@@ -385,7 +379,7 @@ static bool scatter(Path *p, const Hit *h, const Material *m, Vec3 wo, Vec3 n, b
     if (gops->vertex_end)
         gops->vertex_end(guide, &gh, ls.lit, pc->rng, &v.g);
     if (ls.pdf > 0.0f) {
-        float w = ls.delta ? 1.0f : power_heuristic(ls.pdf, gops->pdf(&v.g, ls.wi, ls.cos_x));
+        float w = ls.delta ? 1.0f : sg_power_heuristic(ls.pdf, gops->pdf(&v.g, ls.wi, ls.cos_x));
         Vec3 c = v3_scale(ls.c, w);
         p->radiance = v3_add(p->radiance, v3_mul(p->ps.beta, c));
         if (seg)

@@ -7,12 +7,6 @@
 
 /* ---- light sources ------------------------------------------------------------ */
 
-static inline float power_heuristic(float a, float b)
-{
-    float a2 = a * a, b2 = b * b;
-    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
-}
-
 static Vec3 vec3_of(const double d[3]) { return v3((float)d[0], (float)d[1], (float)d[2]); }
 
 /* pbrt-v4's smooth spot falloff: 0 outside the cone, 1 inside its core. */
@@ -120,7 +114,7 @@ static double source_power(const LightSource *l, double radius)
     case SG_LIGHT_SPOT:
         return 2.0 * lum * (1.0 - 0.5 * ((double)l->cos_falloff_start + l->cos_cone));
     case SG_LIGHT_DISTANT: /* the irradiance over the scene's disk */
-        if (l->cos_radius < 1.0f)
+        if (l->sun_sin2 > 0.0f)
             lum *= M_PI * l->sun_sin2; /* radiance to irradiance */
         return lum * radius * radius;
     case SG_LIGHT_INFINITE:
@@ -146,10 +140,8 @@ static bool sources_init(LightSet *ls, const SgScene *s, const double centre[3],
         l->direction = v3_normalize(vec3_of(in->direction));
         l->cos_cone = (float)in->cos_cone;
         l->cos_falloff_start = (float)in->cos_falloff_start;
-        l->cos_radius = 1.0f;
         if (in->kind == SG_LIGHT_DISTANT && in->angular_radius > 0.0) {
             double radius = fmin(in->angular_radius, M_PI / 2), sr = sin(radius), half = sin(0.5 * radius);
-            l->cos_radius = (float)cos(radius);
             l->sun_sin2 = (float)(sr * sr);
             l->sun_one_minus_cos = (float)(2.0 * half * half);
             l->rgb = v3_scale(l->rgb, (float)(1.0 / (M_PI * sr * sr))); /* the disk's radiance */
@@ -188,11 +180,11 @@ Vec3 light_set_escaped(const LightSet *ls, Vec3 x, Vec3 d, float bsdf_pdf)
         Vec3 le;
         if (l->kind == SG_LIGHT_INFINITE)
             le = l->map ? environment_radiance(l->map, d) : l->rgb;
-        else if (l->kind == SG_LIGHT_DISTANT && l->cos_radius < 1.0f && in_sun_disk(l, d))
+        else if (l->kind == SG_LIGHT_DISTANT && l->sun_sin2 > 0.0f && in_sun_disk(l, d))
             le = l->rgb;
         else
             continue;
-        float w = bsdf_pdf < 0.0f ? 1.0f : power_heuristic(bsdf_pdf, light_source_pdf(ls, i, x, d));
+        float w = bsdf_pdf < 0.0f ? 1.0f : sg_power_heuristic(bsdf_pdf, light_source_pdf(ls, i, x, d));
         sum = v3_add(sum, v3_scale(le, w));
     }
     return sum;
@@ -204,7 +196,7 @@ float light_source_pdf(const LightSet *ls, uint32_t i, Vec3 x, Vec3 d)
     float pick = (float)l->pick_pdf;
     if (l->kind == SG_LIGHT_INFINITE)
         return pick * infinite_pdf(l, x, d);
-    if (l->kind == SG_LIGHT_DISTANT && l->cos_radius < 1.0f)
+    if (l->kind == SG_LIGHT_DISTANT && l->sun_sin2 > 0.0f)
         return in_sun_disk(l, d) ? pick / (2.0f * SG_PI * l->sun_one_minus_cos) : 0.0f;
     return 0.0f;
 }
@@ -232,7 +224,7 @@ bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u0, 
         return k > 0.0f;
     }
     case SG_LIGHT_DISTANT:
-        if (l->cos_radius >= 1.0f) {
+        if (!(l->sun_sin2 > 0.0f)) {
             out->wi = v3_scale(l->direction, -1.0f);
             out->le = l->rgb;
             out->delta = true;
@@ -249,54 +241,35 @@ bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u0, 
         out->le = l->rgb;
         out->pdf = pick / (2.0f * SG_PI * l->sun_one_minus_cos);
         return true;
-    case SG_LIGHT_INFINITE:
-        if (l->portal_count) { /* through a window, or from the whole sky */
-            if (u0 < PORTAL_SHARE) {
-                float s = u0 / PORTAL_SHARE * (float)l->portal_count;
-                uint32_t k = (uint32_t)s < l->portal_count ? (uint32_t)s : l->portal_count - 1;
-                const Portal *p = &l->portals[k];
-                Vec3 y = v3_add(p->p0, v3_add(v3_scale(p->e1, u1), v3_scale(p->e2, u2)));
-                Vec3 to = v3_sub(y, origin);
-                float len = v3_length(to);
-                if (!(len > 0.0f))
-                    return false;
-                out->wi = v3_scale(to, 1.0f / len);
-            } else {
-                float pdf, v1 = u1, v2 = u2;
-                if (l->map)
-                    out->wi = environment_sample(l->map, v1, v2, &pdf);
-                else {
-                    float z = 1.0f - 2.0f * v1, r = sqrtf(fmaxf(0.0f, 1.0f - z * z)), phi = 2.0f * SG_PI * v2;
-                    out->wi = v3(r * cosf(phi), r * sinf(phi), z);
-                }
-            }
-            out->le = l->map ? environment_radiance(l->map, out->wi) : l->rgb;
-            out->pdf = pick * infinite_pdf(l, origin, out->wi);
-            return out->pdf > 0.0f;
-        }
-        if (l->map) {
-            float pdf;
-            out->wi = environment_sample(l->map, u1, u2, &pdf);
-            out->le = environment_radiance(l->map, out->wi);
-            out->pdf = pick * pdf;
-            return pdf > 0.0f;
-        }
-        {
+    case SG_LIGHT_INFINITE: {
+        /* through a window (where it has portals), or from the whole sky */
+        float sky;
+        if (l->portal_count && u0 < PORTAL_SHARE) {
+            float s = u0 / PORTAL_SHARE * (float)l->portal_count;
+            uint32_t k = (uint32_t)s < l->portal_count ? (uint32_t)s : l->portal_count - 1;
+            const Portal *p = &l->portals[k];
+            Vec3 to = v3_sub(v3_add(p->p0, v3_add(v3_scale(p->e1, u1), v3_scale(p->e2, u2))), origin);
+            float len = v3_length(to);
+            if (!(len > 0.0f))
+                return false;
+            out->wi = v3_scale(to, 1.0f / len);
+        } else if (l->map) {
+            out->wi = environment_sample(l->map, u1, u2, &sky);
+        } else {
             float z = 1.0f - 2.0f * u1, r = sqrtf(fmaxf(0.0f, 1.0f - z * z)), phi = 2.0f * SG_PI * u2;
             out->wi = v3(r * cosf(phi), r * sinf(phi), z);
+            sky = 1.0f / (4.0f * SG_PI);
         }
-        out->le = l->rgb;
-        out->pdf = pick / (4.0f * SG_PI);
-        return true;
+        out->le = l->map ? environment_radiance(l->map, out->wi) : l->rgb;
+        /* without portals the sample's own density; with them the mixture's */
+        out->pdf = pick * (l->portal_count ? infinite_pdf(l, origin, out->wi) : sky);
+        return out->pdf > 0.0f;
+    }
     }
     return false;
 }
 
-double light_set_power(const LightSet *ls)
-{
-    uint32_t n = ls->count + ls->source_count;
-    return n ? ls->total_power : 0.0;
-}
+double light_set_power(const LightSet *ls) { return ls->total_power; }
 
 /* ---- the set ---------------------------------------------------------------------- */
 

@@ -42,8 +42,8 @@ typedef struct LightSource {
     Vec3 position;     /* point, spot */
     Vec3 direction;    /* the way the light travels */
     float cos_cone, cos_falloff_start; /* spot */
-    float cos_radius;  /* distant: cosine of the sun's angular radius; 1: a delta */
-    float sun_sin2;    /* ... its sine squared, and 1 - cosine: what a small disk needs */
+    float sun_sin2;    /* distant: the sine squared of the sun's angular radius (0: a delta),
+                        * and 1 - its cosine: what a small disk needs, kept without cancellation */
     float sun_one_minus_cos;
     Environment *map;  /* infinite: the image, or NULL: constant */
     uint32_t portal_count; /* infinite: windows to sample it through (hand-drawn or found) */

@@ -65,7 +65,7 @@ bool openings_find(const SgImportanceCache *cache, const double bounds_min[3], c
                 for (int i0 = 0; i0 < nu; i0++) {
                     if (open[(size_t)j0 * nu + i0] != 1)
                         continue;
-                    Patch p = {{i0, j0}, {i0, j0}, axis, side, 0};
+                    Patch p = {{i0, j0}, {i0, j0}, axis, side, 0}; /* in the face's cells, then voxels */
                     int top = 0;
                     stack[top++] = i0, stack[top++] = j0;
                     open[(size_t)j0 * nu + i0] = 2;
@@ -92,11 +92,9 @@ bool openings_find(const SgImportanceCache *cache, const double bounds_min[3], c
                         }
                         patches = grown, patch_cap = cap;
                     }
-                    patch_count++;
-                    patches[patch_count - 1] = p;
-                    /* from cells of the face's grid to voxels */
-                    patches[patch_count - 1].lo[0] += lo[u], patches[patch_count - 1].hi[0] += lo[u];
-                    patches[patch_count - 1].lo[1] += lo[v], patches[patch_count - 1].hi[1] += lo[v];
+                    p.lo[0] += lo[u], p.hi[0] += lo[u];
+                    p.lo[1] += lo[v], p.hi[1] += lo[v];
+                    patches[patch_count++] = p;
                 }
             free(open);
             free(stack);

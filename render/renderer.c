@@ -96,7 +96,8 @@ bool sg_roulette_parse(const char *name, SgRoulette *r)
 
 /* ---- setup ---------------------------------------------------------------- */
 
-/* `create`: the guide's constructor, NULL: the one o->sampling names. */
+/* A sky without a portal of its own gets the openings the precompute
+ * found (r->opt.importance.cache) as its portals. */
 static bool attach_openings(SgRenderer *r, const SgScene *s, const char *path, SgError *err)
 {
     Vec3(*corners)[4];
@@ -112,6 +113,7 @@ static bool attach_openings(SgRenderer *r, const SgScene *s, const char *path, S
     return ok || sg_fail(err, "%s: out of memory for the openings", path);
 }
 
+/* `create`: the guide's constructor, NULL: the one o->sampling names. */
 static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, PathGuideCreate create, SgError *err)
 {
     const char *path = s->path[0] ? s->path : "scene";
@@ -169,8 +171,6 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
         sg_renderer_free(r);
         return NULL;
     }
-    /* a sky without a hand-drawn portal looks through the openings the
-     * precompute found */
     if (o->importance.cache && r->lights.has_escaping && !attach_openings(r, s, path, err)) {
         sg_renderer_free(r);
         return NULL;

@@ -19,6 +19,14 @@ extern "C" {
 #define SG_PI 3.14159265358979323846f
 #define SG_INV_PI 0.31830988618379067154f
 
+/* Veach's power heuristic (beta 2): the MIS weight of a sample drawn with
+ * pdf a against another strategy's pdf b at the same direction. */
+static inline float sg_power_heuristic(float a, float b)
+{
+    float a2 = a * a, b2 = b * b;
+    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
+
 /* Maps a local direction (z = axis) into the frame around unit `axis`. */
 Vec3 sg_to_world(Vec3 local, Vec3 axis);
 /* The inverse: a world direction in that frame (v3_basis(axis), axis). */

@@ -555,7 +555,7 @@ static void portal_case(uint64_t seed, int sub)
 static void source_case(SgLightSourceKind kind, float radius, uint64_t seed, int sub)
 {
     LightSource src = {.kind = kind, .rgb = v3(1, 1, 1), .direction = tilted(0.3f, -1.0f, 0.2f),
-                       .cos_radius = cosf(radius), .sun_sin2 = sinf(radius) * sinf(radius),
+                       .sun_sin2 = sinf(radius) * sinf(radius),
                        .sun_one_minus_cos = 2.0f * sinf(0.5f * radius) * sinf(0.5f * radius), .pick_pdf = 1.0};
     LightSet ls = {.source_count = 1, .sources = &src, .has_escaping = true};
     assert_chi2(kind == SG_LIGHT_INFINITE ? "constant sky" : "sun disk", source_sample_fn, source_pdf_fn, &ls, seed,

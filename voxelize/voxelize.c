@@ -66,6 +66,13 @@ bool sg_triangle_box_overlap(const double centre[3], double half, const double a
 
 /* ---- grid placement ----------------------------------------------------- */
 
+/* Light from outside: a margin of air round the bounds, where the sky is,
+ * reached through the scene's openings; 0 for a closed scene. */
+static int outside_margin(const SgScene *scene)
+{
+    return sg_scene_lit_from_outside(scene) ? SG_VOXELIZE_OUTSIDE_MARGIN : 0;
+}
+
 bool sg_voxelize_grid_for(const SgScene *scene, int resolution, SgGrid *grid, SgError *err)
 {
     if (resolution < 1 || resolution > 4096)
@@ -79,9 +86,7 @@ bool sg_voxelize_grid_for(const SgScene *scene, int resolution, SgGrid *grid, Sg
         return sg_fail(err, "%s: the scene's bounding box is empty or not finite", scene->path);
     double h = longest / resolution;
     int dims[3];
-    /* light from outside: a margin of air round the bounds, where the sky
-     * is, reached through the scene's openings */
-    int margin = sg_scene_lit_from_outside(scene) ? SG_VOXELIZE_OUTSIDE_MARGIN : 0;
+    int margin = outside_margin(scene);
     double origin[3];
     for (int a = 0; a < 3; a++) {
         /* Relative slack so that 10.0 / 0.1 counts as 100 voxels, not 101. */
@@ -349,8 +354,7 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
         return sg_fail(err, "%s: out of memory", scene->path);
     }
     medium->light_count = light_count;
-    int margin = sg_scene_lit_from_outside(scene) ? SG_VOXELIZE_OUTSIDE_MARGIN : 0;
-    medium->outside_margin = margin;
+    medium->outside_margin = outside_margin(scene);
     for (uint32_t k = 0; k < light_count; k++) {
         SgGuideLight l = sg_scene_guide_light(scene, k);
         SgMediumLight *ml = &medium->lights[k];
