@@ -94,11 +94,11 @@ static void describe_mode(const SgSamplingMode *m)
     SgError e = {0};
     bool available = !m->available || m->available(&e);
     printf("{\"name\": \"%s\", \"uses_cache\": %s, \"default_with_cache\": %s, \"default_without_cache\": %s, "
-           "\"lobe_exponent\": %g, \"learns\": %s, \"learned_roulette\": %s, \"biased\": %s, "
-           "\"available\": %s}\n",
+           "\"lobe_exponent\": %g, \"learns\": %s, \"training_passes\": %d, \"learned_roulette\": %s, "
+           "\"biased\": %s, \"available\": %s}\n",
            m->name, m->uses_cache ? "true" : "false", m->default_with_cache ? "true" : "false",
            m->default_without_cache ? "true" : "false", m->lobe_exponent, m->learns ? "true" : "false",
-           m->learned_roulette ? "true" : "false", m->biased ? "true" : "false", available ? "true" : "false");
+           m->training_passes, m->learned_roulette ? "true" : "false", m->biased ? "true" : "false", available ? "true" : "false");
 }
 
 static int describe(int argc, char **argv)

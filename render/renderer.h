@@ -167,11 +167,12 @@ double sg_renderer_guided_fraction(const SgRenderer *r);
 /* The share of the diffuse and glossy bounces drawn so far whose direction
  * the guide's lobe drew (the rest: the BSDF's sampler); 0 before any. */
 double sg_renderer_lobe_share(const SgRenderer *r);
-/* openpgl: the passes whose paths trained the field so far (it learns
- * after each of the first SgRenderOptions.training_passes, by default
- * SG_OPENPGL_TRAINING_PASSES: Cycles' training samples), and the seconds
- * its updates took; 0 in other modes. */
-#define SG_OPENPGL_TRAINING_PASSES 128
+/* A learned mode: the passes whose paths trained the field so far (the
+ * first SgRenderOptions.training_passes; openpgl's default is
+ * SG_OPENPGL_TRAINING_PASSES: Cycles' 128 updates, the first from 1 pass,
+ * the second from 2, the rest from 4), and the seconds its updates took;
+ * 0 in other modes. */
+#define SG_OPENPGL_TRAINING_PASSES (1 + 2 + 4 * 126)
 int sg_renderer_training_passes(const SgRenderer *r);
 double sg_renderer_training_seconds(const SgRenderer *r);
 /* Bytes of texels the texture cache holds; *images: the images' full size

@@ -824,7 +824,7 @@ Test(render_integrator, openpgl_agrees_with_bsdf_in_dark_room)
     double se = sqrt(b.std_error * b.std_error + p.std_error * p.std_error);
     cr_log_info("two rooms: bsdf %.5f +- %.5f, openpgl %.5f +- %.5f, guide drew %.3f, %d training passes", b.mean[0],
                 b.std_error, p.mean[0], p.std_error, share, passes);
-    cr_assert_eq(passes, 64, "the field learns after every pass: %d", passes);
+    cr_assert_eq(passes, 64, "every pass's paths train the field: %d", passes);
     cr_assert(share > 0.2, "the field guides: it drew %.3f of the bounces", share);
     cr_assert(fabs(b.mean[0] - p.mean[0]) < 3.0 * se, "bsdf %.5f vs openpgl %.5f, 3 se = %.5f", b.mean[0],
               p.mean[0], 3 * se);

@@ -209,3 +209,26 @@ Test(render_openpgl, field_of_one_mode_is_refused_by_the_other, .timeout = 300)
     cr_assert_not(read, "a mis field was taken for a ris render");
     cr_assert(strstr(refused.message, "openpgl mis") != NULL, "the refusal names the mode: %s", refused.message);
 }
+
+/* ---- the training's schedule: Cycles' (1, 2, then 4 passes per update) ---- */
+
+Test(render_openpgl, training_updates_on_cycles_schedule, .timeout = 300)
+{
+    skip_without_openpgl();
+    SgScene *s = sgt_furnace_scene();
+    SgRenderOptions o;
+    openpgl_options(&o, s, SG_OPENPGL_MIS, SG_ROULETTE_ALBEDO);
+    o.training_passes = 9; /* updates after passes 1, 3 and 7, and at the end: 4 */
+    SgError err = {0};
+    SgRenderer *r = sg_renderer_create(s, &o, &err);
+    cr_assert_not_null(r, "%s", err.message);
+    cr_assert(sg_renderer_train(r, &err), "%s", err.message);
+    SgRenderReport report;
+    sg_renderer_report(r, &report);
+    int passes = sg_renderer_training_passes(r);
+    sg_renderer_free(r);
+    sgt_scene_free(s);
+    cr_assert_eq(passes, 9, "every training pass's paths reach the field: %d", passes);
+    cr_assert(strstr(report.guide, "on 9 passes in 4 updates") != NULL, "the schedule: %s", report.guide);
+    cr_assert_eq(SG_OPENPGL_TRAINING_PASSES, 1 + 2 + 4 * 126, "Cycles' 128 updates");
+}

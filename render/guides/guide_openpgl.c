@@ -1,8 +1,9 @@
 /* openpgl: the peer, Open PGL's learned guiding integrated as Cycles does
  * (render/guides/openpgl_field.h wraps the library): one field for the scene,
- * trained after each of its training passes (SG_OPENPGL_TRAINING_PASSES,
- * Cycles' training samples, unless the options say) from the paths that
- * pass recorded, then frozen (or frozen as a field file gives it). At a
+ * trained during its training passes (SG_OPENPGL_TRAINING_PASSES unless the
+ * options say) on Cycles' schedule: 128 updates, each from the paths of up
+ * to 4 passes (openpgl_passes_per_update), then frozen (or frozen as a field
+ * file gives it). At a
  * diffuse or glossy vertex the field's distribution there (cosine product
  * applied) and the BSDF share the bounce as Cycles' two modes do
  * (--openpgl-mode):
@@ -39,6 +40,8 @@ typedef struct OpenPgl {
     PathGuide base;
     SgPglField *field;
     int training_passes;
+    int trained_passes;   /* passes whose paths reached the field */
+    int batch;            /* passes recorded since the last update */
     SgOpenPglMode mode;
     bool guided_roulette; /* Open PGL's guided roulette runs (radiance caches, --roulette learned) */
     bool recording; /* this pass trains the field */
@@ -70,15 +73,24 @@ static void pgl_pass_begin(PathGuide *g, int pass, uint64_t pass_key, GuidePass 
     plan->record = o->recording;
 }
 
+/* Cycles' schedule: its scheduler starts with one sample between updates
+ * and grows the work, and Cycles caps it at 4 samples per update while
+ * guiding trains: 1, 2, then 4 passes per update. */
+static int openpgl_passes_per_update(int update) { return update == 0 ? 1 : update == 1 ? 2 : 4; }
+
 static void pgl_pass_end(PathGuide *g, int pass)
 {
-    (void)pass;
     OpenPgl *o = (OpenPgl *)g;
     if (!o->recording)
         return;
-    double t0 = sg_seconds(); /* the next pass samples what this one taught */
+    o->trained_passes++;
+    o->batch++;
+    if (o->batch < openpgl_passes_per_update(sg_pgl_field_updates(o->field)) && pass + 1 < o->training_passes)
+        return;
+    double t0 = sg_seconds(); /* the next pass samples what these taught */
     sg_pgl_field_update(o->field);
     o->training_seconds += sg_seconds() - t0;
+    o->batch = 0;
 }
 
 /* Cycles' roughness of a vertex: the square root of its lobes' mean
@@ -235,11 +247,13 @@ static void pgl_record_path_end(PathGuide *g, int thread) { sg_pgl_path_end(((Op
 static void pgl_stats(const PathGuide *g, GuideStats *s)
 {
     const OpenPgl *o = (const OpenPgl *)g;
-    s->training_passes = sg_pgl_field_updates(o->field);
+    s->training_passes = o->trained_passes;
+    s->training_updates = sg_pgl_field_updates(o->field);
     s->training_seconds = o->training_seconds;
 }
 
-/* A field file's part: the updates behind the field, then Open PGL's own bytes. */
+/* A field file's part: the updates and passes behind the field, then Open
+ * PGL's own bytes. */
 static bool pgl_field_store(const PathGuide *g, FieldBytes *out)
 {
     const OpenPgl *o = (const OpenPgl *)g;
@@ -248,8 +262,8 @@ static bool pgl_field_store(const PathGuide *g, FieldBytes *out)
     SgError e = {0};
     if (!sg_pgl_field_save(o->field, &data, &size, &e))
         return false;
-    int32_t updates = sg_pgl_field_updates(o->field);
-    bool ok = field_bytes_put(out, &updates, sizeof updates) && field_bytes_put(out, data, size);
+    int32_t counts[2] = {sg_pgl_field_updates(o->field), o->trained_passes};
+    bool ok = field_bytes_put(out, counts, sizeof counts) && field_bytes_put(out, data, size);
     free(data);
     return ok;
 }
@@ -257,11 +271,12 @@ static bool pgl_field_store(const PathGuide *g, FieldBytes *out)
 static bool pgl_field_load(PathGuide *g, FieldReader *in, SgError *err)
 {
     OpenPgl *o = (OpenPgl *)g;
-    int32_t updates;
-    if (!field_reader_get(in, &updates, sizeof updates) || updates < 0)
+    int32_t counts[2];
+    if (!field_reader_get(in, counts, sizeof counts) || counts[0] < 0 || counts[1] < counts[0])
         return sg_fail(err, "its Open PGL field is truncated");
-    if (!sg_pgl_field_restore(o->field, in->data + in->at, in->size - in->at, updates, err))
+    if (!sg_pgl_field_restore(o->field, in->data + in->at, in->size - in->at, counts[0], err))
         return false;
+    o->trained_passes = counts[1];
     in->at = in->size;
     o->frozen = true;
     return true;
@@ -273,8 +288,8 @@ static void pgl_describe(const PathGuide *g, const GuideStats *s, SgRenderReport
 {
     const OpenPgl *o = (const OpenPgl *)g;
     snprintf(report->guide, sizeof report->guide,
-             ", %s, field trained on %d passes (%.2f s%s), guide drew %.1f%% of bounces%s",
-             sg_openpgl_mode_name(o->mode), s->training_passes, s->training_seconds, o->frozen ? ", frozen" : "",
+             ", %s, field trained on %d passes in %d updates (%.2f s%s), guide drew %.1f%% of bounces%s",
+             sg_openpgl_mode_name(o->mode), s->training_passes, s->training_updates, s->training_seconds, o->frozen ? ", frozen" : "",
              100.0 * s->lobe_share, o->guided_roulette ? ", Open PGL's guided roulette" : "");
     if (o->guided_roulette)
         report->roulette = SG_ROULETTE_LEARNED;
@@ -332,6 +347,7 @@ const PathGuideKind guide_openpgl_kind = {
     .mode = {.name = "openpgl",
              .help = "the peer, Open PGL's learned guiding as Cycles uses it\n(no cache; builds with `make openpgl`; --openpgl-mode)",
              .learns = true,
+             .learned_roulette = true, /* Open PGL's guided roulette, where it keeps radiance caches */
              .training_passes = SG_OPENPGL_TRAINING_PASSES,
              .available = sg_pgl_require},
     .create = pgl_create,

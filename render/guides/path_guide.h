@@ -110,7 +110,8 @@ typedef struct GuidePass {
 /* For the render line and the EXR. */
 typedef struct GuideStats {
     double guided_fraction;  /* of the learner's bounces, where it uses the lobe; -1 none */
-    int training_passes;     /* passes that updated a learned field */
+    int training_passes;     /* passes whose paths trained a learned field */
+    int training_updates;    /* openpgl: the field's updates from them */
     double training_seconds; /* the updates' time */
     double lobe_share;       /* the integrator's count: bounces the guide drew (by_guide) */
 } GuideStats;
