@@ -37,18 +37,39 @@ uint32_t sgt_add_material(SgScene *s, SgMaterialType type, const float albedo[3]
 
 SgMaterial *sgt_material(SgScene *s, uint32_t m) { return &s->materials[m]; }
 
+/* The arrays a count of n items is kept in hold the next power of two at
+ * least n: a scene of many quads grows in log steps (a realloc per quad is
+ * quadratic, and minutes under AddressSanitizer, which always copies). */
+static size_t quad_capacity(size_t n)
+{
+    size_t c = 8;
+    while (c < n)
+        c *= 2;
+    return c;
+}
+
+static void *grow_to(void *p, size_t count, size_t added, size_t item)
+{
+    if (count && quad_capacity(count + added) == quad_capacity(count))
+        return p;
+    void *q = realloc(p, quad_capacity(count + added) * item);
+    if (!q)
+        abort();
+    return q;
+}
+
 void sgt_add_quad(SgScene *s, const double c[4][3], uint32_t material)
 {
     uint32_t v0 = s->vertex_count;
-    s->positions = realloc(s->positions, (s->vertex_count + 4) * 3 * sizeof(double));
+    s->positions = grow_to(s->positions, v0, 4, 3 * sizeof(double));
     for (int k = 0; k < 4; k++)
         for (int i = 0; i < 3; i++)
             s->positions[3 * (v0 + k) + i] = c[k][i];
     s->vertex_count += 4;
     uint32_t t0 = s->triangle_count;
-    s->indices = realloc(s->indices, (t0 + 2) * 3 * sizeof(uint32_t));
-    s->triangle_material = realloc(s->triangle_material, (t0 + 2) * sizeof(uint32_t));
-    s->triangle_light = realloc(s->triangle_light, (t0 + 2) * sizeof(uint32_t));
+    s->indices = grow_to(s->indices, t0, 2, 3 * sizeof(uint32_t));
+    s->triangle_material = grow_to(s->triangle_material, t0, 2, sizeof(uint32_t));
+    s->triangle_light = grow_to(s->triangle_light, t0, 2, sizeof(uint32_t));
     uint32_t tri[6] = {v0, v0 + 1, v0 + 2, v0, v0 + 2, v0 + 3};
     memcpy(s->indices + 3 * t0, tri, sizeof tri);
     s->triangle_material[t0] = s->triangle_material[t0 + 1] = material;
