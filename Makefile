@@ -44,7 +44,7 @@ CPPFLAGS += -Icommon -I. -D_GNU_SOURCE -MMD -MP
 CFLAGS += -std=c11 $(OPT) -g $(WARN) $(SANFLAGS) -pthread
 CXXFLAGS += -std=c++17 $(OPT) -g $(WARN) $(SANFLAGS) -pthread -Wno-deprecated-declarations
 LDFLAGS += $(SANFLAGS) -pthread
-LDLIBS := -lembree3 -lopenvdb -ltbb -lOpenImageIO -lOpenImageIO_Util -lassimp -lcjson \
+LDLIBS := -lembree3 -lopenvdb -ltbb -lassimp -lcjson -ldl \
           -lcriterion -lstdc++ -lm
 
 # The Open PGL peer (render --sampling openpgl): linked where `make openpgl`
@@ -62,13 +62,22 @@ ALL_STEPS := voxelize skeletonize importance render merge
 STEPS := $(foreach s,$(ALL_STEPS),$(if $(wildcard $(s)/main.c),$(s)))
 PROGRAMS := $(addprefix $(BIN)/,$(STEPS))
 
+# OpenImageIO's two wrappers are a shared object of their own, loaded on
+# first use (common/image_library.h): linked in, OpenImageIO's 250 shared
+# objects cost every program half a second of CPU at start. The objects are
+# built position-independent, with their own copies of the helpers they call.
+IMAGES_CXX := common/image_io.cpp render/texture_images.cpp
+IMAGES_SO := $(BUILD)/libsg_images.so
+IMAGES_OBJ := $(IMAGES_CXX:%.cpp=$(BUILD)/pic/%.o) $(BUILD)/pic/common/error.o $(BUILD)/pic/common/output_file.o
+$(BUILD)/common/image_library.o: CPPFLAGS += -DSG_IMAGES_LIBRARY='"$(abspath $(IMAGES_SO))"'
+
 COMMON_C := $(wildcard common/*.c common/*/*.c)
-COMMON_CXX := $(wildcard common/*.cpp)
+COMMON_CXX := $(filter-out $(IMAGES_CXX),$(wildcard common/*.cpp))
 COMMON_OBJ := $(COMMON_C:%.c=$(BUILD)/%.o) $(COMMON_CXX:%.cpp=$(BUILD)/%.o)
 
 # Each step: its library (every .c and .cpp but main.c, in its folder and
 # the folders inside it) and its program (main.c).
-step_lib_src = $(filter-out $(1)/main.c,$(wildcard $(1)/*.c $(1)/*.cpp $(1)/*/*.c $(1)/*/*.cpp))
+step_lib_src = $(filter-out $(1)/main.c $(IMAGES_CXX),$(wildcard $(1)/*.c $(1)/*.cpp $(1)/*/*.c $(1)/*/*.cpp))
 step_lib_obj = $(patsubst %.cpp,$(BUILD)/%.o,$(patsubst %.c,$(BUILD)/%.o,$(call step_lib_src,$(1))))
 STEP_LIBS := $(foreach s,$(STEPS),$(BUILD)/lib$(s).a)
 
@@ -103,6 +112,15 @@ BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
 
 all: $(PROGRAMS)
 
+$(IMAGES_SO): $(IMAGES_OBJ)
+	$(CXX) -shared $(LDFLAGS) -Wl,-Bsymbolic -o $@ $^ -lOpenImageIO -lOpenImageIO_Util
+$(BUILD)/pic/%.o: %.cpp
+	@mkdir -p $(@D)
+	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -fPIC -c -o $@ $<
+$(BUILD)/pic/%.o: %.c
+	@mkdir -p $(@D)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -c -o $@ $<
+
 # Rebuilt from scratch so that the object of a removed source does not stay
 # in it; ar names members by file name alone, so no two sources in common/
 # and its folders may share one.
@@ -116,7 +134,7 @@ $(BUILD)/lib$(1).a: $(call step_lib_obj,$(1))
 	@mkdir -p $$(@D)
 	rm -f $$@
 	$$(AR) rcs $$@ $$^
-$(BIN)/$(1): $(BUILD)/$(1)/main.o $(BUILD)/lib$(1).a $(STEP_LIBS) $(BUILD)/libcommon.a
+$(BIN)/$(1): $(BUILD)/$(1)/main.o $(BUILD)/lib$(1).a $(STEP_LIBS) $(BUILD)/libcommon.a | $(IMAGES_SO)
 	@mkdir -p $$(@D)
 	$$(CC) $$(LDFLAGS) -o $$@ $(BUILD)/$(1)/main.o $(STEP_LIBS) $(BUILD)/libcommon.a $$(PROG_LDLIBS)
 endef
@@ -152,12 +170,12 @@ $(BUILD)/libtestsupport.a: $(filter-out $(TEST_CRITERION_OBJ),$(TEST_SUPPORT_OBJ
 # Criterion starts a process for every test, and OpenImageIO alone brings
 # some 250 shared objects whose loading cost more CPU than most tests'
 # own work; the suites that never touch an image now load about 20.
-$(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_CRITERION_OBJ) $(BUILD)/libtestsupport.a $(STEP_LIBS) $(BUILD)/libcommon.a
+$(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_CRITERION_OBJ) $(BUILD)/libtestsupport.a $(STEP_LIBS) $(BUILD)/libcommon.a | $(IMAGES_SO)
 	@mkdir -p $(@D)
 	$(CC) $(LDFLAGS) -Wl,--as-needed -o $@ $< $(TEST_CRITERION_OBJ) $(BUILD)/libtestsupport.a $(STEP_LIBS) \
 	  $(BUILD)/libcommon.a $(LDLIBS)
 
-$(BUILD)/bench/%: $(BUILD)/bench/%.o $(STEP_LIBS) $(BUILD)/libcommon.a
+$(BUILD)/bench/%: $(BUILD)/bench/%.o $(STEP_LIBS) $(BUILD)/libcommon.a | $(IMAGES_SO)
 	@mkdir -p $(@D)
 	$(CC) $(LDFLAGS) -o $@ $< $(STEP_LIBS) $(BUILD)/libcommon.a $(PROG_LDLIBS)
 
@@ -189,7 +207,7 @@ FUZZ_SECONDS ?= 60
 $(BUILD)/common/medium_vdb.o $(BUILD)/common/vdb_read_guard.o: CXXFLAGS += -fno-sanitize=bool
 
 # Linked by the C++ driver: UBSan's C++ checks in the wrappers need its runtime.
-$(BUILD)/fuzzers/%: $(BUILD)/tests/fuzz/%.o $(STEP_LIBS) $(BUILD)/libcommon.a
+$(BUILD)/fuzzers/%: $(BUILD)/tests/fuzz/%.o $(STEP_LIBS) $(BUILD)/libcommon.a | $(IMAGES_SO)
 	@mkdir -p $(@D)
 	$(CXX) $(LDFLAGS) -fsanitize=fuzzer -o $@ $< $(STEP_LIBS) $(BUILD)/libcommon.a $(PROG_LDLIBS)
 

@@ -1,4 +1,5 @@
-/* Image files through OpenImageIO (wrapper: image_io.cpp). Images are
+/* Image files through OpenImageIO (wrapper: image_io.cpp, loaded on first
+ * use through image_io_lazy.c). Images are
  * linear float RGB, row-major from the top-left pixel. */
 #ifndef SG_IMAGE_IO_H
 #define SG_IMAGE_IO_H
@@ -16,6 +17,10 @@ typedef struct SgImageAttribute {
     const char *name;
     const char *value; /* stored as a string attribute */
 } SgImageAttribute;
+
+/* Loads the image library now (it loads on first use: common/image_library.h);
+ * false with the cause in err when it cannot be. */
+bool sg_image_io_ready(SgError *err);
 
 /* Linear float RGB EXR with string attributes (spp, seconds, mode, seed...). */
 bool sg_image_write_exr(const char *path, int width, int height, const float *rgb,

@@ -154,3 +154,26 @@ Test(image_io, errors_name_the_file_and_leave_no_partial_output)
     cr_assert(strstr(err.message, "build/no/such/dir/x.exr") != NULL, "%s", err.message);
     cr_assert(access("build/no/such/dir/x.exr", F_OK) != 0);
 }
+
+/* OpenImageIO loads on first use (common/image_library.h): without its
+ * library an image cannot be written, and the program learns it in one line
+ * naming the cause, with no file left. */
+Test(image_io, without_the_image_library_nothing_is_written)
+{
+    char dir[] = "/tmp/sg-test-nolib-XXXXXX";
+    cr_assert_not_null(mkdtemp(dir));
+    cr_assert_eq(setenv("SG_IMAGES_LIBRARY", "/nonexistent/libsg_images.so", 1), 0);
+    char path[64];
+    snprintf(path, sizeof path, "%s/a.exr", dir);
+    const float rgb[3] = {1, 2, 3};
+    SgError err = {0};
+    cr_assert_not(sg_image_io_ready(&err));
+    cr_assert(strstr(err.message, "image support") && strstr(err.message, "/nonexistent/libsg_images.so"), "%s",
+              err.message);
+    cr_assert(strchr(err.message, '\n') == NULL);
+    SgError write_err = {0};
+    cr_assert_not(sg_image_write_exr(path, 1, 1, rgb, NULL, 0, &write_err));
+    cr_assert_str_eq(write_err.message, err.message);
+    cr_assert_neq(access(path, F_OK), 0, "a file was left");
+    rmdir(dir);
+}
