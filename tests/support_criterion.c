@@ -4,8 +4,9 @@
  * shared object with dl_iterate_phdr and opening and mapping each one's
  * file to read its section headers (src/compat/section-elf.c), ten walks a
  * process, and it starts one process per test. Our test binaries load some
- * 270 shared objects (OpenImageIO's dependencies), so these walks cost
- * more CPU than most tests' own work. Tests and hooks live only in the
+ * 40 shared objects (270 once a test reads or writes an image and
+ * OpenImageIO's dependencies come), so these walks cost more CPU than most
+ * tests' own work. Tests and hooks live only in the
  * executable and in libcriterion itself: this definition, which the
  * dynamic linker prefers to libc's, shows a callback that lives in
  * libcriterion those two objects alone, and passes every other caller (the
