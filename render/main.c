@@ -25,6 +25,7 @@ static const char *usage_head =
     "              [--max-depth N] [--exponent P] [--alpha A] [--roulette learned|albedo]\n"
     "              [--size WxH] [--shard K/N] [--texture-cache MB] [--quiet]\n"
     "              [--field FIELD | --field-out FIELD [--training-passes N]] [--openpgl-mode ris|mis]\n"
+    "              [--no-openings]\n"
     "       render --describe [MODE]\n"
     "\n"
     "Path traces SCENE (.json or pbrt-v4 .pbrt; Embree 3) with next-event estimation and MIS.\n"
@@ -55,6 +56,8 @@ static const char *usage_tail =
     "  --openpgl-mode M  openpgl: ris (default, Cycles' default: BSDF and guide candidates\n"
     "                    resampled, glossy lobes guided above roughness 0.05) or mis (Cycles'\n"
     "                    older one-sample mixture, diffuse lobes only)\n"
+    "  --no-openings     a sky is sampled over its whole sphere, not through the windows the\n"
+    "                    precompute found in the cache (a hand-drawn portal still counts)\n"
     "  --size WxH        image size (default: the scene's image size, else 320x240)\n"
     "  --shard K/N       render only shard K (0 <= K < N) of the render split into N: its\n"
     "                    passes K, K+N, K+2N... of --spp in all (with --time: for that long);\n"
@@ -140,7 +143,7 @@ typedef struct Args {
     long threads, max_depth, width, height;
     long shard, shard_count;
     double exposure, exponent, alpha;
-    bool has_exposure, has_exponent, has_alpha, quiet;
+    bool has_exposure, has_exponent, has_alpha, quiet, no_openings;
     double texture_cache_mb;
 } Args;
 
@@ -259,6 +262,8 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
                 return sg_fail(err, "--training-passes: '%s' is not a positive integer", v);
         } else if (!strcmp(s, "--quiet")) {
             a->quiet = true;
+        } else if (!strcmp(s, "--no-openings")) {
+            a->no_openings = true;
         } else if (s[0] == '-' && s[1]) {
             return sg_fail(err, "%s: unknown option (see --help)", s);
         } else if (!a->scene) {
@@ -320,11 +325,12 @@ static void shard_identity(const SgScene *scene, const SgRenderOptions *o, const
         snprintf(id->cache, sizeof id->cache, "none");
     char recipe[4500]; /* the options and a field's path */
     int n = snprintf(recipe, sizeof recipe, "size %dx%d sampling %s seed %" PRIu64 " depth %d exponent %.9g alpha %.9g "
-                     "roulette %s shards %d%s%s%s%s", o->width, o->height, sg_sampling_name(o->sampling), o->seed,
+                     "roulette %s shards %d%s%s%s%s%s", o->width, o->height, sg_sampling_name(o->sampling), o->seed,
                      o->max_depth, o->lobe_exponent, o->alpha, sg_roulette_name(o->roulette), o->shard_count,
                      field ? " field " : "", field ? field : "",
                      o->sampling == SG_SAMPLING_OPENPGL ? " openpgl-mode " : "",
-                     o->sampling == SG_SAMPLING_OPENPGL ? sg_openpgl_mode_name(o->openpgl_mode) : "");
+                     o->sampling == SG_SAMPLING_OPENPGL ? sg_openpgl_mode_name(o->openpgl_mode) : "",
+                     o->no_openings ? " no-openings" : "");
     if (n < 0 || (size_t)n >= sizeof recipe)
         n = (int)strlen(recipe);
     snprintf(id->recipe, sizeof id->recipe, "%016" PRIx64, sg_hash_bytes(SG_HASH_INIT, recipe, (size_t)n));
@@ -385,6 +391,7 @@ int main(int argc, char **argv)
     o.sampling = a.sampling;
     o.roulette = a.roulette;
     o.openpgl_mode = a.openpgl_mode;
+    o.no_openings = a.no_openings;
     o.shard = (int)a.shard;
     o.shard_count = (int)a.shard_count;
     o.texture_cache_mb = a.texture_cache_mb;

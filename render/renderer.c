@@ -171,7 +171,7 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
         sg_renderer_free(r);
         return NULL;
     }
-    if (o->importance.cache && r->lights.has_escaping && !attach_openings(r, s, path, err)) {
+    if (o->importance.cache && !o->no_openings && r->lights.has_escaping && !attach_openings(r, s, path, err)) {
         sg_renderer_free(r);
         return NULL;
     }
@@ -446,6 +446,10 @@ static void field_identity(const SgRenderer *r, FieldIdentity *id)
     if (o->sampling == SG_SAMPLING_OPENPGL) { /* the mode draws the paths the field learns from */
         size_t n = strlen(id->recipe);
         snprintf(id->recipe + n, sizeof id->recipe - n, ", openpgl %s", sg_openpgl_mode_name(o->openpgl_mode));
+    }
+    if (o->no_openings) { /* the sky's light samples shape what a learner sees */
+        size_t n = strlen(id->recipe);
+        snprintf(id->recipe + n, sizeof id->recipe - n, ", no openings");
     }
 }
 

@@ -134,6 +134,9 @@ typedef struct SgRenderOptions {
      * and rendering on the clock without a field); 0: the mode's default */
     int training_passes;
     SgOpenPglMode openpgl_mode; /* openpgl: RIS or MIS (default RIS, Cycles') */
+    /* a sky is sampled over its whole sphere, not through the openings the
+     * precompute found (render/openings.h); a hand-drawn portal still counts */
+    bool no_openings;
 } SgRenderOptions;
 
 /* Defaults: image size and depth from the scene (320x240, 8 when not

@@ -64,11 +64,12 @@ static const char *precompute(const char *scene, const char *dir)
  * it: each run loaded some 260 shared objects and the scene again, which
  * cost more than its render (bin/render's own options are test_render_cli's
  * subject, and cache_for_other_geometry_is_refused runs it here). */
-static void image_means(const SgScene *scene, const char *scene_path, const char *cache, SgSampling mode,
-                        int seeds, int spp, double *mean, double *se)
+static void image_means_opts(const SgScene *scene, const char *scene_path, const char *cache, SgSampling mode,
+                             bool no_openings, int seeds, int spp, double *mean, double *se)
 {
     SgRenderOptions o;
     sg_render_options_default(&o, scene);
+    o.no_openings = no_openings;
     o.width = 80;
     o.height = 60;
     o.sampling = mode;
@@ -100,6 +101,12 @@ static void image_means(const SgScene *scene, const char *scene_path, const char
     sg_importance_file_close(&guide);
     *mean = s / seeds;
     *se = sqrt(fmax(0.0, ss / seeds - *mean * *mean) / (seeds - 1));
+}
+
+static void image_means(const SgScene *scene, const char *scene_path, const char *cache, SgSampling mode,
+                        int seeds, int spp, double *mean, double *se)
+{
+    image_means_opts(scene, scene_path, cache, mode, false, seeds, spp, mean, se);
 }
 
 /* guided must agree with bsdf; the paper's rule is biased (where the lobe
@@ -333,8 +340,13 @@ Test(render_pipeline, guided_follows_the_sky_through_a_window, .timeout = 240)
     double want = 0.6 * 2.0 * F, mb, sb, mg, sg;
     image_means(loaded, scene, cache_path, SG_SAMPLING_BSDF, 4, 16, &mb, &sb);
     image_means(loaded, scene, cache_path, SG_SAMPLING_GUIDED, 4, 16, &mg, &sg);
+    double mn, sn; /* guided, the sky sampled over its sphere (--no-openings) */
+    image_means_opts(loaded, scene, cache_path, SG_SAMPLING_GUIDED, true, 4, 16, &mn, &sn);
     sg_scene_free(loaded);
-    cr_log_info("window: closed form %.6f, bsdf %.6f +- %.6f, guided %.6f +- %.6f", want, mb, sb, mg, sg);
+    cr_log_info("window: closed form %.6f, bsdf %.6f +- %.6f, guided %.6f +- %.6f, without the opening %.6f +- %.6f",
+                want, mb, sb, mg, sg, mn, sn);
+    cr_expect(fabs(mn - want) < 3 * sn + 0.003 * want, "guided without the opening %.6f, closed form %.6f", mn, want);
+    cr_expect(sg < 0.5 * sn, "the opening does not lower guided's standard error: %g with, %g without", sg, sn);
     cr_expect(fabs(mb - want) < 3 * sb + 0.003 * want, "bsdf %.6f, closed form %.6f", mb, want);
     cr_expect(fabs(mg - want) < 3 * sg + 0.003 * want, "guided %.6f, closed form %.6f", mg, want);
     /* the sky sampled through the opening found: far less noise (measured
