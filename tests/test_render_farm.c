@@ -162,7 +162,12 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
 
     /* 3. a shard cancelled while it runs leaves no file; --resume renders it
      * again, and the merge follows */
-    cr_assert_eq(slurm_render(err, "--shards 4 --out %s/farm2 -- --spp 4000 --size 48x36 --seed 3 >/dev/null", tmp), 0,
+    /* long enough that shard 0 is caught running: some 1.2 s of passes in a
+     * release build, as long under the sanitizers (some 3x slower) with
+     * fewer */
+    const int long_spp = getenv("SG_SANITIZED") ? 1600 : 4000;
+    cr_assert_eq(slurm_render(err, "--shards 4 --out %s/farm2 -- --spp %d --size 48x36 --seed 3 >/dev/null", tmp,
+                              long_spp), 0,
                  "%s", err);
     char job[64] = "";
     for (int i = 0; i < 400 && !job[0]; i++) { /* shard 0 running */
@@ -212,16 +217,16 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
     status = sg_test_run(cmd, err, sizeof err);
     cr_assert_eq(status, 0, "--resume failed (%d): %s", status, err);
     snprintf(dir, sizeof dir, "%s/farm2", tmp);
-    check_exact_merge(dir, 4, 4000);
+    check_exact_merge(dir, 4, long_spp);
 
     /* the rerun shard is the shard: the same pixels as rendering it here
      * (guided learns: every shard renders with the field the precompute
      * job trained) */
     snprintf(cmd, sizeof cmd,
-             "%s/render " SCENE " --cache %s/farm2/importance.cache --field %s/farm2/corridor.field --spp 4000 "
+             "%s/render " SCENE " --cache %s/farm2/importance.cache --field %s/farm2/corridor.field --spp %d "
              "--size 48x36 --seed 3 --shard 0/4 "
              "-o %s/shard0.exr --quiet && idiff -q -fail 0 -warn 0 %s/shard0.exr %s/farm2/shards/corridor-0.exr",
-             bin, tmp, tmp, tmp, tmp, tmp);
+             bin, tmp, tmp, long_spp, tmp, tmp, tmp);
     status = sg_test_run(cmd, err, sizeof err);
     cr_assert_eq(status, 0, "shard 0 rendered again differs (%d): %s", status, err);
     stop_cluster();
