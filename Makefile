@@ -241,16 +241,11 @@ deps:
 # AddressSanitizer + UBSan (SG_SANITIZED=1 lets heavy tests scale down).
 # The test binaries are built in parallel with the programs (check-tests
 # alone would build them one at a time).
-# The sanitized build compiles while the release suites run (they leave
-# cores idle while the farm's test waits on Slurm); its output goes to
-# build/sanitized-build.log, shown if it fails.
 test: deps
 	@$(MAKE) --no-print-directory -j$$(nproc) test-programs
-	@mkdir -p build; \
-	$(MAKE) --no-print-directory -j$$(nproc) SANITIZE=1 test-programs >build/sanitized-build.log 2>&1 & build=$$!; \
-	$(MAKE) --no-print-directory check-tests; release=$$?; \
-	if ! wait $$build; then cat build/sanitized-build.log; echo "make test: the sanitized build failed"; exit 1; fi; \
-	SG_SANITIZED=1 $(MAKE) --no-print-directory SANITIZE=1 check-tests && [ $$release -eq 0 ]
+	@$(MAKE) --no-print-directory check-tests
+	@$(MAKE) --no-print-directory -j$$(nproc) SANITIZE=1 test-programs
+	@SG_SANITIZED=1 $(MAKE) --no-print-directory SANITIZE=1 check-tests
 
 test-programs: $(PROGRAMS) $(TEST_BIN)
 
