@@ -167,9 +167,9 @@ $(BUILD)/libtestsupport.a: $(filter-out $(TEST_CRITERION_OBJ),$(TEST_SUPPORT_OBJ
 	$(AR) rcs $@ $^
 
 # --as-needed: a test binary loads only the shared libraries it calls.
-# Criterion starts a process for every test, and OpenImageIO alone brings
-# some 250 shared objects whose loading cost more CPU than most tests'
-# own work; the suites that never touch an image now load about 20.
+# Criterion starts a process for every test, so what every process loads
+# counts (OpenImageIO's 250 shared objects come only with an image: see
+# IMAGES_SO).
 $(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_CRITERION_OBJ) $(BUILD)/libtestsupport.a $(STEP_LIBS) $(BUILD)/libcommon.a | $(IMAGES_SO)
 	@mkdir -p $(@D)
 	$(CC) $(LDFLAGS) -Wl,--as-needed -o $@ $< $(TEST_CRITERION_OBJ) $(BUILD)/libtestsupport.a $(STEP_LIBS) \

@@ -17,8 +17,9 @@
 #include "error.h"
 
 /* The wrappers' function `name`, the library loaded first (once, thread
- * safe); NULL with "image support (PATH): cause" in err when it cannot be
- * loaded or lacks the function. */
+ * safe); NULL with the cause in err ("image support: " and the loader's
+ * message, which names the file) when it cannot be loaded or lacks the
+ * function. */
 void *sg_image_library_symbol(const char *name, SgError *err);
 
 #endif

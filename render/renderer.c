@@ -441,16 +441,13 @@ static void field_identity(const SgRenderer *r, FieldIdentity *id)
         snprintf(alpha, sizeof alpha, "learned");
     else
         snprintf(alpha, sizeof alpha, "%.9g", o->alpha);
-    snprintf(id->recipe, sizeof id->recipe, "%dx%d, max depth %d, exponent %.9g, alpha %s, roulette %s", o->width,
-             o->height, o->max_depth, o->lobe_exponent, alpha, sg_roulette_name(o->roulette));
-    if (o->sampling == SG_SAMPLING_OPENPGL) { /* the mode draws the paths the field learns from */
-        size_t n = strlen(id->recipe);
-        snprintf(id->recipe + n, sizeof id->recipe - n, ", openpgl %s", sg_openpgl_mode_name(o->openpgl_mode));
-    }
-    if (o->no_openings) { /* the sky's light samples shape what a learner sees */
-        size_t n = strlen(id->recipe);
-        snprintf(id->recipe + n, sizeof id->recipe - n, ", no openings");
-    }
+    /* openpgl: the mode draws the paths the field learns from; no openings:
+     * the sky's light samples shape what a learner sees */
+    bool pgl = o->sampling == SG_SAMPLING_OPENPGL;
+    snprintf(id->recipe, sizeof id->recipe, "%dx%d, max depth %d, exponent %.9g, alpha %s, roulette %s%s%s%s",
+             o->width, o->height, o->max_depth, o->lobe_exponent, alpha, sg_roulette_name(o->roulette),
+             pgl ? ", openpgl " : "", pgl ? sg_openpgl_mode_name(o->openpgl_mode) : "",
+             o->no_openings ? ", no openings" : "");
 }
 
 bool sg_renderer_write_field(const SgRenderer *r, const char *path, SgError *err)

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "color.h"
+#include "memory.h"
 
 SgScene *sgt_scene_new(void)
 {
@@ -37,25 +38,18 @@ uint32_t sgt_add_material(SgScene *s, SgMaterialType type, const float albedo[3]
 
 SgMaterial *sgt_material(SgScene *s, uint32_t m) { return &s->materials[m]; }
 
-/* The arrays a count of n items is kept in hold the next power of two at
- * least n: a scene of many quads grows in log steps (a realloc per quad is
+/* A test scene's arrays grow as sg_reserve grows them, doubling from 8,
+ * so their capacity follows from their count (a realloc per quad is
  * quadratic, and minutes under AddressSanitizer, which always copies). */
-static size_t quad_capacity(size_t n)
-{
-    size_t c = 8;
-    while (c < n)
-        c *= 2;
-    return c;
-}
-
 static void *grow_to(void *p, size_t count, size_t added, size_t item)
 {
-    if (count && quad_capacity(count + added) == quad_capacity(count))
-        return p;
-    void *q = realloc(p, quad_capacity(count + added) * item);
-    if (!q)
+    size_t capacity = 0;
+    if (count)
+        for (capacity = 8; capacity < count; capacity *= 2)
+            ;
+    if (!sg_reserve(&p, &capacity, count + added, item, 8))
         abort();
-    return q;
+    return p;
 }
 
 void sgt_add_quad(SgScene *s, const double c[4][3], uint32_t material)
