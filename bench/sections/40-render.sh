@@ -62,13 +62,8 @@ have_pipeline=1
 for p in voxelize skeletonize importance render; do
   [ -x "$bin/$p" ] || have_pipeline=0
 done
-precompute() { # scene outdir -> outdir/importance.cache
-  local scene=$1 dir=$2
-  mkdir -p "$dir"
-  "$bin/voxelize" "$scene" -o "$dir/medium.vdb" >/dev/null 2>&1 &&
-  "$bin/skeletonize" "$dir/medium.vdb" -o "$dir/skeleton.ply" >/dev/null 2>&1 &&
-  "$bin/importance" "$dir/medium.vdb" "$dir/skeleton.ply" -o "$dir/importance.cache" >/dev/null 2>&1
-}
+source bench/precompute_steps.sh
+precompute() { precompute_steps "$bin" "$1" "$2"; } # scene outdir -> outdir/importance.cache
 
 # measure "MODES" SPP ROUNDS: renders scene $sc with each mode in turn,
 # ROUNDS times interleaved, and prints a table row per mode (the best

@@ -32,6 +32,7 @@ if [ ! -x "$base/bin/render" ]; then
     exit 0
   fi
 fi
+source bench/precompute_steps.sh
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
@@ -39,11 +40,7 @@ echo "| scene | sampling | spp | µs/sample at $rev | µs/sample now | now / the
 echo "|---|---|---|---|---|---|---|---|"
 for sc in data/corridor/corridor.json data/cornell-box/cornell-box.json; do
   name=$(basename "$sc" .json)
-  mkdir -p "$out/$name"
-  if ! { "$bin/voxelize" "$sc" -o "$out/$name/medium.vdb" &&
-         "$bin/skeletonize" "$out/$name/medium.vdb" -o "$out/$name/skeleton.ply" &&
-         "$bin/importance" "$out/$name/medium.vdb" "$out/$name/skeleton.ply" \
-           -o "$out/$name/importance.cache"; } >/dev/null 2>&1; then
+  if ! precompute_steps "$bin" "$sc" "$out/$name"; then
     echo "| $name | precompute failed | | | | | | |"; continue
   fi
   runs=("bsdf $base/bin/render" "guided $base/bin/render")

@@ -45,6 +45,7 @@ mkdir -p "$report_dir"
 
 # the scenes and the columns' options (shared with 65-previous.sh)
 source bench/scenes.sh
+source bench/precompute_steps.sh
 scenes=("${bench_scenes[@]}")
 modes=("${bench_modes[@]}")
 
@@ -85,9 +86,7 @@ precompute() {
   rm -f "$dir/geometry.key"
   local t0
   t0=$(date +%s%N)
-  "$bin/voxelize" "$scene" "${res[@]}" -o "$dir/medium.vdb" >"$dir/precompute.log" 2>&1 &&
-  "$bin/skeletonize" "$dir/medium.vdb" -o "$dir/skeleton.ply" >>"$dir/precompute.log" 2>&1 &&
-  "$bin/importance" "$dir/medium.vdb" "$dir/skeleton.ply" -o "$dir/importance.cache" >>"$dir/precompute.log" 2>&1 ||
+  precompute_steps "$bin" "$scene" "$dir" "${4:-}" ||
     { notes+=("$name: precompute failed: $(tail -1 "$dir/precompute.log")"); return 1; }
   printf '%s\n' "$key" >"$dir/geometry.key"
   printf '%s\n' "$(( $(date +%s%N) - t0 ))" >"$dir/precompute.ns"

@@ -14,6 +14,7 @@ set -uo pipefail
 bin=${SG_BIN:-bin}
 tool=${SG_BENCH_BIN:-build/release/bench}/convergence
 source bench/scenes.sh
+source bench/precompute_steps.sh
 
 if [ "${SG_QUICK:-0}" = 1 ]; then
   setting=quick pixels=9600 seconds=3 seeds=1
@@ -72,15 +73,10 @@ for entry in "${bench_scenes[@]}"; do
   fi
   read -r size _ < <("$tool" size "$scene" "$pixels") || { notes+=("$name: cannot read the scene"); continue; }
   # the previous build's precompute, once per scene and build
-  pdir=$prev/out/$name res=()
-  [ -n "$resolution" ] && res=(--resolution "$resolution")
+  pdir=$prev/out/$name
   if [ ! -e "$pdir/importance.cache" ]; then
     note "$name: the previous build's precompute"
-    mkdir -p "$pdir"
-    if ! { "$prev/bin/voxelize" "$scene" "${res[@]}" -o "$pdir/medium.vdb" &&
-           "$prev/bin/skeletonize" "$pdir/medium.vdb" -o "$pdir/skeleton.ply" &&
-           "$prev/bin/importance" "$pdir/medium.vdb" "$pdir/skeleton.ply" -o "$pdir/importance.cache"; } \
-         >"$pdir/precompute.log" 2>&1; then
+    if ! precompute_steps "$prev/bin" "$scene" "$pdir" "$resolution"; then
       notes+=("$name: the previous build cannot precompute it: $(tail -1 "$pdir/precompute.log")")
       rm -f "$pdir/importance.cache"; continue
     fi
