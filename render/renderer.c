@@ -312,6 +312,7 @@ void sg_renderer_pass(SgRenderer *r)
     PassCtx pc = {.r = r, .tiles_x = r->tiles_x, .first_pass = r->spp == 0};
     pixel_sampler_init(&pc.sampler, r->training ? r->opt.seed ^ TRAINING_SEED_SALT : r->opt.seed, pass);
     const PathGuideOps *gops = r->guide->ops;
+    pc.plan.training = r->training;
     if (gops->pass_begin)
         gops->pass_begin(r->guide, r->spp, pc.sampler.pass_key, &pc.plan);
     sg_thread_pool_run(r->pool, (uint64_t)r->tiles_x * r->tiles_y + pc.plan.side_job, pass_job, &pc);

@@ -211,7 +211,7 @@ bool sg_renderer_read_field(SgRenderer *r, const char *path, SgError *err);
 /* What the render did, in words, for bin/render's summary line and EXR. */
 typedef struct SgRenderReport {
     SgRoulette roulette; /* the roulette that ran: learned only where the guide learns what bounces bring */
-    char alpha[64];      /* the mixture's weight: the options' number, or how it was learned */
+    char alpha[96];      /* the mixture's weight: the options' number, or how it was learned */
     char guide[192];     /* the guide's part of the summary line, "" or ", ..." */
     uint32_t openings;   /* windows the precompute found, through which the sky is sampled */
 } SgRenderReport;

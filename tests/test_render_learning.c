@@ -10,6 +10,7 @@
 
 #include "../render/guides/mixture_learning.h"
 #include "../render/renderer.h"
+#include "../render/sampling.h"
 #include "rng.h"
 #include "support_render.h"
 
@@ -139,7 +140,7 @@ Test(render_learning, sparse_regions_take_their_coarse_region_s_choice)
     feed(l, busy, 4000, 0.05, 0.995f, 4);
     feed(l, away, 4000, 0.6, 0.0f, 5);
     feed(l, sparse, 10, 0.05, 0.995f, 6);
-    float lobe = sg_mixture_candidates[SG_MIXTURE_CANDIDATES - 1].alpha;
+    float lobe = sg_mixture_candidates[SG_MIXTURE_SKELETON_CANDIDATES - 1].alpha;
     cr_assert_float_eq(sg_mixture_choice(l, busy).alpha, lobe, 0.0f);
     cr_assert_float_eq(sg_mixture_choice(l, away).alpha, 1.0f, 0.0f);
     cr_assert_float_eq(sg_mixture_choice(l, sparse).alpha, lobe, 0.0f, "sparse region: %g",
@@ -245,6 +246,116 @@ Test(render_learning, a_region_that_missed_the_rare_light_is_not_taken_for_dark)
     /* the busy region's own 3000 reports rule its estimate (their M2 is 1) */
     got = sg_mixture_radiance(v, busy);
     cr_assert_float_eq(got, 1.0f, 1e-4f, "busy region: rms %g", got);
+    sg_mixture_learner_free(l);
+}
+
+/* ---- the learned axis ------------------------------------------------------ */
+
+/* A pass of `count` bounces drawn by BSDF sampling (cosine about n, albedo
+ * 1, so v = L) in one region: light L = 20 in a cone of cosine 0.97 about
+ * `light`, `ambient` elsewhere; the skeleton's axis is `skeleton`. */
+static void feed_directions(SgMixtureLearner *l, uint32_t region, Vec3 n, Vec3 light, Vec3 skeleton, float ambient,
+                            int count, SgRng *rng)
+{
+    for (int i = 0; i < count; i++) {
+        Vec3 d = sg_sample_cosine_hemisphere(n, sg_rng_float(rng), sg_rng_float(rng));
+        float p = fmaxf(v3_dot(d, n), 1e-6f) / 3.14159265f;
+        float c = v3_dot(d, skeleton);
+        SgMixtureRecord rec = {.region = region,
+                               .radiance = -1.0f,
+                               .lobe = true,
+                               .pdf_bsdf = p,
+                               .pdf = p,
+                               .cos_axis = c,
+                               .cos_mirror = c - 2.0f * v3_dot(skeleton, n) * v3_dot(d, n),
+                               .direction = d,
+                               .normal = n,
+                               .estimate = v3_dot(d, light) > 0.97f ? 20.0f : ambient,
+                               .weight = 1.0f};
+        sg_mixture_record(l, (uint32_t)(i & 1), &rec);
+    }
+}
+
+/* The light comes from the side the skeleton does not point to: the
+ * region learns the light's direction as its axis and draws its lobe
+ * around it, where the skeleton's candidates would lose to the BSDF. */
+Test(render_learning, a_region_learns_the_axis_the_skeleton_missed)
+{
+    SgMixtureLearner *l = unit_learner();
+    const Vec3 n = v3(0, 1, 0), light = v3_normalize(v3(1, 1, 0)), skeleton = v3_normalize(v3(-1, 1, 0.3f));
+    uint32_t r = sg_mixture_region(l, v3(0.3f, 0.3f, 0.3f), n);
+    SgRng rng;
+    sg_rng_seed(&rng, 11, 3);
+    Vec3 axis;
+    cr_assert_not(sg_mixture_region_axis(l, r, &axis), "no axis before any record");
+    for (int pass = 0; pass < 8; pass++) {
+        feed_directions(l, r, n, light, skeleton, 0.0f, 400, &rng);
+        sg_mixture_end_pass(l);
+    }
+    cr_assert(sg_mixture_region_axis(l, r, &axis));
+    float angle = acosf(fminf(v3_dot(axis, light), 1.0f)) * 57.2958f;
+    cr_log_info("learned axis %g %g %g: %.2f degrees from the light", axis.x, axis.y, axis.z, angle);
+    cr_assert_lt(angle, 3.0f, "the axis is %.2f degrees from the light", angle);
+    SgMixtureCandidate c = sg_mixture_choice(l, r);
+    cr_assert(c.learned_axis && c.alpha < 1.0f && c.exponent == 64.0f, "choice: alpha %g exponent %g, %s axis",
+              c.alpha, c.exponent, c.learned_axis ? "learned" : "skeleton");
+    cr_assert(sg_mixture_view(l)->state[r] & SG_MIXTURE_STATE_AXIS);
+    cr_assert_not(sg_mixture_view(l)->state[r] & SG_MIXTURE_STATE_LOBE, "no cache query for a learned axis");
+    cr_assert_gt(sg_mixture_learned_axis_fraction(l), 0.99);
+    sg_mixture_learner_free(l);
+}
+
+/* A learned axis is judged only on bounces drawn while it was in use. As
+ * the renderer runs it, a pass's records are learned during the next pass
+ * (sg_mixture_learn beside it) and what that learned reaches the view when
+ * that pass ends: a refit made from pass 2's records is in use from pass 4
+ * on, and pass 3's records, drawn around the old axis, must not
+ * judge the new one (here they would favour it: they would make it win
+ * before any bounce was drawn around it). */
+Test(render_learning, a_new_axis_is_judged_on_the_passes_that_use_it)
+{
+    SgMixtureLearner *l = unit_learner();
+    const Vec3 n = v3(0, 0, 1), light = v3_normalize(v3(0, -1, 2)), skeleton = v3_normalize(v3(1, 0, 0.2f));
+    uint32_t r = sg_mixture_region(l, v3(0.6f, 0.6f, 0.6f), n);
+    SgRng rng;
+    sg_rng_seed(&rng, 12, 3);
+    feed_directions(l, r, n, light, skeleton, 0.0f, 1000, &rng); /* pass 1 */
+    sg_mixture_end_pass(l);
+    sg_mixture_learn(l); /* during pass 2: the first axis, in use from pass 3 */
+    feed_directions(l, r, n, light, skeleton, 0.0f, 3000, &rng); /* pass 2 */
+    sg_mixture_end_pass(l);
+    Vec3 first, second;
+    cr_assert(sg_mixture_region_axis(l, r, &first), "fitted and published");
+    sg_mixture_learn(l); /* during pass 3: 4000 records, the axis is refitted */
+    feed_directions(l, r, n, light, skeleton, 0.0f, 600, &rng); /* pass 3, around the first axis */
+    sg_mixture_end_pass(l);
+    cr_assert(sg_mixture_region_axis(l, r, &second));
+    cr_assert(first.x != second.x || first.y != second.y || first.z != second.z, "refitted");
+    sg_mixture_learn(l); /* during pass 4: pass 3's records */
+    cr_assert_not(sg_mixture_choice(l, r).learned_axis, "judged on bounces drawn around the old axis");
+    feed_directions(l, r, n, light, skeleton, 0.0f, 600, &rng); /* pass 4, around the new axis */
+    sg_mixture_end_pass(l);
+    sg_mixture_learn(l);
+    cr_assert(sg_mixture_choice(l, r).learned_axis, "alpha %g", sg_mixture_choice(l, r).alpha);
+    sg_mixture_learner_free(l);
+}
+
+/* Light from everywhere alike: BSDF sampling has no variance, any lobe
+ * adds some, so the region keeps to the BSDF though it has an axis. */
+Test(render_learning, a_learned_axis_does_not_win_where_light_is_even)
+{
+    SgMixtureLearner *l = unit_learner();
+    const Vec3 n = v3(1, 0, 0);
+    uint32_t r = sg_mixture_region(l, v3(0.3f, 0.6f, 0.3f), n);
+    SgRng rng;
+    sg_rng_seed(&rng, 13, 3);
+    for (int pass = 0; pass < 8; pass++) {
+        feed_directions(l, r, n, v3(0, 0, 1), v3(0, 1, 0), 1.0f, 400, &rng);
+        sg_mixture_end_pass(l);
+    }
+    Vec3 axis;
+    cr_assert(sg_mixture_region_axis(l, r, &axis));
+    cr_assert_float_eq(sg_mixture_choice(l, r).alpha, 1.0f, 0.0f, "alpha %g", sg_mixture_choice(l, r).alpha);
     sg_mixture_learner_free(l);
 }
 

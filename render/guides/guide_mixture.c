@@ -30,13 +30,16 @@ typedef struct Mixture {
 
 typedef struct MixtureVertex {
     ImportanceQuery query;
-    SgFoldedLobe lobe;
+    SgFoldedLobe lobe; /* the lobe drawn from: the skeleton's or the learned axis's */
     SgMixtureCandidate mix;
     uint32_t region;
     bool asked;    /* the guide was queried */
-    bool mixture;  /* it gave an axis: the bounce draws from the mixture */
+    bool mixture;  /* there is an axis: the bounce draws from the mixture */
+    bool skeleton; /* the skeleton gave an axis (skeleton_axis) */
+    Vec3 skeleton_axis;
     /* the direction drawn, as the learner needs it */
-    float pdf_bsdf, cos_axis, cos_mirror, pdf;
+    Vec3 direction;
+    float pdf_bsdf, pdf;
 } MixtureVertex;
 _Static_assert(sizeof(MixtureVertex) <= GUIDE_VERTEX_STATE, "MixtureVertex fits GuideVertex.state");
 
@@ -55,14 +58,20 @@ static inline const MixtureVertex *mixture_vertex_c(const GuideVertex *v) { retu
 /* At most this many learning paths per pass (~20 MB of records), whatever
  * the image size: a large image learns from a share of its pixels. */
 #define LEARN_PATHS_MAX 16384
+/* A training pass (render --field-out) is for learning alone: every path
+ * learns, up to this many a pass (~80 MB of records in each of the two
+ * buffers). On Sponza (320x240, 48 spp from the field) training with every
+ * path rather than the render's share lowered relMSE 1.8x, the learned
+ * axis another 1.8x (docs/render.md). */
+#define LEARN_TRAINING_PATHS_MAX 131072
 
 static void mixture_pass_begin(PathGuide *g, int pass, uint64_t pass_key, GuidePass *plan)
 {
     Mixture *x = (Mixture *)g;
-    uint64_t stride = 1;
-    while (x->pixels / stride > LEARN_PATHS_MAX)
+    uint64_t stride = 1, most = plan->training ? LEARN_TRAINING_PATHS_MAX : LEARN_PATHS_MAX;
+    while (x->pixels / stride > most)
         stride *= 2;
-    if (pass >= LEARN_WARMUP_PASSES)
+    if (pass >= LEARN_WARMUP_PASSES && !plan->training)
         for (int p = 2; p <= pass && stride < LEARN_STRIDE_MAX; p *= 2)
             stride *= 2;
     x->stride = stride;
@@ -102,6 +111,8 @@ static void mixture_vertex_begin(PathGuide *g, const GuideHit *h, SgRng *rng, Gu
     mv->mix = x->fixed;
     mv->region = SG_NO_REGION;
     mv->mixture = false;
+    mv->skeleton = false;
+    mv->direction = v3(0, 0, 0);
     bool lobe_region = x->fixed.alpha < 1.0f;
     if (x->learner) {
         /* the region's learned alpha; where it is the BSDF alone the guide
@@ -113,6 +124,11 @@ static void mixture_vertex_begin(PathGuide *g, const GuideHit *h, SgRng *rng, Gu
         lobe_region = state & SG_MIXTURE_STATE_LOBE;
         v->learn = h->may_learn && !(state & SG_MIXTURE_STATE_SETTLED);
         v->rms = sg_mixture_radiance(view, mv->region);
+        if (state & SG_MIXTURE_STATE_AXIS) { /* the region's learned axis: no cache query */
+            const float *a = &view->axis[3 * (size_t)mv->region];
+            mv->mixture = true;
+            mv->lobe = sg_folded_lobe(v3(a[0], a[1], a[2]), h->n, mv->mix.exponent);
+        }
     }
     mv->asked = (lobe_region || v->learn) && importance_lookup_begin(&x->skeleton, h->p, h->n, rng, &mv->query);
 }
@@ -124,6 +140,10 @@ static void mixture_vertex_end(PathGuide *g, const GuideHit *h, bool lit, SgRng 
     MixtureVertex *mv = mixture_vertex(v);
     Vec3 axis;
     if (mv->asked && importance_lookup_end(&x->skeleton, &mv->query, h->p, h->n, &axis)) {
+        mv->skeleton = true;
+        mv->skeleton_axis = axis;
+        if (mv->mix.learned_axis)
+            return; /* the skeleton's axis only for the learner */
         /* alpha 1 (a learning path): the BSDF, with the lobe's densities
          * at hand for the learner */
         mv->mixture = true;
@@ -143,14 +163,21 @@ static float mixture_pdf(const GuideVertex *v, Vec3 w, float cos_n)
 static Vec3 mixture_sample(GuideVertex *v, const float u[3], float *pdf)
 {
     MixtureVertex *mv = mixture_vertex(v);
-    if (!mv->mixture)
-        return guide_bsdf_sample(v, u, pdf);
+    if (!mv->mixture) {
+        Vec3 w = guide_bsdf_sample(v, u, pdf);
+        if (v->learn) { /* the learner's record: the BSDF drew it */
+            mv->direction = w;
+            mv->pdf_bsdf = mv->pdf = *pdf;
+        }
+        return w;
+    }
     float alpha = mv->mix.alpha;
     v->by_guide = !(u[0] < alpha);
     Vec3 w = bsdf_mixture_sample(&v->bsdf, &mv->lobe, alpha, u[0], u[1], u[2]);
-    /* with the BSDF's part and the cosines the learner needs */
-    mv->pdf = *pdf = bsdf_mixture_pdf(&v->bsdf, &mv->lobe, alpha, w, v3_dot(w, v->bsdf.lobe.n), &mv->pdf_bsdf,
-                                      &mv->cos_axis, &mv->cos_mirror);
+    /* with the BSDF's part the learner needs */
+    float c1, c2;
+    mv->pdf = *pdf = bsdf_mixture_pdf(&v->bsdf, &mv->lobe, alpha, w, v3_dot(w, v->bsdf.lobe.n), &mv->pdf_bsdf, &c1, &c2);
+    mv->direction = w;
     return w;
 }
 
@@ -163,19 +190,26 @@ static void mixture_learn(PathGuide *g, int tile, const GuideVertex *v, const Bo
 {
     Mixture *x = (Mixture *)g;
     const MixtureVertex *mv = mixture_vertex_c(v);
-    bool lobe = mv->mixture && (o->bounced || o->cut);
-    if (o->cut && !lobe)
-        return;
+    /* every learning bounce: where the skeleton gave no axis its
+     * candidates are the BSDF, and the learned axis needs them all */
+    bool lobe = o->bounced || o->cut;
     if (!lobe && !x->roulette_learns)
         return; /* only the learned roulette reads what left a vertex */
     SgMixtureRecord rec = {.region = mv->region, .radiance = o->cut ? -1.0f : o->radiance, .lobe = lobe,
                            .weight = o->weight};
     if (lobe) {
         if (!o->cut) {
+            Vec3 n = v->bsdf.lobe.n, d = mv->direction;
             rec.pdf_bsdf = mv->pdf_bsdf;
-            rec.cos_axis = mv->cos_axis;
-            rec.cos_mirror = mv->cos_mirror;
             rec.pdf = mv->pdf;
+            rec.direction = d;
+            rec.normal = n;
+            rec.no_skeleton = !mv->skeleton;
+            if (mv->skeleton) {
+                Vec3 a = mv->skeleton_axis;
+                rec.cos_axis = v3_dot(a, d);
+                rec.cos_mirror = rec.cos_axis - 2.0f * v3_dot(a, n) * v3_dot(d, n);
+            }
         }
         rec.estimate = o->radiance;
     }
@@ -186,6 +220,7 @@ static void mixture_stats(const PathGuide *g, GuideStats *s)
 {
     const Mixture *x = (const Mixture *)g;
     s->guided_fraction = x->learner ? sg_mixture_guided_fraction(x->learner) : -1.0;
+    s->learned_axis_fraction = x->learner ? sg_mixture_learned_axis_fraction(x->learner) : 0.0;
 }
 
 static void mixture_destroy(PathGuide *g)
@@ -233,8 +268,8 @@ static void mixture_describe(const PathGuide *g, const GuideStats *s, SgRenderRe
     if (x->alpha_learned && x->frozen)
         snprintf(report->alpha, sizeof report->alpha, "learned, frozen");
     else if (x->alpha_learned)
-        snprintf(report->alpha, sizeof report->alpha, "learned (lobe in %.0f%% of bounces)",
-                 100.0 * fmax(0.0, s->guided_fraction));
+        snprintf(report->alpha, sizeof report->alpha, "learned (lobe in %.0f%% of bounces, %.0f%% around a learned axis)",
+                 100.0 * fmax(0.0, s->guided_fraction), 100.0 * s->learned_axis_fraction);
     snprintf(report->guide, sizeof report->guide, ", alpha %s, lobe drew %.1f%% of bounces", report->alpha,
              100.0 * s->lobe_share);
 }
@@ -271,7 +306,7 @@ static PathGuide *mixture_create(const PathGuideSetup *setup, SgError *err)
     Mixture *x = path_guide_alloc(sizeof *x, &mixture_ops, setup, err);
     if (!x)
         return NULL;
-    x->fixed = (SgMixtureCandidate){o->alpha, o->lobe_exponent};
+    x->fixed = (SgMixtureCandidate){o->alpha, o->lobe_exponent, false};
     x->alpha_learned = o->alpha == SG_ALPHA_LEARNED;
     x->roulette_learns = o->roulette == SG_ROULETTE_LEARNED;
     x->pixels = (uint64_t)o->width * (uint64_t)o->height;

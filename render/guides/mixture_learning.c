@@ -6,7 +6,12 @@
 
 /* BSDF alone first: with equal estimates the cheaper, safer choice wins. */
 const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES] = {
-    {1.0f, 16.0f}, {0.8f, 4.0f}, {0.8f, 16.0f}, {0.8f, 64.0f}, {0.6f, 4.0f}, {0.6f, 16.0f}, {0.6f, 64.0f}};
+    {1.0f, 16.0f, false}, {0.8f, 4.0f, false}, {0.8f, 16.0f, false}, {0.8f, 64.0f, false},
+    {0.6f, 4.0f, false},  {0.6f, 16.0f, false}, {0.6f, 64.0f, false}, {0.7f, 4.0f, true},
+    {0.7f, 16.0f, true},  {0.7f, 64.0f, true},  {0.4f, 4.0f, true},  {0.4f, 16.0f, true},
+    {0.4f, 64.0f, true}};
+#define SKELETON_CANDIDATES SG_MIXTURE_SKELETON_CANDIDATES
+#define AXIS_CANDIDATES (SG_MIXTURE_CANDIDATES - SKELETON_CANDIDATES)
 /* The candidates' lobe exponents, each a power of 4 of the one before, so
  * that a record computes cos^e for all of them by squaring. */
 #define EXPONENTS 3
@@ -16,6 +21,14 @@ static const float exponents[EXPONENTS] = {4.0f, 16.0f, 64.0f};
  * which it stops learning. */
 #define MIN_SAMPLES 256u
 #define SETTLED_SAMPLES 4096
+/* A region fits its axis when its records reach AXIS_FIT_FIRST, then each
+ * time they grow AXIS_FIT_GROWTH times (each refit forgets the moments
+ * measured around the old axis), never once it settles; its learned
+ * candidates compete once AXIS_MIN_SAMPLES records were drawn while the
+ * axis was in use. */
+#define AXIS_FIT_FIRST 256u
+#define AXIS_FIT_GROWTH 4u
+#define AXIS_MIN_SAMPLES 128u
 /* Vertices a region needs before its outgoing radiance is used. */
 #define RADIANCE_MIN_SAMPLES 64u
 /* A coarse region, or the whole scene, with this many guided bounces and
@@ -37,6 +50,9 @@ typedef struct StoredRecord {
     float weight;                      /* w: the bounce's weight in the image */
     float radiance;                    /* outgoing radiance estimate, < 0 none */
     bool lobe;                         /* a guided bounce: estimate and terms set */
+    bool axis_terms;                   /* the learned candidates' terms are set */
+    uint32_t generation;               /* the view's when the record was made */
+    float fit[3];                      /* v d: the axis fit's share (zero: none) */
     float term[SG_MIXTURE_CANDIDATES]; /* v^2 p / p_k */
 } StoredRecord;
 
@@ -48,7 +64,7 @@ typedef struct RecordBuffer {
 } RecordBuffer;
 
 typedef struct RegionStats {
-    double moment[SG_MIXTURE_CANDIDATES]; /* sums of w v^2 p / p_k */
+    double moment[SKELETON_CANDIDATES];   /* sums of w v^2 p / p_k */
     double weight, weighted;              /* sums of w and of w v */
     uint64_t samples;
     double radiance_sum2;                 /* sum of squared outgoing radiance estimates */
@@ -56,6 +72,15 @@ typedef struct RegionStats {
     uint64_t radiance_published;          /* samples when last passed to its fine regions */
     /* what the region adds to its level's totals under its current choice */
     double variance, cost;
+    /* the learned axis: sum of v d over its records, the samples at the
+     * last fit, and the learned candidates' sums over the records drawn
+     * while the current axis was in use (generation axis_from or later) */
+    double fit[3];
+    uint64_t fitted_at;
+    uint32_t axis_from;
+    uint64_t axis_samples;
+    double axis_weight, axis_weighted;
+    double axis_moment[AXIS_CANDIDATES];
 } RegionStats;
 
 /* One level of regions (fine or coarse): sums over its regions of the
@@ -65,8 +90,10 @@ typedef struct Totals {
 } Totals;
 
 /* Cost of a guided bounce relative to a BSDF one (cache query, densities
- * of the lobe), measured on the corridor and the Cornell box. */
+ * of the lobe), measured on the corridor and the Cornell box; a bounce
+ * around the learned axis asks no cache. */
 #define GUIDED_COST 1.25
+#define LEARNED_AXIS_COST 1.15
 /* A coarse region is this many fine cells on a side: it answers for the
  * fine regions that have too few samples of their own. */
 #define COARSE 4
@@ -96,6 +123,12 @@ struct SgMixtureLearner {
     RecordBuffer *buffers;
     uint32_t filling;      /* the set records go to: buffers + filling * tiles */
     int exponent_of[SG_MIXTURE_CANDIDATES]; /* index in exponents[] of each candidate's lobe */
+    /* learned axes (3 floats a region, zero: none): the fine regions' in
+     * use (their own, else their coarse region's), whether a fine region
+     * has its own, the coarse regions', and the copy the renderer reads */
+    float *axis, *coarse_axis, *view_axis;
+    uint8_t *own_axis;
+    uint32_t generation;   /* publications so far */
     float *radiance;       /* per fine region, as learned */
     float global_radiance;
     /* what the renderer reads (the view) is a copy, brought up to date by
@@ -159,7 +192,11 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->changed = malloc(sizeof *l->changed * l->region_count);
     l->flags = calloc(l->region_count, 1);
     l->seen = malloc(sizeof *l->seen * l->region_count);
-    if (!l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
+    l->axis = calloc((size_t)l->region_count * 3, sizeof *l->axis);
+    l->view_axis = calloc((size_t)l->region_count * 3, sizeof *l->view_axis);
+    l->coarse_axis = calloc((size_t)l->coarse_count * 3, sizeof *l->coarse_axis);
+    l->own_axis = calloc(l->region_count, 1);
+    if (!l->axis || !l->view_axis || !l->coarse_axis || !l->own_axis || !l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
         !l->coarse_touched || !l->stats || !l->coarse || !l->coarse_of || !l->buffers || !l->view_state ||
         !l->view_radiance || !l->changed || !l->flags || !l->seen) {
         sg_mixture_learner_free(l);
@@ -198,8 +235,9 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     for (int i = 0; i < 3; i++)
         l->view.cell_max[i] = (float)l->cells[i] - 0.5f;
     l->view.state = l->view_state;
-    for (int k = 0; k < 8; k++)
+    for (int k = 0; k < 16; k++)
         l->view.of_state[k] = sg_mixture_candidates[k < SG_MIXTURE_CANDIDATES ? k : initial];
+    l->view.axis = l->view_axis;
     memset(l->coarse_choice, -1, l->coarse_count);
     l->global_choice = -1;
     return l;
@@ -228,6 +266,10 @@ void sg_mixture_learner_free(SgMixtureLearner *l)
     free(l->changed);
     free(l->flags);
     free(l->seen);
+    free(l->axis);
+    free(l->view_axis);
+    free(l->coarse_axis);
+    free(l->own_axis);
     free(l);
 }
 
@@ -270,12 +312,37 @@ static void refresh_state(SgMixtureLearner *l, uint32_t region)
     /* a region without a choice of its own has too few samples to settle:
      * its statistics are not read */
     bool settled = l->choice[region] >= 0 && l->stats[region].samples >= SETTLED_SAMPLES;
-    uint8_t st = (uint8_t)(candidate | (settled ? STATE_SETTLED : 0) |
-                           (l->view.of_state[candidate].alpha < 1.0f ? SG_MIXTURE_STATE_LOBE : 0));
+    SgMixtureCandidate c = l->view.of_state[candidate];
+    unsigned lobe = c.alpha >= 1.0f ? 0u : c.learned_axis ? SG_MIXTURE_STATE_AXIS : SG_MIXTURE_STATE_LOBE;
+    uint8_t st = (uint8_t)(candidate | (settled ? STATE_SETTLED : 0) | lobe);
     if (st != l->state[region]) {
         l->state[region] = st;
         mark_changed(l, region);
     }
+}
+
+/* The folded lobe's density at each exponent, given a direction's
+ * cosines with the axis and its mirror image: cos^4, ^16, ^64 by squaring. */
+static void folded_lobe_densities(float cos_axis, float cos_mirror, float lobe[EXPONENTS])
+{
+    float c1 = fminf(fmaxf(cos_axis, 0.0f), 1.0f), c2 = fminf(fmaxf(cos_mirror, 0.0f), 1.0f);
+    for (int e = 0; e < EXPONENTS; e++) {
+        for (int s = 0; s < 2; s++) { /* 4 = 2^2, then 2 more squarings per step */
+            c1 *= c1;
+            c2 *= c2;
+        }
+        lobe[e] = (exponents[e] + 1.0f) * (0.5f / 3.14159265f) * (c1 + c2);
+    }
+}
+
+/* v^2 p / p_k for candidate k. p_k = 0: that candidate could never have
+ * drawn this direction, which carries light: it would be biased. */
+static float candidate_term(int k, float weight, float pdf_bsdf, const float lobe[EXPONENTS],
+                            const SgMixtureLearner *l)
+{
+    float a = sg_mixture_candidates[k].alpha;
+    float p = a * pdf_bsdf + (1.0f - a) * lobe[l->exponent_of[k]];
+    return p > 0.0f ? weight / p : INFINITY;
 }
 
 void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord *rec)
@@ -297,32 +364,44 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     st->radiance = rec->radiance >= 0.0f && isfinite(rec->radiance) ? rec->radiance : -1.0f;
     st->lobe = rec->lobe;
     st->estimate = 0.0f;
+    st->axis_terms = false;
+    st->generation = l->view.generation;
+    st->fit[0] = st->fit[1] = st->fit[2] = 0.0f;
     if (!rec->lobe)
         return;
+    const float *axis = &l->view_axis[3 * (size_t)rec->region];
+    bool has_axis = axis[0] != 0.0f || axis[1] != 0.0f || axis[2] != 0.0f;
+    bool has_direction = rec->direction.x != 0.0f || rec->direction.y != 0.0f || rec->direction.z != 0.0f;
     float v = rec->estimate;
     if (!(v > 0.0f) || !isfinite(v)) {
-        st->estimate = 0.0f;
+        st->axis_terms = has_axis; /* a sample that brought nothing back */
         return;
     }
     st->estimate = v;
     float weight = v * v * rec->pdf;
-    /* the folded lobe's density at each exponent: cos^4, ^16, ^64 by squaring */
     float lobe[EXPONENTS];
-    float c1 = fminf(fmaxf(rec->cos_axis, 0.0f), 1.0f), c2 = fminf(fmaxf(rec->cos_mirror, 0.0f), 1.0f);
-    for (int e = 0; e < EXPONENTS; e++) {
-        for (int s = 0; s < 2; s++) { /* 4 = 2^2, then 2 more squarings per step */
-            c1 *= c1;
-            c2 *= c2;
-        }
-        lobe[e] = (exponents[e] + 1.0f) * (0.5f / 3.14159265f) * (c1 + c2);
+    if (rec->no_skeleton)
+        for (int k = 0; k < SKELETON_CANDIDATES; k++)
+            st->term[k] = rec->pdf_bsdf > 0.0f ? weight / rec->pdf_bsdf : INFINITY;
+    else {
+        folded_lobe_densities(rec->cos_axis, rec->cos_mirror, lobe);
+        for (int k = 0; k < SKELETON_CANDIDATES; k++)
+            st->term[k] = candidate_term(k, weight, rec->pdf_bsdf, lobe, l);
     }
-    for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++) {
-        float a = sg_mixture_candidates[k].alpha;
-        float p = a * rec->pdf_bsdf + (1.0f - a) * lobe[l->exponent_of[k]];
-        /* p = 0: that candidate could never have drawn this direction,
-         * which carries light: it would be biased */
-        st->term[k] = p > 0.0f ? weight / p : INFINITY;
-    }
+    if (!has_direction)
+        return;
+    Vec3 d = rec->direction;
+    st->fit[0] = v * d.x, st->fit[1] = v * d.y, st->fit[2] = v * d.z;
+    if (!has_axis)
+        return;
+    /* the cosines with the learned axis and its mirror image across the surface */
+    float c1 = axis[0] * d.x + axis[1] * d.y + axis[2] * d.z;
+    float an = axis[0] * rec->normal.x + axis[1] * rec->normal.y + axis[2] * rec->normal.z;
+    float c2 = c1 - 2.0f * an * v3_dot(d, rec->normal);
+    folded_lobe_densities(c1, c2, lobe);
+    for (int k = SKELETON_CANDIDATES; k < SG_MIXTURE_CANDIDATES; k++)
+        st->term[k] = candidate_term(k, weight, rec->pdf_bsdf, lobe, l);
+    st->axis_terms = true;
 }
 
 static bool fallback_settled(const RegionStats *st)
@@ -343,11 +422,23 @@ static void add_record(RegionStats *st, const StoredRecord *rec)
     if (!(w > 0.0) || !isfinite(w))
         return;
     st->weight += w; /* a bounce that brought nothing back still counts */
+    bool axis = rec->axis_terms && rec->generation >= st->axis_from;
+    if (axis) {
+        st->axis_samples++;
+        st->axis_weight += w;
+    }
     if (rec->estimate == 0.0f)
         return;
     st->weighted += w * rec->estimate;
-    for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++)
+    for (int k = 0; k < SKELETON_CANDIDATES; k++)
         st->moment[k] += w * rec->term[k];
+    for (int i = 0; i < 3; i++)
+        st->fit[i] += rec->fit[i];
+    if (!axis)
+        return;
+    st->axis_weighted += w * rec->estimate;
+    for (int k = 0; k < AXIS_CANDIDATES; k++)
+        st->axis_moment[k] += w * rec->term[SKELETON_CANDIDATES + k];
 }
 
 /* The region's share of the image variance under candidate k: its bounces'
@@ -355,12 +446,19 @@ static void add_record(RegionStats *st, const StoredRecord *rec)
 static double region_variance(const RegionStats *st, int k)
 {
     double mean2 = st->weight > 0.0 ? st->weighted * st->weighted / st->weight : 0.0;
-    return fmax(0.0, st->moment[k] - mean2);
+    if (k < SKELETON_CANDIDATES)
+        return fmax(0.0, st->moment[k] - mean2);
+    /* the learned axis's candidates: measured on the records drawn while
+     * the axis was in use, scaled to all of the region's */
+    if (st->axis_samples < AXIS_MIN_SAMPLES || !(st->axis_weight > 0.0))
+        return INFINITY;
+    return fmax(0.0, st->axis_moment[k - SKELETON_CANDIDATES] * (st->weight / st->axis_weight) - mean2);
 }
 
 static double region_cost(const RegionStats *st, int k)
 {
-    return (double)st->samples * (k == 0 ? 1.0 : GUIDED_COST);
+    return (double)st->samples *
+           (k == 0 ? 1.0 : sg_mixture_candidates[k].learned_axis ? LEARNED_AXIS_COST : GUIDED_COST);
 }
 
 /* The candidate that makes the image's variance times render time least,
@@ -368,14 +466,14 @@ static double region_cost(const RegionStats *st, int k)
  * V_rest, T_rest are the level's totals without this region. Or -1 with
  * too few samples. A region whose bounces weigh little in the image cannot
  * pay for the guide's cost however much it would lower its own variance. */
-static int best_candidate(const RegionStats *st, const Totals *t)
+static int best_candidate(const RegionStats *st, const Totals *t, int candidates)
 {
     if (st->samples < MIN_SAMPLES)
         return -1;
     double v_rest = fmax(0.0, t->variance - st->variance), t_rest = fmax(0.0, t->cost - st->cost);
     int best = 0;
     double best_score = INFINITY;
-    for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++) {
+    for (int k = 0; k < candidates; k++) {
         double score = (v_rest + region_variance(st, k)) * (t_rest + region_cost(st, k));
         if (score < best_score) {
             best = k;
@@ -386,9 +484,9 @@ static int best_candidate(const RegionStats *st, const Totals *t)
 }
 
 /* Re-chooses a region and keeps its level's totals current. */
-static int choose(RegionStats *st, Totals *t)
+static int choose(RegionStats *st, Totals *t, int candidates)
 {
-    int k = best_candidate(st, t);
+    int k = best_candidate(st, t, candidates);
     int counted = k < 0 ? 0 : k;
     t->variance -= st->variance;
     t->cost -= st->cost;
@@ -453,12 +551,15 @@ static void publish(SgMixtureLearner *l)
     if (l->changed_count > l->region_count / 8) {
         memcpy(l->view_state, l->state, l->region_count);
         memcpy(l->view_radiance, l->radiance, sizeof *l->radiance * l->region_count);
+        memcpy(l->view_axis, l->axis, 3 * sizeof *l->axis * l->region_count);
     } else
         for (uint32_t i = 0; i < l->changed_count; i++) {
             uint32_t r = l->changed[i];
             l->view_state[r] = l->state[r];
             l->view_radiance[r] = l->radiance[r];
+            memcpy(&l->view_axis[3 * (size_t)r], &l->axis[3 * (size_t)r], 3 * sizeof *l->axis);
         }
+    l->view.generation = ++l->generation;
     for (uint32_t i = 0; i < l->changed_count; i++)
         l->flags[l->changed[i]] &= (uint8_t)~REGION_CHANGED;
     l->changed_count = 0;
@@ -477,6 +578,56 @@ void sg_mixture_update(SgMixtureLearner *l)
     sg_mixture_end_pass(l);
     sg_mixture_learn(l);
     publish(l);
+}
+
+/* Refits a region's axis on its schedule (AXIS_FIT_FIRST records, then
+ * each AXIS_FIT_GROWTH times more, never once settled): the direction of
+ * the sum of v d. True when the axis changed; the learned candidates'
+ * sums then restart from the records of the next publication on. */
+static bool fit_axis(RegionStats *st, float axis[3], uint32_t generation)
+{
+    uint64_t due = st->fitted_at ? st->fitted_at * AXIS_FIT_GROWTH : AXIS_FIT_FIRST;
+    if (st->samples < due)
+        return false;
+    st->fitted_at = st->samples;
+    double len = sqrt(st->fit[0] * st->fit[0] + st->fit[1] * st->fit[1] + st->fit[2] * st->fit[2]);
+    if (!(len > 0.0) || !isfinite(len))
+        return false;
+    for (int i = 0; i < 3; i++)
+        axis[i] = (float)(st->fit[i] / len);
+    st->axis_from = generation + 1; /* the records of the passes that use it */
+    st->axis_samples = 0;
+    st->axis_weight = st->axis_weighted = 0.0;
+    memset(st->axis_moment, 0, sizeof st->axis_moment);
+    return true;
+}
+
+/* A fine region's axis in use changes (its own fit, or its coarse
+ * region's where it has none): its learned candidates start again. */
+static void set_axis(SgMixtureLearner *l, uint32_t region, const float axis[3])
+{
+    float *a = &l->axis[3 * (size_t)region];
+    if (a[0] == axis[0] && a[1] == axis[1] && a[2] == axis[2])
+        return;
+    memcpy(a, axis, 3 * sizeof *a);
+    RegionStats *st = &l->stats[region];
+    st->axis_from = l->generation + 1;
+    st->axis_samples = 0;
+    st->axis_weight = st->axis_weighted = 0.0;
+    memset(st->axis_moment, 0, sizeof st->axis_moment);
+    mark_changed(l, region);
+}
+
+/* A fine region's own fit, once a settling region would not refit. */
+static void fit_fine_axis(SgMixtureLearner *l, uint32_t region)
+{
+    RegionStats *st = &l->stats[region];
+    if (st->samples >= SETTLED_SAMPLES)
+        return;
+    if (!fit_axis(st, &l->axis[3 * (size_t)region], l->generation))
+        return;
+    l->own_axis[region] = 1;
+    mark_changed(l, region);
 }
 
 void sg_mixture_learn(SgMixtureLearner *l)
@@ -515,7 +666,8 @@ void sg_mixture_learn(SgMixtureLearner *l)
         }
         b->count = 0;
     }
-    int8_t g = (int8_t)choose(&l->global, &l->global_totals);
+    /* the whole scene has no axis of its own */
+    int8_t g = (int8_t)choose(&l->global, &l->global_totals, SKELETON_CANDIDATES);
     if (g != l->global_choice) {
         l->global_choice = g; /* rare: every region that follows it looks again */
         for (uint32_t i = 0; i < l->region_count; i++)
@@ -524,14 +676,16 @@ void sg_mixture_learn(SgMixtureLearner *l)
     }
     for (uint32_t i = 0; i < fine; i++) {
         l->is_touched[l->touched[i]] = 0;
-        l->choice[l->touched[i]] = (int8_t)choose(&l->stats[l->touched[i]], &l->fine_totals);
+        fit_fine_axis(l, l->touched[i]);
+        l->choice[l->touched[i]] = (int8_t)choose(&l->stats[l->touched[i]], &l->fine_totals, SG_MIXTURE_CANDIDATES);
         refresh_state(l, l->touched[i]);
         refresh_radiance(l, l->touched[i]);
     }
     for (uint32_t i = 0; i < coarse; i++) {
         uint32_t c = coarse_list[i];
         l->coarse_touched[c] = 0;
-        int8_t k = (int8_t)choose(&l->coarse[c], &l->coarse_totals);
+        bool refitted = fit_axis(&l->coarse[c], &l->coarse_axis[3 * (size_t)c], l->generation);
+        int8_t k = (int8_t)choose(&l->coarse[c], &l->coarse_totals, SG_MIXTURE_CANDIDATES);
         bool rechosen = k != l->coarse_choice[c];
         /* its radiance goes to its sparse fine regions each time its
          * samples double: the estimate settles, the copies cost */
@@ -540,7 +694,7 @@ void sg_mixture_learn(SgMixtureLearner *l)
                                 cs->radiance_samples >= 2 * cs->radiance_published;
         if (answers_radiance)
             cs->radiance_published = cs->radiance_samples;
-        if (!rechosen && !answers_radiance)
+        if (!rechosen && !answers_radiance && !refitted)
             continue;
         l->coarse_choice[c] = k;
         /* the fine regions it answers for: its cells, same normal bin */
@@ -552,6 +706,8 @@ void sg_mixture_learn(SgMixtureLearner *l)
             for (int y = cy * COARSE; y < (cy + 1) * COARSE && y < l->cells[1]; y++)
                 for (int x = cx * COARSE; x < (cx + 1) * COARSE && x < l->cells[0]; x++) {
                     uint32_t f = sg_mixture_region_of_cell(&l->view, (uint32_t)x, (uint32_t)y, (uint32_t)z, bin);
+                    if (refitted && !l->own_axis[f])
+                        set_axis(l, f, &l->coarse_axis[3 * (size_t)c]);
                     if (rechosen && l->choice[f] < 0)
                         refresh_state(l, f);
                     if (answers_radiance && !(l->flags[f] & REGION_OWN_RADIANCE))
@@ -567,24 +723,45 @@ uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region)
 }
 
 
-double sg_mixture_guided_fraction(const SgMixtureLearner *l)
+/* Share of the bounces seen, weighted by each region's, whose region's
+ * choice has state bits `bits`. */
+static double fraction_with(const SgMixtureLearner *l, unsigned bits)
 {
-    /* weighted by the bounces each region has seen */
-    double all = 0.0, guided = 0.0;
+    double all = 0.0, some = 0.0;
     for (uint32_t s = 0; s < l->seen_count; s++) {
         uint32_t i = l->seen[s];
         double n = (double)l->stats[i].samples;
         all += n;
-        if (n > 0.0 && sg_mixture_choice(l, i).alpha < 1.0f)
-            guided += n;
+        if (n > 0.0 && (l->state[i] & bits))
+            some += n;
     }
-    return all > 0.0 ? guided / all : 0.0;
+    return all > 0.0 ? some / all : 0.0;
 }
 
-/* region count, the scene's radiance, then per region its state byte and radiance */
+double sg_mixture_guided_fraction(const SgMixtureLearner *l)
+{
+    return fraction_with(l, SG_MIXTURE_STATE_LOBE | SG_MIXTURE_STATE_AXIS);
+}
+
+double sg_mixture_learned_axis_fraction(const SgMixtureLearner *l)
+{
+    return fraction_with(l, SG_MIXTURE_STATE_AXIS);
+}
+
+bool sg_mixture_region_axis(const SgMixtureLearner *l, uint32_t region, Vec3 *axis)
+{
+    if (region >= l->region_count)
+        return false;
+    const float *a = &l->view_axis[3 * (size_t)region];
+    *axis = v3(a[0], a[1], a[2]);
+    return a[0] != 0.0f || a[1] != 0.0f || a[2] != 0.0f;
+}
+
+/* region count, the scene's radiance, then per region its state byte,
+ * radiance and axis */
 size_t sg_mixture_view_size(const SgMixtureLearner *l)
 {
-    return sizeof(uint32_t) + sizeof(float) + (size_t)l->region_count * (1 + sizeof(float));
+    return sizeof(uint32_t) + sizeof(float) + (size_t)l->region_count * (1 + 4 * sizeof(float));
 }
 
 void sg_mixture_view_save(const SgMixtureLearner *l, void *out)
@@ -594,6 +771,7 @@ void sg_mixture_view_save(const SgMixtureLearner *l, void *out)
     memcpy(o + 4, &l->view.global_radiance, sizeof(float));
     memcpy(o + 8, l->view_state, l->region_count);
     memcpy(o + 8 + l->region_count, l->view_radiance, sizeof(float) * l->region_count);
+    memcpy(o + 8 + l->region_count * (size_t)5, l->view_axis, 3 * sizeof(float) * l->region_count);
 }
 
 bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size)
@@ -608,5 +786,6 @@ bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size)
     memcpy(&l->view.global_radiance, i + 4, sizeof(float));
     memcpy(l->view_state, i + 8, l->region_count);
     memcpy(l->view_radiance, i + 8 + l->region_count, sizeof(float) * l->region_count);
+    memcpy(l->view_axis, i + 8 + l->region_count * (size_t)5, 3 * sizeof(float) * l->region_count);
     return true;
 }

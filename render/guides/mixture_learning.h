@@ -28,6 +28,18 @@
  * bounces weigh little in the image cannot pay for the cache query however
  * much it would lower its own variance.
  *
+ * The skeleton's lobe can point the wrong way: the light may reach a
+ * region from a lit wall rather than along the skeleton. So each region
+ * also learns an axis of its own, the mean direction of what its bounces
+ * brought back (sum of v d: an unbiased estimate of the first moment of
+ * f cos L whatever density drew d), fitted on the coarse regions and on
+ * the fine ones with enough records, and candidates that draw the lobe
+ * around that axis compete with the skeleton's on the same second-moment
+ * estimates: the guide starts from the skeleton and learns where its lobe
+ * is wrong. A learned axis is fixed during a pass (each pass stays
+ * unbiased); its candidates' moments are taken only from records made
+ * while it was in use.
+ *
  * Every vertex of a learning path also reports what its bounce brought
  * back (all that came after the bounce, per unit throughput of the
  * bounce); each region's root mean square of that drives the guided
@@ -52,16 +64,21 @@ extern "C" {
 #endif
 
 #define SG_NO_REGION UINT32_MAX
-#define SG_MIXTURE_CANDIDATES 7
+#define SG_MIXTURE_SKELETON_CANDIDATES 7
+#define SG_MIXTURE_CANDIDATES 13
 
-/* A choice of mixture: BSDF probability and lobe exponent. */
+/* A choice of mixture: BSDF probability, lobe exponent, and whether the
+ * lobe's axis is the region's learned one rather than the skeleton's. */
 typedef struct SgMixtureCandidate {
     float alpha, exponent;
+    bool learned_axis;
 } SgMixtureCandidate;
 
-/* Candidate 0 is the BSDF alone; the others pair alpha 0.8 or 0.6 with a
- * wide, middle or narrow lobe (exponents 4, 16, 64: the paper's adaptive
- * strength, "small near direct lighting, strong far away"). */
+/* Candidate 0 is the BSDF alone; 1..6 pair alpha 0.8 or 0.6 with a wide,
+ * middle or narrow lobe toward the skeleton's importance point (exponents
+ * 4, 16, 64: the paper's adaptive strength, "small near direct lighting,
+ * strong far away"); 7..12 pair alpha 0.7 or 0.4 with the same lobes
+ * around the region's learned axis. */
 extern const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES];
 /* Where a region (and its coarse region) has too few samples yet: a mild
  * mixture, so that the first passes already try the lobe and learn its
@@ -77,10 +94,13 @@ typedef struct SgMixtureRecord {
      * throughput of the bounce): all that came after the bounce; < 0
      * unknown. Its regional second moment drives the learned roulette. */
     float radiance;
-    bool lobe;       /* the bounce was guided: the fields below are set */
+    bool lobe;       /* the bounce was drawn by the mixture: the fields below are set */
+    bool no_skeleton; /* the skeleton gave no axis here: its candidates draw from the BSDF */
     float pdf_bsdf;  /* BSDF sampler's density of the direction taken */
-    float cos_axis;  /* its cosine with the lobe's axis, and with the axis */
+    float cos_axis;  /* its cosine with the skeleton lobe's axis, and with the axis */
     float cos_mirror; /* mirrored across the surface (the folded lobe's two halves) */
+    Vec3 direction;  /* the direction taken (zero: unknown, the learned axis skips the record) */
+    Vec3 normal;     /* the shading normal it was taken about */
     float pdf;       /* density of the mixture that drew it */
     float estimate;  /* v: the bounce's one-sample estimate (luminance) */
     float weight;    /* w: its weight in the pixel, the squared throughput before it */
@@ -114,7 +134,11 @@ typedef struct SgMixtureView {
     uint32_t base[6];
     uint32_t stride[6][3];
     const uint8_t *state;          /* per region: SG_MIXTURE_STATE_* bits */
-    SgMixtureCandidate of_state[8];
+    SgMixtureCandidate of_state[16];
+    /* per region: its learned axis (3 floats, local coordinates; zero: none
+     * yet), read where its state has SG_MIXTURE_STATE_AXIS */
+    const float *axis;
+    uint32_t generation;           /* publications so far: the records' stamp */
     /* per region: root mean square of what a bounce brings back per unit
      * throughput (its coarse region's where it has too few samples), < 0:
      * see global_radiance (sg_mixture_radiance) */
@@ -124,12 +148,13 @@ typedef struct SgMixtureView {
 
 const SgMixtureView *sg_mixture_view(const SgMixtureLearner *l);
 
-/* A region's state byte: the candidate in use (7: the initial one), whether
+/* A region's state byte: the candidate in use (15: the initial one), whether
  * the region has settled (stopped learning), whether its candidate uses
- * the lobe (alpha < 1: bounces there ask the guide). */
-#define SG_MIXTURE_STATE_CANDIDATE 7u
-#define SG_MIXTURE_STATE_SETTLED 8u
-#define SG_MIXTURE_STATE_LOBE 16u
+ * the skeleton's lobe (bounces there ask the guide) or the learned axis. */
+#define SG_MIXTURE_STATE_CANDIDATE 15u
+#define SG_MIXTURE_STATE_SETTLED 16u
+#define SG_MIXTURE_STATE_LOBE 32u
+#define SG_MIXTURE_STATE_AXIS 64u
 
 /* The bin of a unit normal: its dominant axis and sign (0..5; the opposite
  * normal's bin is bin ^ 1). A renderer keeps it per triangle. */
@@ -209,8 +234,11 @@ bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size);
 /* A region's sample count, for tests and reports. */
 uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region);
 /* Share of the bounces seen so far that fall in regions whose choice now
- * uses the lobe (alpha < 1). */
+ * uses the lobe (alpha < 1), and of those whose lobe is the learned axis. */
 double sg_mixture_guided_fraction(const SgMixtureLearner *l);
+double sg_mixture_learned_axis_fraction(const SgMixtureLearner *l);
+/* A fine region's learned axis as the view shows it (false: none yet). */
+bool sg_mixture_region_axis(const SgMixtureLearner *l, uint32_t region, Vec3 *axis);
 
 #ifdef __cplusplus
 }

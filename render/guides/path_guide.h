@@ -103,6 +103,7 @@ typedef struct BounceOutcome {
 
 /* What a guide tells of the coming pass. */
 typedef struct GuidePass {
+    bool training;  /* set by the renderer: a training pass (render --field-out), for learning alone */
     bool record;    /* paths call record_* */
     bool side_job;  /* side_job runs once, beside the pass's tiles */
 } GuidePass;
@@ -110,6 +111,7 @@ typedef struct GuidePass {
 /* For the render line and the EXR. */
 typedef struct GuideStats {
     double guided_fraction;  /* of the learner's bounces, where it uses the lobe; -1 none */
+    double learned_axis_fraction; /* of those, where the lobe is around the learned axis */
     int training_passes;     /* passes whose paths trained a learned field */
     int training_updates;    /* openpgl: the field's updates from them */
     double training_seconds; /* the updates' time */
