@@ -39,6 +39,7 @@ typedef struct PendingRecord {
     Vec3 radiance;  /* radiance gathered before the bounce */
     bool bounced;   /* a direction above the surface was drawn */
     bool cut;       /* the albedo roulette cut the path here */
+    float distance; /* how far the bounce's ray went (INFINITY: it left the scene) */
 } PendingRecord;
 
 #define MAX_PENDING 32
@@ -66,6 +67,7 @@ typedef struct Path {
     int depth;
     int branches;
     int pending_count, split_count;
+    PendingRecord *last_bounce; /* the record whose bounce the next ray follows, if any */
     PendingRecord pending[MAX_PENDING];
     SplitPoint splits[SPLIT_STACK];
 } Path;
@@ -86,7 +88,7 @@ static void finish_records(PathGuide *g, const PendingRecord *pending, int from,
         const PendingRecord *pr = &pending[i];
         float t = luminance(pr->beta);
         BounceOutcome o = {.radiance = luminance(per_throughput(v3_sub(radiance, pr->radiance), pr->beta)),
-                           .weight = t * t, .bounced = pr->bounced, .cut = pr->cut};
+                           .weight = t * t, .bounced = pr->bounced, .cut = pr->cut, .distance = pr->distance};
         g->ops->learn(g, tile, &pr->v, &o);
     }
 }
@@ -277,6 +279,7 @@ static bool take_bounce(const PathGuide *guide, BounceVertex *v, PathState *ps, 
     if (pr) {
         pr->v = v->g;
         pr->bounced = above;
+        pr->distance = INFINITY;
     }
     if (!above)
         return false; /* below the surface: f = 0, the path ends */
@@ -391,6 +394,7 @@ static bool scatter(Path *p, const Hit *h, const Material *m, Vec3 wo, Vec3 n, b
         pr->beta = p->ps.beta;
         pr->radiance = p->radiance;
     }
+    p->last_bounce = pr;
     return take_bounce(guide, &v, &p->ps, pc->rng, pr, pc->st);
 }
 
@@ -404,6 +408,11 @@ static bool path_vertex(Path *p)
     const PathCtx *pc = p->pc;
     Hit h = intersect(it->geo, p->ps.o, p->ps.d, INFINITY);
     pc->st->rays++;
+    if (p->last_bounce) { /* where the learning vertex's bounce led */
+        if (h.found)
+            p->last_bounce->distance = h.t;
+        p->last_bounce = NULL;
+    }
     if (!h.found) {
         if (it->lights->has_escaping)
             add_escaped(p);
@@ -460,6 +469,7 @@ static bool path_resume_split(Path *p)
     }
     if (--sp->remaining == 0)
         p->split_count--;
+    p->last_bounce = pr;
     bool alive = take_bounce(p->it->guide, &v, &p->ps, p->pc->rng, pr, p->pc->st) &&
                  v3_max_component(p->ps.beta) > 0.0f;
     p->depth++;
@@ -478,6 +488,7 @@ Vec3 integrator_trace(const Integrator *it, Vec3 o, Vec3 d, const PathCtx *pc, V
     p.depth = 0;
     p.branches = 1;
     p.pending_count = p.split_count = 0;
+    p.last_bounce = NULL;
     bool alive = true;
     for (;;) {
         if (alive)

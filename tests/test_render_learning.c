@@ -340,6 +340,46 @@ Test(render_learning, a_new_axis_is_judged_on_the_passes_that_use_it)
     sg_mixture_learner_free(l);
 }
 
+/* A small bright patch near the region: its direction changes across the
+ * region (parallax), so one learned direction blurs it, while the mean of
+ * where the bright bounces ended finds the patch, and a narrow lobe toward
+ * it from each vertex wins. */
+Test(render_learning, a_region_learns_where_a_near_light_lies)
+{
+    SgMixtureLearner *l = unit_learner();
+    const Vec3 n = v3(0, 1, 0), corner = v3(0.25f, 0.25f, 0.25f), patch = v3(0.3125f, 0.4f, 0.3125f);
+    uint32_t r = sg_mixture_region(l, v3(0.3f, 0.3f, 0.3f), n);
+    SgRng rng;
+    sg_rng_seed(&rng, 14, 3);
+    for (int pass = 0; pass < 10; pass++) {
+        for (int i = 0; i < 400; i++) {
+            /* a vertex anywhere on the region's floor (fine cells are 1/8) */
+            Vec3 x = v3(corner.x + 0.125f * sg_rng_float(&rng), 0.25f, corner.z + 0.125f * sg_rng_float(&rng));
+            cr_assert_eq(sg_mixture_region(l, x, n), r);
+            Vec3 d = sg_sample_cosine_hemisphere(n, sg_rng_float(&rng), sg_rng_float(&rng));
+            Vec3 to = v3_sub(patch, x);
+            float dist = sqrtf(v3_dot(to, to));
+            bool hit = v3_dot(d, v3_scale(to, 1.0f / dist)) > 0.995f;
+            float p = fmaxf(v3_dot(d, n), 1e-6f) / 3.14159265f;
+            SgMixtureRecord rec = {.region = r, .radiance = -1.0f, .lobe = true, .no_skeleton = true,
+                                   .pdf_bsdf = p, .pdf = p, .direction = d, .normal = n, .position = x,
+                                   .distance = hit ? dist : 1.0f, .estimate = hit ? 20.0f : 0.0f, .weight = 1.0f};
+            sg_mixture_record(l, (uint32_t)(i & 1), &rec);
+        }
+        sg_mixture_end_pass(l);
+    }
+    Vec3 point;
+    cr_assert(sg_mixture_region_point(l, r, &point));
+    Vec3 off = v3_sub(point, patch);
+    float miss = sqrtf(v3_dot(off, off));
+    cr_log_info("learned point %g %g %g, %.4f from the patch", point.x, point.y, point.z, miss);
+    cr_assert_lt(miss, 0.01f, "the learned point is %.4f from the patch", miss);
+    SgMixtureCandidate c = sg_mixture_choice(l, r);
+    cr_assert(c.learned_point && c.exponent == 64.0f, "choice: alpha %g exponent %g, %s", c.alpha, c.exponent,
+              c.learned_point ? "toward the point" : c.learned_axis ? "around the direction" : "skeleton or BSDF");
+    sg_mixture_learner_free(l);
+}
+
 /* Light from everywhere alike: BSDF sampling has no variance, any lobe
  * adds some, so the region keeps to the BSDF though it has an axis. */
 Test(render_learning, a_learned_axis_does_not_win_where_light_is_even)

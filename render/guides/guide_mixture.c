@@ -37,8 +37,8 @@ typedef struct MixtureVertex {
     bool mixture;  /* there is an axis: the bounce draws from the mixture */
     bool skeleton; /* the skeleton gave an axis (skeleton_axis) */
     Vec3 skeleton_axis;
-    /* the direction drawn, as the learner needs it */
-    Vec3 direction;
+    /* the vertex and the direction drawn, as the learner needs them */
+    Vec3 position, direction;
     float pdf_bsdf, pdf;
 } MixtureVertex;
 _Static_assert(sizeof(MixtureVertex) <= GUIDE_VERTEX_STATE, "MixtureVertex fits GuideVertex.state");
@@ -112,6 +112,7 @@ static void mixture_vertex_begin(PathGuide *g, const GuideHit *h, SgRng *rng, Gu
     mv->region = SG_NO_REGION;
     mv->mixture = false;
     mv->skeleton = false;
+    mv->position = h->p;
     mv->direction = v3(0, 0, 0);
     bool lobe_region = x->fixed.alpha < 1.0f;
     if (x->learner) {
@@ -124,10 +125,12 @@ static void mixture_vertex_begin(PathGuide *g, const GuideHit *h, SgRng *rng, Gu
         lobe_region = state & SG_MIXTURE_STATE_LOBE;
         v->learn = h->may_learn && !(state & SG_MIXTURE_STATE_SETTLED);
         v->rms = sg_mixture_radiance(view, mv->region);
-        if (state & SG_MIXTURE_STATE_AXIS) { /* the region's learned axis: no cache query */
+        if (state & SG_MIXTURE_STATE_AXIS) { /* the region's learned axis or point: no cache query */
             const float *a = &view->axis[3 * (size_t)mv->region];
+            Vec3 axis = mv->mix.learned_point ? sg_mixture_point_axis(&view->point[4 * (size_t)mv->region], a, h->p)
+                                              : v3(a[0], a[1], a[2]);
             mv->mixture = true;
-            mv->lobe = sg_folded_lobe(v3(a[0], a[1], a[2]), h->n, mv->mix.exponent);
+            mv->lobe = sg_folded_lobe(axis, h->n, mv->mix.exponent);
         }
     }
     mv->asked = (lobe_region || v->learn) && importance_lookup_begin(&x->skeleton, h->p, h->n, rng, &mv->query);
@@ -204,6 +207,8 @@ static void mixture_learn(PathGuide *g, int tile, const GuideVertex *v, const Bo
             rec.pdf = mv->pdf;
             rec.direction = d;
             rec.normal = n;
+            rec.position = mv->position;
+            rec.distance = o->distance;
             rec.no_skeleton = !mv->skeleton;
             if (mv->skeleton) {
                 Vec3 a = mv->skeleton_axis;
@@ -306,7 +311,7 @@ static PathGuide *mixture_create(const PathGuideSetup *setup, SgError *err)
     Mixture *x = path_guide_alloc(sizeof *x, &mixture_ops, setup, err);
     if (!x)
         return NULL;
-    x->fixed = (SgMixtureCandidate){o->alpha, o->lobe_exponent, false};
+    x->fixed = (SgMixtureCandidate){o->alpha, o->lobe_exponent, false, false};
     x->alpha_learned = o->alpha == SG_ALPHA_LEARNED;
     x->roulette_learns = o->roulette == SG_ROULETTE_LEARNED;
     x->pixels = (uint64_t)o->width * (uint64_t)o->height;

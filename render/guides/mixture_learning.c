@@ -6,12 +6,19 @@
 
 /* BSDF alone first: with equal estimates the cheaper, safer choice wins. */
 const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES] = {
-    {1.0f, 16.0f, false}, {0.8f, 4.0f, false}, {0.8f, 16.0f, false}, {0.8f, 64.0f, false},
-    {0.6f, 4.0f, false},  {0.6f, 16.0f, false}, {0.6f, 64.0f, false}, {0.7f, 4.0f, true},
-    {0.7f, 16.0f, true},  {0.7f, 64.0f, true},  {0.4f, 4.0f, true},  {0.4f, 16.0f, true},
-    {0.4f, 64.0f, true}};
+    {1.0f, 16.0f, false, false}, {0.8f, 4.0f, false, false}, {0.8f, 16.0f, false, false},
+    {0.8f, 64.0f, false, false}, {0.6f, 4.0f, false, false}, {0.6f, 16.0f, false, false},
+    {0.6f, 64.0f, false, false}, {0.7f, 4.0f, true, false},  {0.7f, 16.0f, true, false},
+    {0.7f, 64.0f, true, false},  {0.4f, 4.0f, true, false},  {0.4f, 16.0f, true, false},
+    {0.4f, 64.0f, true, false},  {0.7f, 4.0f, true, true},   {0.7f, 16.0f, true, true},
+    {0.7f, 64.0f, true, true},   {0.4f, 4.0f, true, true},   {0.4f, 16.0f, true, true},
+    {0.4f, 64.0f, true, true}};
 #define SKELETON_CANDIDATES SG_MIXTURE_SKELETON_CANDIDATES
-#define AXIS_CANDIDATES (SG_MIXTURE_CANDIDATES - SKELETON_CANDIDATES)
+/* the learned candidates come in two families of six: around the learned
+ * direction (family 0), toward the learned point (family 1) */
+#define FAMILIES 2
+#define AXIS_CANDIDATES 6
+_Static_assert(SKELETON_CANDIDATES + FAMILIES * AXIS_CANDIDATES == SG_MIXTURE_CANDIDATES, "candidate families");
 /* The candidates' lobe exponents, each a power of 4 of the one before, so
  * that a record computes cos^e for all of them by squaring. */
 #define EXPONENTS 3
@@ -50,9 +57,10 @@ typedef struct StoredRecord {
     float weight;                      /* w: the bounce's weight in the image */
     float radiance;                    /* outgoing radiance estimate, < 0 none */
     bool lobe;                         /* a guided bounce: estimate and terms set */
-    bool axis_terms;                   /* the learned candidates' terms are set */
+    bool axis_terms[FAMILIES];         /* the learned candidates' terms are set */
     uint32_t generation;               /* the view's when the record was made */
     float fit[3];                      /* v d: the axis fit's share (zero: none) */
+    float point_fit[4];                /* v (x + t d) and v: the point fit's share */
     float term[SG_MIXTURE_CANDIDATES]; /* v^2 p / p_k */
 } StoredRecord;
 
@@ -75,12 +83,12 @@ typedef struct RegionStats {
     /* the learned axis: sum of v d over its records, the samples at the
      * last fit, and the learned candidates' sums over the records drawn
      * while the current axis was in use (generation axis_from or later) */
-    double fit[3];
+    double fit[3], point_fit[4];
     uint64_t fitted_at;
     uint32_t axis_from;
-    uint64_t axis_samples;
-    double axis_weight, axis_weighted;
-    double axis_moment[AXIS_CANDIDATES];
+    uint64_t axis_samples[FAMILIES];
+    double axis_weight[FAMILIES], axis_weighted[FAMILIES];
+    double axis_moment[FAMILIES][AXIS_CANDIDATES];
 } RegionStats;
 
 /* One level of regions (fine or coarse): sums over its regions of the
@@ -127,6 +135,7 @@ struct SgMixtureLearner {
      * use (their own, else their coarse region's), whether a fine region
      * has its own, the coarse regions', and the copy the renderer reads */
     float *axis, *coarse_axis, *view_axis;
+    float *point, *coarse_point, *view_point; /* 4 floats a region: x, y, z, 1 where there is one */
     uint8_t *own_axis;
     uint32_t generation;   /* publications so far */
     float *radiance;       /* per fine region, as learned */
@@ -196,7 +205,10 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->view_axis = calloc((size_t)l->region_count * 3, sizeof *l->view_axis);
     l->coarse_axis = calloc((size_t)l->coarse_count * 3, sizeof *l->coarse_axis);
     l->own_axis = calloc(l->region_count, 1);
-    if (!l->axis || !l->view_axis || !l->coarse_axis || !l->own_axis || !l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
+    l->point = calloc((size_t)l->region_count * 4, sizeof *l->point);
+    l->view_point = calloc((size_t)l->region_count * 4, sizeof *l->view_point);
+    l->coarse_point = calloc((size_t)l->coarse_count * 4, sizeof *l->coarse_point);
+    if (!l->point || !l->view_point || !l->coarse_point || !l->axis || !l->view_axis || !l->coarse_axis || !l->own_axis || !l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
         !l->coarse_touched || !l->stats || !l->coarse || !l->coarse_of || !l->buffers || !l->view_state ||
         !l->view_radiance || !l->changed || !l->flags || !l->seen) {
         sg_mixture_learner_free(l);
@@ -235,9 +247,10 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     for (int i = 0; i < 3; i++)
         l->view.cell_max[i] = (float)l->cells[i] - 0.5f;
     l->view.state = l->view_state;
-    for (int k = 0; k < 16; k++)
+    for (int k = 0; k < 32; k++)
         l->view.of_state[k] = sg_mixture_candidates[k < SG_MIXTURE_CANDIDATES ? k : initial];
     l->view.axis = l->view_axis;
+    l->view.point = l->view_point;
     memset(l->coarse_choice, -1, l->coarse_count);
     l->global_choice = -1;
     return l;
@@ -270,6 +283,9 @@ void sg_mixture_learner_free(SgMixtureLearner *l)
     free(l->view_axis);
     free(l->coarse_axis);
     free(l->own_axis);
+    free(l->point);
+    free(l->view_point);
+    free(l->coarse_point);
     free(l);
 }
 
@@ -364,17 +380,22 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     st->radiance = rec->radiance >= 0.0f && isfinite(rec->radiance) ? rec->radiance : -1.0f;
     st->lobe = rec->lobe;
     st->estimate = 0.0f;
-    st->axis_terms = false;
+    st->axis_terms[0] = st->axis_terms[1] = false;
     st->generation = l->view.generation;
-    st->fit[0] = st->fit[1] = st->fit[2] = 0.0f;
+    memset(st->fit, 0, sizeof st->fit);
+    memset(st->point_fit, 0, sizeof st->point_fit);
     if (!rec->lobe)
         return;
     const float *axis = &l->view_axis[3 * (size_t)rec->region];
+    const float *point = &l->view_point[4 * (size_t)rec->region];
     bool has_axis = axis[0] != 0.0f || axis[1] != 0.0f || axis[2] != 0.0f;
+    bool has_point = has_axis && point[3] > 0.0f;
     bool has_direction = rec->direction.x != 0.0f || rec->direction.y != 0.0f || rec->direction.z != 0.0f;
     float v = rec->estimate;
     if (!(v > 0.0f) || !isfinite(v)) {
-        st->axis_terms = has_axis; /* a sample that brought nothing back */
+        /* a sample that brought nothing back */
+        st->axis_terms[0] = has_axis;
+        st->axis_terms[1] = has_point;
         return;
     }
     st->estimate = v;
@@ -390,18 +411,29 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     }
     if (!has_direction)
         return;
-    Vec3 d = rec->direction;
+    Vec3 d = rec->direction, x = rec->position;
     st->fit[0] = v * d.x, st->fit[1] = v * d.y, st->fit[2] = v * d.z;
+    float t = rec->distance;
+    if (t > 0.0f && isfinite(t)) {
+        st->point_fit[0] = v * (x.x + t * d.x), st->point_fit[1] = v * (x.y + t * d.y);
+        st->point_fit[2] = v * (x.z + t * d.z), st->point_fit[3] = v;
+    }
     if (!has_axis)
         return;
-    /* the cosines with the learned axis and its mirror image across the surface */
-    float c1 = axis[0] * d.x + axis[1] * d.y + axis[2] * d.z;
-    float an = axis[0] * rec->normal.x + axis[1] * rec->normal.y + axis[2] * rec->normal.z;
-    float c2 = c1 - 2.0f * an * v3_dot(d, rec->normal);
-    folded_lobe_densities(c1, c2, lobe);
-    for (int k = SKELETON_CANDIDATES; k < SG_MIXTURE_CANDIDATES; k++)
-        st->term[k] = candidate_term(k, weight, rec->pdf_bsdf, lobe, l);
-    st->axis_terms = true;
+    float dn = v3_dot(d, rec->normal);
+    for (int f = 0; f < FAMILIES; f++) {
+        if (f == 1 && !has_point)
+            break;
+        Vec3 a = f == 0 ? v3(axis[0], axis[1], axis[2]) : sg_mixture_point_axis(point, axis, x);
+        /* the cosines with the lobe's axis and its mirror image across the surface */
+        float c1 = v3_dot(a, d), c2 = c1 - 2.0f * v3_dot(a, rec->normal) * dn;
+        folded_lobe_densities(c1, c2, lobe);
+        for (int k = 0; k < AXIS_CANDIDATES; k++) {
+            int c = SKELETON_CANDIDATES + f * AXIS_CANDIDATES + k;
+            st->term[c] = candidate_term(c, weight, rec->pdf_bsdf, lobe, l);
+        }
+        st->axis_terms[f] = true;
+    }
 }
 
 static bool fallback_settled(const RegionStats *st)
@@ -422,11 +454,13 @@ static void add_record(RegionStats *st, const StoredRecord *rec)
     if (!(w > 0.0) || !isfinite(w))
         return;
     st->weight += w; /* a bounce that brought nothing back still counts */
-    bool axis = rec->axis_terms && rec->generation >= st->axis_from;
-    if (axis) {
-        st->axis_samples++;
-        st->axis_weight += w;
-    }
+    /* records drawn while the learned axis and point were in use */
+    bool current = rec->generation >= st->axis_from;
+    for (int f = 0; f < FAMILIES; f++)
+        if (current && rec->axis_terms[f]) {
+            st->axis_samples[f]++;
+            st->axis_weight[f] += w;
+        }
     if (rec->estimate == 0.0f)
         return;
     st->weighted += w * rec->estimate;
@@ -434,11 +468,15 @@ static void add_record(RegionStats *st, const StoredRecord *rec)
         st->moment[k] += w * rec->term[k];
     for (int i = 0; i < 3; i++)
         st->fit[i] += rec->fit[i];
-    if (!axis)
-        return;
-    st->axis_weighted += w * rec->estimate;
-    for (int k = 0; k < AXIS_CANDIDATES; k++)
-        st->axis_moment[k] += w * rec->term[SKELETON_CANDIDATES + k];
+    for (int i = 0; i < 4; i++)
+        st->point_fit[i] += rec->point_fit[i];
+    for (int f = 0; f < FAMILIES; f++) {
+        if (!current || !rec->axis_terms[f])
+            continue;
+        st->axis_weighted[f] += w * rec->estimate;
+        for (int k = 0; k < AXIS_CANDIDATES; k++)
+            st->axis_moment[f][k] += w * rec->term[SKELETON_CANDIDATES + f * AXIS_CANDIDATES + k];
+    }
 }
 
 /* The region's share of the image variance under candidate k: its bounces'
@@ -448,11 +486,12 @@ static double region_variance(const RegionStats *st, int k)
     double mean2 = st->weight > 0.0 ? st->weighted * st->weighted / st->weight : 0.0;
     if (k < SKELETON_CANDIDATES)
         return fmax(0.0, st->moment[k] - mean2);
-    /* the learned axis's candidates: measured on the records drawn while
-     * the axis was in use, scaled to all of the region's */
-    if (st->axis_samples < AXIS_MIN_SAMPLES || !(st->axis_weight > 0.0))
+    /* the learned candidates: measured on the records drawn while the
+     * axis and point were in use, scaled to all of the region's */
+    int f = (k - SKELETON_CANDIDATES) / AXIS_CANDIDATES, i = (k - SKELETON_CANDIDATES) % AXIS_CANDIDATES;
+    if (st->axis_samples[f] < AXIS_MIN_SAMPLES || !(st->axis_weight[f] > 0.0))
         return INFINITY;
-    return fmax(0.0, st->axis_moment[k - SKELETON_CANDIDATES] * (st->weight / st->axis_weight) - mean2);
+    return fmax(0.0, st->axis_moment[f][i] * (st->weight / st->axis_weight[f]) - mean2);
 }
 
 static double region_cost(const RegionStats *st, int k)
@@ -552,12 +591,14 @@ static void publish(SgMixtureLearner *l)
         memcpy(l->view_state, l->state, l->region_count);
         memcpy(l->view_radiance, l->radiance, sizeof *l->radiance * l->region_count);
         memcpy(l->view_axis, l->axis, 3 * sizeof *l->axis * l->region_count);
+        memcpy(l->view_point, l->point, 4 * sizeof *l->point * l->region_count);
     } else
         for (uint32_t i = 0; i < l->changed_count; i++) {
             uint32_t r = l->changed[i];
             l->view_state[r] = l->state[r];
             l->view_radiance[r] = l->radiance[r];
             memcpy(&l->view_axis[3 * (size_t)r], &l->axis[3 * (size_t)r], 3 * sizeof *l->axis);
+            memcpy(&l->view_point[4 * (size_t)r], &l->point[4 * (size_t)r], 4 * sizeof *l->point);
         }
     l->view.generation = ++l->generation;
     for (uint32_t i = 0; i < l->changed_count; i++)
@@ -584,7 +625,16 @@ void sg_mixture_update(SgMixtureLearner *l)
  * each AXIS_FIT_GROWTH times more, never once settled): the direction of
  * the sum of v d. True when the axis changed; the learned candidates'
  * sums then restart from the records of the next publication on. */
-static bool fit_axis(RegionStats *st, float axis[3], uint32_t generation)
+static void forget_learned_moments(RegionStats *st, uint32_t generation)
+{
+    st->axis_from = generation + 1; /* the records of the passes that use the new axis */
+    memset(st->axis_samples, 0, sizeof st->axis_samples);
+    memset(st->axis_weight, 0, sizeof st->axis_weight);
+    memset(st->axis_weighted, 0, sizeof st->axis_weighted);
+    memset(st->axis_moment, 0, sizeof st->axis_moment);
+}
+
+static bool fit_axis(RegionStats *st, float axis[3], float point[4], uint32_t generation)
 {
     uint64_t due = st->fitted_at ? st->fitted_at * AXIS_FIT_GROWTH : AXIS_FIT_FIRST;
     if (st->samples < due)
@@ -595,26 +645,25 @@ static bool fit_axis(RegionStats *st, float axis[3], uint32_t generation)
         return false;
     for (int i = 0; i < 3; i++)
         axis[i] = (float)(st->fit[i] / len);
-    st->axis_from = generation + 1; /* the records of the passes that use it */
-    st->axis_samples = 0;
-    st->axis_weight = st->axis_weighted = 0.0;
-    memset(st->axis_moment, 0, sizeof st->axis_moment);
+    double pw = st->point_fit[3];
+    bool has_point = pw > 0.0 && isfinite(pw);
+    for (int i = 0; i < 3; i++)
+        point[i] = has_point ? (float)(st->point_fit[i] / pw) : 0.0f;
+    point[3] = has_point ? 1.0f : 0.0f;
+    forget_learned_moments(st, generation);
     return true;
 }
 
 /* A fine region's axis in use changes (its own fit, or its coarse
  * region's where it has none): its learned candidates start again. */
-static void set_axis(SgMixtureLearner *l, uint32_t region, const float axis[3])
+static void set_axis(SgMixtureLearner *l, uint32_t region, const float axis[3], const float point[4])
 {
-    float *a = &l->axis[3 * (size_t)region];
-    if (a[0] == axis[0] && a[1] == axis[1] && a[2] == axis[2])
+    float *a = &l->axis[3 * (size_t)region], *p = &l->point[4 * (size_t)region];
+    if (!memcmp(a, axis, 3 * sizeof *a) && !memcmp(p, point, 4 * sizeof *p))
         return;
     memcpy(a, axis, 3 * sizeof *a);
-    RegionStats *st = &l->stats[region];
-    st->axis_from = l->generation + 1;
-    st->axis_samples = 0;
-    st->axis_weight = st->axis_weighted = 0.0;
-    memset(st->axis_moment, 0, sizeof st->axis_moment);
+    memcpy(p, point, 4 * sizeof *p);
+    forget_learned_moments(&l->stats[region], l->generation);
     mark_changed(l, region);
 }
 
@@ -624,7 +673,7 @@ static void fit_fine_axis(SgMixtureLearner *l, uint32_t region)
     RegionStats *st = &l->stats[region];
     if (st->samples >= SETTLED_SAMPLES)
         return;
-    if (!fit_axis(st, &l->axis[3 * (size_t)region], l->generation))
+    if (!fit_axis(st, &l->axis[3 * (size_t)region], &l->point[4 * (size_t)region], l->generation))
         return;
     l->own_axis[region] = 1;
     mark_changed(l, region);
@@ -684,7 +733,8 @@ void sg_mixture_learn(SgMixtureLearner *l)
     for (uint32_t i = 0; i < coarse; i++) {
         uint32_t c = coarse_list[i];
         l->coarse_touched[c] = 0;
-        bool refitted = fit_axis(&l->coarse[c], &l->coarse_axis[3 * (size_t)c], l->generation);
+        bool refitted =
+            fit_axis(&l->coarse[c], &l->coarse_axis[3 * (size_t)c], &l->coarse_point[4 * (size_t)c], l->generation);
         int8_t k = (int8_t)choose(&l->coarse[c], &l->coarse_totals, SG_MIXTURE_CANDIDATES);
         bool rechosen = k != l->coarse_choice[c];
         /* its radiance goes to its sparse fine regions each time its
@@ -707,7 +757,7 @@ void sg_mixture_learn(SgMixtureLearner *l)
                 for (int x = cx * COARSE; x < (cx + 1) * COARSE && x < l->cells[0]; x++) {
                     uint32_t f = sg_mixture_region_of_cell(&l->view, (uint32_t)x, (uint32_t)y, (uint32_t)z, bin);
                     if (refitted && !l->own_axis[f])
-                        set_axis(l, f, &l->coarse_axis[3 * (size_t)c]);
+                        set_axis(l, f, &l->coarse_axis[3 * (size_t)c], &l->coarse_point[4 * (size_t)c]);
                     if (rechosen && l->choice[f] < 0)
                         refresh_state(l, f);
                     if (answers_radiance && !(l->flags[f] & REGION_OWN_RADIANCE))
@@ -757,11 +807,20 @@ bool sg_mixture_region_axis(const SgMixtureLearner *l, uint32_t region, Vec3 *ax
     return a[0] != 0.0f || a[1] != 0.0f || a[2] != 0.0f;
 }
 
+bool sg_mixture_region_point(const SgMixtureLearner *l, uint32_t region, Vec3 *point)
+{
+    if (region >= l->region_count)
+        return false;
+    const float *p = &l->view_point[4 * (size_t)region];
+    *point = v3(p[0], p[1], p[2]);
+    return p[3] > 0.0f;
+}
+
 /* region count, the scene's radiance, then per region its state byte,
- * radiance and axis */
+ * radiance, axis and point */
 size_t sg_mixture_view_size(const SgMixtureLearner *l)
 {
-    return sizeof(uint32_t) + sizeof(float) + (size_t)l->region_count * (1 + 4 * sizeof(float));
+    return sizeof(uint32_t) + sizeof(float) + (size_t)l->region_count * (1 + 8 * sizeof(float));
 }
 
 void sg_mixture_view_save(const SgMixtureLearner *l, void *out)
@@ -772,6 +831,7 @@ void sg_mixture_view_save(const SgMixtureLearner *l, void *out)
     memcpy(o + 8, l->view_state, l->region_count);
     memcpy(o + 8 + l->region_count, l->view_radiance, sizeof(float) * l->region_count);
     memcpy(o + 8 + l->region_count * (size_t)5, l->view_axis, 3 * sizeof(float) * l->region_count);
+    memcpy(o + 8 + l->region_count * (size_t)17, l->view_point, 4 * sizeof(float) * l->region_count);
 }
 
 bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size)
@@ -787,5 +847,6 @@ bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size)
     memcpy(l->view_state, i + 8, l->region_count);
     memcpy(l->view_radiance, i + 8 + l->region_count, sizeof(float) * l->region_count);
     memcpy(l->view_axis, i + 8 + l->region_count * (size_t)5, 3 * sizeof(float) * l->region_count);
+    memcpy(l->view_point, i + 8 + l->region_count * (size_t)17, 4 * sizeof(float) * l->region_count);
     return true;
 }

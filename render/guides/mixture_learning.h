@@ -36,7 +36,11 @@
  * the fine ones with enough records, and candidates that draw the lobe
  * around that axis compete with the skeleton's on the same second-moment
  * estimates: the guide starts from the skeleton and learns where its lobe
- * is wrong. A learned axis is fixed during a pass (each pass stays
+ * is wrong. Where the bounces' rays end on a surface the region also learns
+ * a point, the mean of their ends weighted by v (where its light comes
+ * from, as the skeleton's importance point says where the light lies), and
+ * a lobe toward it from each vertex (parallax: the direction changes across
+ * the region) competes too. A learned axis is fixed during a pass (each pass stays
  * unbiased); its candidates' moments are taken only from records made
  * while it was in use.
  *
@@ -52,6 +56,7 @@
 #ifndef SG_MIXTURE_LEARNING_H
 #define SG_MIXTURE_LEARNING_H
 
+#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -65,20 +70,22 @@ extern "C" {
 
 #define SG_NO_REGION UINT32_MAX
 #define SG_MIXTURE_SKELETON_CANDIDATES 7
-#define SG_MIXTURE_CANDIDATES 13
+#define SG_MIXTURE_CANDIDATES 19
 
 /* A choice of mixture: BSDF probability, lobe exponent, and whether the
- * lobe's axis is the region's learned one rather than the skeleton's. */
+ * lobe's axis is the region's learned one (learned_axis: its learned
+ * direction, or with learned_point the direction to its learned point)
+ * rather than the skeleton's. */
 typedef struct SgMixtureCandidate {
     float alpha, exponent;
-    bool learned_axis;
+    bool learned_axis, learned_point;
 } SgMixtureCandidate;
 
 /* Candidate 0 is the BSDF alone; 1..6 pair alpha 0.8 or 0.6 with a wide,
  * middle or narrow lobe toward the skeleton's importance point (exponents
  * 4, 16, 64: the paper's adaptive strength, "small near direct lighting,
  * strong far away"); 7..12 pair alpha 0.7 or 0.4 with the same lobes
- * around the region's learned axis. */
+ * around the region's learned direction, 13..18 toward its learned point. */
 extern const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES];
 /* Where a region (and its coarse region) has too few samples yet: a mild
  * mixture, so that the first passes already try the lobe and learn its
@@ -101,6 +108,8 @@ typedef struct SgMixtureRecord {
     float cos_mirror; /* mirrored across the surface (the folded lobe's two halves) */
     Vec3 direction;  /* the direction taken (zero: unknown, the learned axis skips the record) */
     Vec3 normal;     /* the shading normal it was taken about */
+    Vec3 position;   /* the vertex */
+    float distance;  /* how far the bounce's ray went (INFINITY or 0: unknown) */
     float pdf;       /* density of the mixture that drew it */
     float estimate;  /* v: the bounce's one-sample estimate (luminance) */
     float weight;    /* w: its weight in the pixel, the squared throughput before it */
@@ -134,10 +143,12 @@ typedef struct SgMixtureView {
     uint32_t base[6];
     uint32_t stride[6][3];
     const uint8_t *state;          /* per region: SG_MIXTURE_STATE_* bits */
-    SgMixtureCandidate of_state[16];
+    SgMixtureCandidate of_state[32];
     /* per region: its learned axis (3 floats, local coordinates; zero: none
-     * yet), read where its state has SG_MIXTURE_STATE_AXIS */
+     * yet) and point (4 floats: x, y, z, and 1 where it has one), read
+     * where its state has SG_MIXTURE_STATE_AXIS */
     const float *axis;
+    const float *point;
     uint32_t generation;           /* publications so far: the records' stamp */
     /* per region: root mean square of what a bounce brings back per unit
      * throughput (its coarse region's where it has too few samples), < 0:
@@ -148,13 +159,13 @@ typedef struct SgMixtureView {
 
 const SgMixtureView *sg_mixture_view(const SgMixtureLearner *l);
 
-/* A region's state byte: the candidate in use (15: the initial one), whether
+/* A region's state byte: the candidate in use (31: the initial one), whether
  * the region has settled (stopped learning), whether its candidate uses
- * the skeleton's lobe (bounces there ask the guide) or the learned axis. */
-#define SG_MIXTURE_STATE_CANDIDATE 15u
-#define SG_MIXTURE_STATE_SETTLED 16u
-#define SG_MIXTURE_STATE_LOBE 32u
-#define SG_MIXTURE_STATE_AXIS 64u
+ * the skeleton's lobe (bounces there ask the guide) or a learned axis. */
+#define SG_MIXTURE_STATE_CANDIDATE 31u
+#define SG_MIXTURE_STATE_SETTLED 32u
+#define SG_MIXTURE_STATE_LOBE 64u
+#define SG_MIXTURE_STATE_AXIS 128u
 
 /* The bin of a unit normal: its dominant axis and sign (0..5; the opposite
  * normal's bin is bin ^ 1). A renderer keeps it per triangle. */
@@ -237,8 +248,21 @@ uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region);
  * uses the lobe (alpha < 1), and of those whose lobe is the learned axis. */
 double sg_mixture_guided_fraction(const SgMixtureLearner *l);
 double sg_mixture_learned_axis_fraction(const SgMixtureLearner *l);
-/* A fine region's learned axis as the view shows it (false: none yet). */
+/* A fine region's learned axis and point as the view shows them (false: none yet). */
 bool sg_mixture_region_axis(const SgMixtureLearner *l, uint32_t region, Vec3 *axis);
+bool sg_mixture_region_point(const SgMixtureLearner *l, uint32_t region, Vec3 *point);
+/* The axis of a learned-point lobe at p: toward the point, or the learned
+ * direction where the point is too near p to tell one (or absent). */
+static inline Vec3 sg_mixture_point_axis(const float point[4], const float axis[3], Vec3 p)
+{
+    if (point[3] > 0.0f) {
+        Vec3 d = v3(point[0] - p.x, point[1] - p.y, point[2] - p.z);
+        float len2 = v3_dot(d, d);
+        if (len2 > 1e-12f)
+            return v3_scale(d, 1.0f / sqrtf(len2));
+    }
+    return v3(axis[0], axis[1], axis[2]);
+}
 
 #ifdef __cplusplus
 }

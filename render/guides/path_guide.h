@@ -74,7 +74,7 @@ typedef struct GuideHit {
  * integrator's, the rest the guide's (`state`, its own layout). Plain data:
  * the integrator copies it where the path splits and where it keeps a
  * record for learn(). */
-#define GUIDE_VERTEX_STATE 112
+#define GUIDE_VERTEX_STATE 128
 typedef struct GuideVertex {
     Bsdf bsdf;         /* the material's BSDF; bsdf.lobe.n is the shading normal */
     /* set by vertex_begin */
@@ -99,6 +99,7 @@ typedef struct BounceOutcome {
                         * luminance of its throughput */
     bool bounced;      /* a direction above the surface was drawn */
     bool cut;          /* the roulette cut the path here, before the bounce */
+    float distance;    /* how far the bounce's ray went to the next surface (INFINITY: none) */
 } BounceOutcome;
 
 /* What a guide tells of the coming pass. */
