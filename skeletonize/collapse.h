@@ -30,8 +30,8 @@ typedef struct SgCollapseResult {
  * vertex (i,j,k), 0 elsewhere). An isolated edge joins the constraint set
  * when lifespan > filter_scale x opening (1: [Cha10]). parallel_grain > 0:
  * the collapse runs on `threads` threads (<= 0: every core); 0: on one.
- * slab_planes: the z planes per slab of the temporal blocking (0: about
- * 256 KB of lattice; at least 2). The result is the same for any. */
+ * slab_planes: the z planes per slab of the temporal blocking (0: two, the
+ * fewest). The result is the same for any. */
 bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
                  const uint16_t *dist8, const uint16_t *open8, double filter_scale,
                  int threads, uint32_t parallel_grain, uint32_t slab_planes, SgProgress *progress,

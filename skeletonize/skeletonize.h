@@ -54,10 +54,10 @@ typedef struct SgSkeletonOptions {
                                result; default SG_SKELETON_PARALLEL_GRAIN, the
                                value no longer matters); 0: the collapse runs
                                on one thread: skeletonize --serial-collapse */
-    uint32_t collapse_slab_planes; /* the collapse's slabs of z planes: 0 about
-                               256 KB of lattice each (default), n >= 2 n
-                               planes, more than the grid's one slab; same
-                               result (the tests compare them) */
+    uint32_t collapse_slab_planes; /* the collapse's slabs of z planes: 0 two
+                               (default), n >= 2 n planes, more than the
+                               grid's: one slab; same result (the tests
+                               compare them) */
     double filter_scale;    /* the lifespan rule keeps an edge when
                                lifespan > filter_scale x opening; 1 is [Cha10]'s
                                parameter-free rule (default), 0 keeps every
