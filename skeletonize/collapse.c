@@ -4,7 +4,7 @@
  * A step runs 18 sub-steps: direction x, y, z; orientation +, -; coface
  * dimension 3, 2, 1. Sub-step s removes, at once, every free pair of its
  * kind that was free when it began (CC09: such pairs cannot interfere).
- * Free faces wait in 18 queues (flat uint32 arrays of cell ids); a face is
+ * Free faces wait in queues (flat uint32 arrays of cell ids); a face is
  * queued when it becomes free, which can only happen when one of its
  * cofaces is removed, so after a removal only the faces of the removed
  * cells are re-tested: each step costs the size of the current border.
@@ -14,14 +14,30 @@
  * "queued" bit per cell. A queued face may stop being free (its coface
  * goes with another face): it is checked again when its sub-step comes.
  *
- * Threads: a large sub-step is verified in parallel (read only), then its
- * pairs are processed by slabs of lattice planes, all even slabs at once,
- * then all odd ones; slabs running together touch disjoint cells, so this
- * is just one of the sequential orders, and no atomics are needed. */
+ * Temporal blocking: the lattice is cut into slabs of z planes, each with
+ * its own queues, and a step runs its 18 sub-steps slab by slab along a
+ * wavefront rather than each over the whole lattice: sub-step s of slab i
+ * comes after sub-step s - 1 of slabs i - 1, i, i + 1 and before sub-step
+ * s + 1 of slabs i - 1 and i + 1. The work for a pair whose face lies in
+ * plane z reads planes z - 2 .. z + 1 and writes z - 1 .. z only, so with
+ * slabs of two planes or more every cell sees the sub-steps around it in
+ * their order (those of one sub-step in some order, which does not change
+ * which pairs it removes: they cannot interfere), and the collapse removes
+ * the same pairs at the same sub-steps as one sweep of the lattice per
+ * sub-step. What it gains: the 18 sub-steps of a step pass over a band of
+ * slabs while its border is in cache, where each used to sweep the border
+ * of the whole lattice (a step's border at resolution 1000 does not fit).
+ *
+ * Threads: slabs two apart touch disjoint planes, so threads take the
+ * ready (slab, sub-step) of lowest wave whose neighbouring slabs are idle;
+ * a slab's queues are filled by itself, the slab below and the slab above
+ * into three separate sets, so no two running slabs push into the same
+ * array. No barrier per sub-step: a thread waits only when no slab is
+ * ready, and the threads meet once a step. The result does not depend on
+ * the threads. */
 #include "collapse.h"
 
 #include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,7 +47,6 @@
 #include "union_find.h"
 
 #define KINDS 18
-#define SORT_BUCKETS 4096
 #define SQUARE_BITS 0x68u /* masks 3, 5, 6 */
 
 typedef struct U32Vec {
@@ -44,20 +59,38 @@ typedef struct EdgeVec {
     size_t n, cap;
 } EdgeVec;
 
-/* Where a pass over removed pairs sends what it finds: the collapse's own
- * queues and lists (sequential), or a worker's (parallel). */
+/* A slab's queues fill from three sources: the slab's own sub-steps (and
+ * the set-up, the cavity breaks), the slab below, the slab above. */
+#define SOURCE_OWN 0
+#define SOURCE_BELOW 1
+#define SOURCE_ABOVE 2
+#define SOURCES 3
+
+typedef struct SlabQueues {
+    U32Vec q[SOURCES][2][KINDS]; /* [source][step parity][kind] */
+} SlabQueues;
+
+#define NO_SLAB SIZE_MAX
+/* A slab's queue for one kind holds a few hundred faces a step; the larger
+ * ones (the whole border at the start) are freed once used. */
+#define QUEUE_KEEP 4096
+
+/* What one thread's work on a (slab, sub-step) writes besides the cells:
+ * the pairs it found, the edges it saw isolated, its counts. */
 typedef struct Sink {
-    U32Vec *cur, *next; /* KINDS queues each */
+    int substep;       /* the running sub-step (the set-up, cavity breaks: the last) */
+    /* where consider() queues a face: the queues of the running slab, of
+     * the one below (cells below `first`), of the one above (from `end`),
+     * each [parity][kind], at slot[kind] (this step or the next) */
+    uint64_t first, end;
+    U32Vec *own, *lower, *upper;
+    uint8_t slot[KINDS];
+    U32Vec pairs;      /* f, g, f, g, ... */
     EdgeVec *noted;
+    EdgeVec own_noted; /* a helper thread's, merged after the step */
+    uint64_t removed, squares_removed;
     bool oom;
 } Sink;
-
-typedef struct Worker {
-    U32Vec pairs;
-    U32Vec cur[KINDS], next[KINDS];
-    EdgeVec noted;
-    Sink sink;
-} Worker;
 
 /* The constraint set is a few cells per skeleton node (anchors and kept
  * edges, 0- and 1-cells), so a small open-addressing set of cell ids
@@ -135,8 +168,6 @@ static bool cell_set_init(CellSet *s)
     return s->slot != NULL;
 }
 
-typedef enum Job { JOB_VERIFY, JOB_EVEN, JOB_ODD, JOB_EXIT } Job;
-
 typedef struct Collapse Collapse;
 typedef struct Helper {
     Collapse *c;
@@ -144,44 +175,41 @@ typedef struct Helper {
 } Helper;
 
 #define MAX_THREADS 8
-/* Slabs of lattice planes processed concurrently are at least this thick
- * and never adjacent: the work for a pair at plane z reads and writes
- * planes z-2..z+1 only. */
-#define SLAB_MIN 8
+/* Slabs hold two planes at least (see the header), and by default two:
+ * the band of slabs a step's wavefront spans (18 slabs) is then the
+ * thinnest, the most likely to stay in cache (Sponza 250 under cachegrind
+ * with a 1 MB last level: 11.2 M misses with slabs of 2 planes, 12.9 M
+ * with slabs of 8). */
+#define SLAB_MIN_PLANES 2
 
 struct Collapse {
     SgComplex *cx;
     uint8_t *cells;
     CellSet cons;       /* the constraint set: lights, camera, kept edges */
     size_t st[3];
-    U32Vec queue_a[KINDS], queue_b[KINDS];
-    U32Vec *cur, *next; /* this step's and next step's queues */
-    U32Vec pairs;       /* f, g, f, g, ... */
-    U32Vec sort_scratch; /* ordering a queue */
-    size_t sort_count[SORT_BUCKETS + 1];
-    uint64_t cell_limit;  /* cell ids are below this */
+    int cur_side;       /* the step's queues: q[cur_side]; the next step's: q[!cur_side] */
+    size_t slab_planes, slab_count;
+    uint64_t slab_cells; /* cell ids per slab */
+    SlabQueues *slabs;
+    SlabQueues staged;  /* the set-up's and the cavity breaks' faces, not yet in their slabs */
     EdgeVec live;       /* isolated edges not yet kept */
     EdgeVec kept;       /* isolated edges in the constraint set */
     const uint16_t *dist8, *open8; /* lattice layout: voxel at its lower corner */
-    int substep;
     int32_t step;
     uint64_t squares, removed, total;
     uint32_t cavities_broken_total, forced_total;
     int64_t filter256;
     bool oom;
-    /* parallel sub-steps */
+    /* threads: the wavefront's state, under `lock` */
     int threads;
-    size_t parallel_grain;
-    Worker *workers;
-    pthread_barrier_t start, end;
-    pthread_mutex_t gate_lock;
-    pthread_cond_t gate;
-    bool gate_open;
-    Job job;
-    const U32Vec *job_queue;
-    size_t slab_planes, slab_count;
-    size_t *slab_start;      /* pairs of slab i: pairs.a[2*slab_start[i] .. 2*slab_start[i+1]) */
-    _Atomic size_t next_slab;
+    Sink *sinks;        /* one per thread */
+    pthread_mutex_t lock;
+    pthread_cond_t changed;
+    uint8_t *done;      /* sub-steps done, per slab, this step */
+    uint8_t *busy;      /* a thread works on the slab */
+    size_t lowest;      /* slabs below have done the step */
+    size_t remaining;   /* (slab, sub-step)s not yet done this step */
+    bool exit;
 };
 
 /* the first capacity of the collapse's growing arrays */
@@ -276,6 +304,9 @@ static inline __attribute__((always_inline)) int free_kind(const Collapse *c, ui
     return axis * 6 + ori * 3 + coface_rank[gm];
 }
 
+/* Queues face h if it is free: for the kind's sub-step this step if that
+ * is still to come, else next step; in the queues of h's slab (the running
+ * slab or one next to it), the set the running slab fills. */
 static inline __attribute__((always_inline)) void consider(const Collapse *c, Sink *sk,
                                                            uint32_t h)
 {
@@ -283,8 +314,44 @@ static inline __attribute__((always_inline)) void consider(const Collapse *c, Si
     int k = free_kind(c, h, &g);
     if (k < 0)
         return;
-    if (!vec_push_u32(k > c->substep ? &sk->cur[k] : &sk->next[k], h))
+    U32Vec *queues = h < sk->first ? sk->lower : h >= sk->end ? sk->upper : sk->own;
+    if (!vec_push_u32(&queues[sk->slot[k]], h))
         sk->oom = true;
+}
+
+/* Points sk at slab i's sub-step s (NO_SLAB: c->staged, for the next step). */
+static void sink_aim(Collapse *c, Sink *sk, size_t i, int s)
+{
+    sk->substep = s;
+    for (int k = 0; k < KINDS; k++)
+        sk->slot[k] = (uint8_t)((k > s ? c->cur_side : !c->cur_side) * KINDS + k);
+    if (i == NO_SLAB) {
+        sk->first = 0;
+        sk->end = UINT64_MAX;
+        sk->own = sk->lower = sk->upper = &c->staged.q[SOURCE_OWN][0][0];
+        return;
+    }
+    sk->first = (uint64_t)i * c->slab_cells;
+    sk->end = sk->first + c->slab_cells;
+    sk->own = &c->slabs[i].q[SOURCE_OWN][0][0];
+    sk->lower = i > 0 ? &c->slabs[i - 1].q[SOURCE_ABOVE][0][0] : NULL;
+    sk->upper = i + 1 < c->slab_count ? &c->slabs[i + 1].q[SOURCE_BELOW][0][0] : NULL;
+}
+
+/* Hands the faces queued by the set-up or a cavity break (next step's, in
+ * c->staged) to their slabs. */
+static void distribute_staged(Collapse *c)
+{
+    int side = !c->cur_side;
+    for (int k = 0; k < KINDS && !c->oom; k++) {
+        U32Vec *q = &c->staged.q[SOURCE_OWN][side][k];
+        for (size_t x = 0; x < q->n; x++) {
+            uint32_t h = q->a[x];
+            u32_push(c, &c->slabs[h / c->slab_cells].q[SOURCE_OWN][side][k], h);
+        }
+        free(q->a);
+        *q = (U32Vec){0};
+    }
 }
 
 /* The faces of a cell (one dimension lower), two per axis it spans: at its
@@ -313,6 +380,12 @@ static inline void consider_faces(const Collapse *c, Sink *sk, uint32_t cell)
         consider(c, sk, faces[i]);
 }
 
+/* An isolated edge's opening is looked up when the lifespan rule first
+ * needs it, at the end of the step it was born in: most such edges are
+ * gone by then (removed with a free vertex), and the lookup was a cache
+ * miss on the opening map, the largest part of noting an edge. */
+#define OPENING_UNKNOWN UINT16_MAX
+
 static uint16_t edge_opening(const Collapse *c, size_t v, unsigned m)
 {
     /* the voxels holding edge (v, m): cubes at v - d, d sharing no axis with m */
@@ -338,7 +411,7 @@ static void note_isolated_edges(const Collapse *c, Sink *sk, uint32_t square)
         unsigned em = edges[i] & 7;
         if (!has(c->cells, w, em) || coface_word(c, w, em) != 0)
             continue; /* gone, or a square is left */
-        SgIsolatedEdge noted = {edges[i], c->step, -1, edge_opening(c, w, em)};
+        SgIsolatedEdge noted = {edges[i], c->step, -1, OPENING_UNKNOWN};
         if (!vec_push_edge(sk->noted, noted))
             sk->oom = true;
     }
@@ -349,17 +422,20 @@ static void remove_cell(const Collapse *c, uint32_t cell)
     c->cells[cell >> 3] &= (uint8_t) ~(1u << (cell & 7));
 }
 
-/* Removes pairs [lo, hi) of c->pairs one by one, noting isolated edges and
- * queueing newly free faces. The pairs were all tested against the complex
- * as the sub-step found it, so removing them in any order gives the same
+
+/* Removes the sink's pairs one by one, noting isolated edges and queueing
+ * newly free faces. The pairs were all tested against the complex as the
+ * sub-step found it, so removing them in any order gives the same
  * complex; noting an edge right after each square goes notes it exactly
  * once (when its last square goes); a face tested too early is tested
  * again when its other coface goes. */
-static void process_pairs(const Collapse *c, Sink *sk, size_t lo, size_t hi)
+static void process_pairs(const Collapse *c, Sink *sk)
 {
-    int coface_dim = 3 - c->substep % 3;
-    for (size_t i = lo; i < hi; i++) {
-        uint32_t f = c->pairs.a[2 * i], g = c->pairs.a[2 * i + 1];
+    int coface_dim = 3 - sk->substep % 3;
+    const uint32_t *pairs = sk->pairs.a;
+    size_t n = sk->pairs.n / 2;
+    for (size_t i = 0; i < n; i++) {
+        uint32_t f = pairs[2 * i], g = pairs[2 * i + 1];
         remove_cell(c, f);
         remove_cell(c, g);
         /* coface_dim 3: each edge of the square f is also an edge of
@@ -369,31 +445,123 @@ static void process_pairs(const Collapse *c, Sink *sk, size_t lo, size_t hi)
         consider_faces(c, sk, g);
         consider_faces(c, sk, f);
     }
+    sk->removed += 2 * n;
+    if (coface_dim >= 2)
+        sk->squares_removed += n;
 }
 
-static void run_job(Collapse *c, int t)
+static bool slab_has_work(const Collapse *c, size_t i, int s)
 {
-    Worker *w = &c->workers[t];
-    if (c->job == JOB_VERIFY) {
-        const U32Vec *q = c->job_queue;
-        size_t lo = q->n * (size_t)t / (size_t)c->threads;
-        size_t hi = q->n * (size_t)(t + 1) / (size_t)c->threads;
-        for (size_t i = lo; i < hi; i++) {
-            uint32_t f = q->a[i], g = 0;
-            if (free_kind(c, f, &g) == c->substep &&
-                (!vec_push_u32(&w->pairs, f) || !vec_push_u32(&w->pairs, g)))
-                w->sink.oom = true;
+    const SlabQueues *sq = &c->slabs[i];
+    for (int source = 0; source < SOURCES; source++)
+        if (sq->q[source][c->cur_side][s].n)
+            return true;
+    return false;
+}
+
+/* Sub-step s of slab i: verify its queued faces against the complex (the
+ * pairs still free of kind s), then remove them. */
+static void run_slab_substep(Collapse *c, Sink *sk, size_t i, int s)
+{
+    sink_aim(c, sk, i, s);
+    sk->pairs.n = 0;
+    SlabQueues *sq = &c->slabs[i];
+    for (int source = 0; source < SOURCES; source++) {
+        U32Vec *q = &sq->q[source][c->cur_side][s];
+        for (size_t x = 0; x < q->n; x++) {
+            uint32_t f = q->a[x], g;
+            if (free_kind(c, f, &g) == s &&
+                (!vec_push_u32(&sk->pairs, f) || !vec_push_u32(&sk->pairs, g)))
+                sk->oom = true;
         }
-        return;
+        q->n = 0;
+        if (q->cap > QUEUE_KEEP) { /* the set-up's surge: do not keep it in every slab */
+            free(q->a);
+            *q = (U32Vec){0};
+        }
     }
-    /* slabs of one parity: any two are separated by a slab of the other */
-    size_t parity = c->job == JOB_ODD;
+    if (!sk->oom)
+        process_pairs(c, sk);
+}
+
+/* One step on one thread: waves w = slab + sub-step upwards, each from
+ * its lowest sub-step (sub-step s of slab i after s - 1 of slab i + 1). */
+static void run_step_serial(Collapse *c)
+{
+    Sink *sk = &c->sinks[0];
+    for (size_t w = 0; w < c->slab_count + KINDS - 1 && !sk->oom; w++)
+        for (int s = 0; s < KINDS && (size_t)s <= w; s++) {
+            size_t i = w - (size_t)s;
+            if (i < c->slab_count && slab_has_work(c, i, s))
+                run_slab_substep(c, sk, i, s);
+        }
+}
+
+/* ---- threads ----------------------------------------------------------- */
+
+/* Slab i may run its next sub-step s when its neighbours are idle, have
+ * done s - 1 and have not done s + 1. */
+static bool slab_ready(const Collapse *c, size_t i)
+{
+    int s = c->done[i];
+    if (s >= KINDS || c->busy[i])
+        return false;
+    if (i > 0 && (c->busy[i - 1] || c->done[i - 1] < s || c->done[i - 1] > s + 1))
+        return false;
+    if (i + 1 < c->slab_count && (c->busy[i + 1] || c->done[i + 1] < s || c->done[i + 1] > s + 1))
+        return false;
+    return true;
+}
+
+/* Under the lock: the ready slab of lowest wave (slab + sub-step), lowest
+ * sub-step first, as the serial order; sub-steps with nothing queued are
+ * done on the spot. NO_SLAB: none ready. */
+static size_t pick_slab(Collapse *c)
+{
     for (;;) {
-        size_t k = atomic_fetch_add(&c->next_slab, 1);
-        size_t slab = 2 * k + parity;
-        if (slab >= c->slab_count)
-            break;
-        process_pairs(c, &w->sink, c->slab_start[slab], c->slab_start[slab + 1]);
+        while (c->lowest < c->slab_count && c->done[c->lowest] == KINDS)
+            c->lowest++;
+        size_t best = NO_SLAB, best_wave = SIZE_MAX;
+        for (size_t i = c->lowest; i < c->slab_count && i <= best_wave; i++) {
+            if (!slab_ready(c, i))
+                continue;
+            size_t wave = i + c->done[i];
+            if (wave < best_wave) {
+                best = i;
+                best_wave = wave;
+            }
+        }
+        if (best == NO_SLAB || slab_has_work(c, best, c->done[best]))
+            return best;
+        c->done[best]++;
+        c->remaining--;
+    }
+}
+
+/* Thread t's share of a step: runs ready slabs until the step is done
+ * (t = 0, the caller) or the collapse ends (helpers). Under the lock. */
+static void work_on_steps(Collapse *c, int t)
+{
+    Sink *sk = &c->sinks[t];
+    for (;;) {
+        if (c->exit || (t == 0 && c->remaining == 0))
+            return;
+        size_t i = pick_slab(c);
+        if (i == NO_SLAB) {
+            if (t == 0 && c->remaining == 0)
+                return;
+            pthread_cond_wait(&c->changed, &c->lock);
+            continue;
+        }
+        int s = c->done[i];
+        c->busy[i] = 1;
+        pthread_mutex_unlock(&c->lock);
+        run_slab_substep(c, sk, i, s);
+        pthread_mutex_lock(&c->lock);
+        c->busy[i] = 0;
+        c->done[i]++;
+        c->remaining--;
+        pthread_cond_broadcast(&c->changed);
     }
 }
 
@@ -401,172 +569,40 @@ static void *helper_main(void *arg)
 {
     Helper *h = arg;
     Collapse *c = h->c;
-    pthread_mutex_lock(&c->gate_lock);
-    while (!c->gate_open)
-        pthread_cond_wait(&c->gate, &c->gate_lock);
-    pthread_mutex_unlock(&c->gate_lock);
-    for (;;) {
-        pthread_barrier_wait(&c->start);
-        if (c->job == JOB_EXIT)
-            break;
-        run_job(c, h->t);
-        pthread_barrier_wait(&c->end);
-    }
+    pthread_mutex_lock(&c->lock);
+    work_on_steps(c, h->t);
+    pthread_mutex_unlock(&c->lock);
     return NULL;
 }
 
-static void run_parallel(Collapse *c, Job job)
+static void run_step_parallel(Collapse *c)
 {
-    c->job = job;
-    atomic_store(&c->next_slab, 0);
-    pthread_barrier_wait(&c->start);
-    run_job(c, 0);
-    pthread_barrier_wait(&c->end);
+    pthread_mutex_lock(&c->lock);
+    memset(c->done, 0, c->slab_count);
+    c->lowest = 0;
+    c->remaining = c->slab_count * KINDS;
+    pthread_cond_broadcast(&c->changed);
+    work_on_steps(c, 0);
+    pthread_mutex_unlock(&c->lock);
 }
 
-static bool append_u32(U32Vec *dst, U32Vec *src)
+/* Runs step c->step (its queues on c->cur_side), then gathers what the
+ * threads found. */
+static void run_step(Collapse *c)
 {
-    if (src->n == 0)
-        return true;
-    if (!sg_reserve((void **)&dst->a, &dst->cap, dst->n + src->n, sizeof *dst->a, VEC_FIRST))
-        return false;
-    memcpy(dst->a + dst->n, src->a, src->n * sizeof *src->a);
-    dst->n += src->n;
-    src->n = 0;
-    if (src->cap > (1u << 16)) { /* a worker's copy of a large queue: do not keep it */
-        free(src->a);
-        *src = (U32Vec){0};
-    }
-    return true;
-}
-
-/* The sub-step on the worker threads: verify (read only), sort the pairs
- * into slabs of lattice planes, then process even slabs concurrently and
- * odd slabs concurrently. Slabs running together touch disjoint cells, so
- * this is one of the sequential orders; queues get the same sets (in
- * another order), and the collapse depends on the sets only: the result
- * does not depend on the threads. */
-static void run_substep_parallel(Collapse *c, U32Vec *q)
-{
-    c->job_queue = q;
-    run_parallel(c, JOB_VERIFY);
-    q->n = 0;
-    size_t total = 0;
+    if (c->threads > 1)
+        run_step_parallel(c);
+    else
+        run_step_serial(c);
     for (int t = 0; t < c->threads; t++) {
-        c->oom |= c->workers[t].sink.oom;
-        total += c->workers[t].pairs.n;
-    }
-    if (c->oom || !sg_reserve((void **)&c->pairs.a, &c->pairs.cap, total, sizeof *c->pairs.a, VEC_FIRST)) {
-        c->oom = true;
-        return;
-    }
-    /* counting sort of the pairs by the slab of their face's plane */
-    size_t *start = c->slab_start;
-    memset(start, 0, (c->slab_count + 1) * sizeof *start);
-    for (int t = 0; t < c->threads; t++) {
-        const U32Vec *p = &c->workers[t].pairs;
-        for (size_t i = 0; i < p->n; i += 2)
-            start[(p->a[i] >> 3) / c->st[2] / c->slab_planes + 1]++;
-    }
-    for (size_t i = 1; i <= c->slab_count; i++)
-        start[i] += start[i - 1];
-    for (int t = 0; t < c->threads; t++) {
-        U32Vec *p = &c->workers[t].pairs;
-        for (size_t i = 0; i < p->n; i += 2) {
-            size_t at = start[(p->a[i] >> 3) / c->st[2] / c->slab_planes]++;
-            c->pairs.a[2 * at] = p->a[i];
-            c->pairs.a[2 * at + 1] = p->a[i + 1];
-        }
-        p->n = 0;
-        if (p->cap > (1u << 16)) {
-            free(p->a);
-            *p = (U32Vec){0};
-        }
-    }
-    for (size_t i = c->slab_count; i > 0; i--) /* back to slab starts */
-        start[i] = start[i - 1];
-    start[0] = 0;
-    c->pairs.n = total;
-    run_parallel(c, JOB_EVEN);
-    run_parallel(c, JOB_ODD);
-    c->removed += total;
-    if (3 - c->substep % 3 >= 2)
-        c->squares -= total / 2;
-    for (int t = 0; t < c->threads && !c->oom; t++) {
-        Worker *w = &c->workers[t];
-        c->oom |= w->sink.oom;
-        for (int k = 0; k < KINDS && !c->oom; k++)
-            if (!append_u32(&c->cur[k], &w->cur[k]) || !append_u32(&c->next[k], &w->next[k]))
-                c->oom = true;
-        for (size_t i = 0; i < w->noted.n && !c->oom; i++)
-            edge_push(c, &c->live, w->noted.a[i]);
-        w->noted.n = 0;
-    }
-}
-
-/* Orders a queue by windows of cell ids (one counting pass on the high
- * bits: SORT_BUCKETS windows over the lattice), so that the sub-step walks
- * the border in memory order: a queue gathers the faces freed by up to 18
- * earlier sub-steps, each in its own sweep of the grid, and on a grid
- * larger than the cache every sweep reloads the lines the others loaded.
- * Within a window (a few lattice rows) the order is left as it came: the
- * window's cells stay in cache, and a full sort took three passes. The
- * result depends on the queue's set only (header). */
-static void sort_queue(Collapse *c, U32Vec *q)
-{
-    if (q->n < 4096)
-        return;
-    if (!sg_reserve((void **)&c->sort_scratch.a, &c->sort_scratch.cap, q->n, sizeof *q->a, VEC_FIRST))
-        return; /* unsorted is still correct */
-    int shift = 0;
-    while ((c->cell_limit >> shift) >= SORT_BUCKETS)
-        shift++;
-    const uint32_t *from = q->a;
-    uint32_t *to = c->sort_scratch.a;
-    size_t *count = c->sort_count;
-    memset(count, 0, (SORT_BUCKETS + 1) * sizeof *count);
-    for (size_t i = 0; i < q->n; i++)
-        count[(from[i] >> shift) + 1]++;
-    for (int b = 0; b < SORT_BUCKETS; b++)
-        count[b + 1] += count[b];
-    for (size_t i = 0; i < q->n; i++)
-        to[count[from[i] >> shift]++] = from[i];
-    U32Vec sorted = {to, q->n, c->sort_scratch.cap};
-    c->sort_scratch = (U32Vec){q->a, 0, q->cap};
-    *q = sorted;
-}
-
-static void run_substep(Collapse *c, int s)
-{
-    c->substep = s;
-    U32Vec *q = &c->cur[s];
-    sort_queue(c, q);
-    if (c->threads > 1 && q->n >= c->parallel_grain) {
-        run_substep_parallel(c, q);
-    } else {
-        c->pairs.n = 0;
-        for (size_t i = 0; i < q->n; i++) {
-            uint32_t f = q->a[i], g;
-            if (free_kind(c, f, &g) == s) {
-                u32_push(c, &c->pairs, f);
-                u32_push(c, &c->pairs, g);
-            }
-        }
-        q->n = 0;
-        if (c->oom)
-            return;
-        size_t n = c->pairs.n / 2;
-        c->removed += 2 * n;
-        if (3 - s % 3 >= 2)
-            c->squares -= n;
-        Sink sink = {c->cur, c->next, &c->live, false};
-        process_pairs(c, &sink, 0, n);
-        c->oom |= sink.oom;
-    }
-    if (q->cap > (1u << 16)) { /* the border moves on: do not keep the slack */
-        free(q->a);
-        q->a = NULL;
-        q->cap = 0;
+        Sink *sk = &c->sinks[t];
+        c->oom |= sk->oom;
+        c->removed += sk->removed;
+        c->squares -= sk->squares_removed;
+        sk->removed = sk->squares_removed = 0;
+        for (size_t i = 0; t > 0 && i < sk->own_noted.n; i++)
+            edge_push(c, &c->live, sk->own_noted.a[i]);
+        sk->own_noted.n = 0;
     }
 }
 
@@ -587,6 +623,8 @@ static void apply_lifespan_rule(Collapse *c)
         unsigned m = e.cell & 7;
         if (!has(c->cells, v, m))
             continue;
+        if (e.open8 == OPENING_UNKNOWN)
+            e.open8 = edge_opening(c, v, m);
         if ((int64_t)(c->step - e.birth) * 8 * 256 > (int64_t)e.open8 * c->filter256) {
             if (!cell_set_add(&c->cons, e.cell))
                 c->oom = true;
@@ -692,7 +730,8 @@ static uint32_t space_region(const Collapse *c, SgRowRuns *r, size_t v)
  * forced break, which adds a loop. */
 static bool break_cavities(Collapse *c)
 {
-    Sink sink = {c->cur, c->next, &c->live, false};
+    Sink *sink = &c->sinks[0];
+    sink_aim(c, sink, NO_SLAB, KINDS - 1); /* everything freed now waits for the next step */
     SgComplex *cx = c->cx;
     U32Vec squares = {0};
     for (size_t v = 0; v < cx->vertex_count; v++) {
@@ -728,7 +767,6 @@ static bool break_cavities(Collapse *c)
         order[i] = thin << 32 | (uint64_t)i;
     }
     qsort(order, n, sizeof *order, compare_u64);
-    c->substep = KINDS - 1; /* everything freed now waits for the next step */
     uint32_t broken = 0;
     for (size_t j = 0; j < n; j++) {
         size_t i = (size_t)(order[j] & 0xffffffffu);
@@ -738,8 +776,8 @@ static bool break_cavities(Collapse *c)
         c->squares--;
         c->removed++;
         broken++;
-        note_isolated_edges(c, &sink, squares.a[i]);
-        consider_faces(c, &sink, squares.a[i]);
+        note_isolated_edges(c, sink, squares.a[i]);
+        consider_faces(c, sink, squares.a[i]);
     }
     c->cavities_broken_total += broken;
     if (broken == 0 && n > 0) {
@@ -748,10 +786,11 @@ static bool break_cavities(Collapse *c)
         c->squares--;
         c->removed++;
         c->forced_total++;
-        note_isolated_edges(c, &sink, squares.a[i]);
-        consider_faces(c, &sink, squares.a[i]);
+        note_isolated_edges(c, sink, squares.a[i]);
+        consider_faces(c, sink, squares.a[i]);
     }
-    ok = !c->oom && !sink.oom;
+    distribute_staged(c);
+    ok = !c->oom && !sink->oom;
 done:
     free(squares.a);
     free(side);
@@ -787,7 +826,7 @@ static int popcount8(unsigned x)
 
 bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
                  const uint16_t *dist8, const uint16_t *open8, double filter_scale,
-                 int threads, uint32_t parallel_grain, SgProgress *progress,
+                 int threads, uint32_t parallel_grain, uint32_t slab_planes, SgProgress *progress,
                  SgCollapseResult *result, SgError *err)
 {
     memset(result, 0, sizeof *result);
@@ -795,16 +834,12 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
     pthread_t ids[MAX_THREADS];
     int started = 0;
     Collapse c = {.cx = cx, .cells = cx->cells, .dist8 = dist8, .open8 = open8};
-    pthread_mutex_init(&c.gate_lock, NULL);
-    pthread_cond_init(&c.gate, NULL);
-    atomic_init(&c.next_slab, 0);
+    pthread_mutex_init(&c.lock, NULL);
+    pthread_cond_init(&c.changed, NULL);
     /* the rule compares 8 x lifespan with scale x (8 x opening): in 1/256 */
     c.filter256 = filter_scale >= 0 && filter_scale < 1e6 ? (int64_t)(filter_scale * 256 + 0.5) : 256;
     for (int a = 0; a < 3; a++)
         c.st[a] = cx->stride[a];
-    c.cur = c.queue_a;
-    c.next = c.queue_b;
-    c.cell_limit = (uint64_t)cx->vertex_count * 8;
     bool ok = false;
     if (!cell_set_init(&c.cons)) {
         c.oom = true;
@@ -816,51 +851,41 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
             goto done;
         }
 
-    /* worker threads for large sub-steps: slabs of at least SLAB_MIN
-     * planes, about 8 per thread for balance */
-    c.parallel_grain = parallel_grain;
+    /* slabs: SLAB_MIN_PLANES unless told, no more than the lattice */
+    c.slab_planes = slab_planes;
+    if (c.slab_planes < SLAB_MIN_PLANES)
+        c.slab_planes = SLAB_MIN_PLANES;
+    if (c.slab_planes > (size_t)cx->lz)
+        c.slab_planes = (size_t)cx->lz;
+    c.slab_count = ((size_t)cx->lz + c.slab_planes - 1) / c.slab_planes;
+    c.slab_cells = (uint64_t)c.slab_planes * c.st[2] * 8;
     c.threads = parallel_grain ? sg_thread_count(threads) : 1;
     if (c.threads > MAX_THREADS)
         c.threads = MAX_THREADS;
-    c.slab_planes = (size_t)cx->lz / (8 * (size_t)c.threads);
-    if (c.slab_planes < SLAB_MIN)
-        c.slab_planes = SLAB_MIN;
-    c.slab_count = ((size_t)cx->lz + c.slab_planes - 1) / c.slab_planes;
     if (c.slab_count < 4)
         c.threads = 1; /* too thin to split */
-    if (c.threads > 1) {
-        c.workers = calloc((size_t)c.threads, sizeof *c.workers);
-        c.slab_start = calloc(c.slab_count + 1, sizeof *c.slab_start);
-        if (!c.workers || !c.slab_start) {
-            c.oom = true;
-            goto done;
-        }
-        for (int t = 0; t < c.threads; t++) {
-            Worker *w = &c.workers[t];
-            w->sink = (Sink){w->cur, w->next, &w->noted, false};
-        }
-        /* helpers wait at the gate until the barriers are sized to the
-         * threads that really started */
-        for (int t = 1; t < c.threads; t++) {
-            helpers[t] = (Helper){&c, t};
-            if (pthread_create(&ids[t], NULL, helper_main, &helpers[t]) != 0)
-                break;
-            started = t;
-        }
-        c.threads = started + 1;
-        if (started > 0) {
-            pthread_barrier_init(&c.start, NULL, (unsigned)c.threads);
-            pthread_barrier_init(&c.end, NULL, (unsigned)c.threads);
-        }
-        pthread_mutex_lock(&c.gate_lock);
-        c.gate_open = true;
-        pthread_cond_broadcast(&c.gate);
-        pthread_mutex_unlock(&c.gate_lock);
+    c.slabs = calloc(c.slab_count, sizeof *c.slabs);
+    c.sinks = calloc((size_t)c.threads, sizeof *c.sinks);
+    c.done = malloc(c.slab_count);
+    c.busy = calloc(c.slab_count, 1);
+    if (!c.slabs || !c.sinks || !c.done || !c.busy) {
+        c.oom = true;
+        goto done;
     }
+    memset(c.done, KINDS, c.slab_count); /* no step open */
+    for (int t = 0; t < c.threads; t++)
+        c.sinks[t].noted = t == 0 ? &c.live : &c.sinks[t].own_noted;
+    for (int t = 1; t < c.threads; t++) {
+        helpers[t] = (Helper){&c, t};
+        if (pthread_create(&ids[t], NULL, helper_main, &helpers[t]) != 0)
+            break;
+        started = t;
+    }
+    c.threads = started + 1;
 
     /* the first free faces: only vertices next to the outside of the medium */
-    c.substep = KINDS - 1;
-    Sink sink = {c.cur, c.next, &c.live, false};
+    Sink *sink = &c.sinks[0];
+    sink_aim(&c, sink, NO_SLAB, KINDS - 1); /* for the first step */
     for (int z = 0; z <= cx->nz; z++) {
         for (int y = 0; y <= cx->ny; y++) {
             size_t v = sg_complex_vertex(cx, 0, y, z);
@@ -874,10 +899,11 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
                     continue;
                 for (unsigned m = 0; m < 7; m++)
                     if (bits >> m & 1)
-                        consider(&c, &sink, (uint32_t)(v * 8 + m));
+                        consider(&c, sink, (uint32_t)(v * 8 + m));
             }
         }
-        if (c.oom || sink.oom) {
+        distribute_staged(&c); /* plane by plane: the border is large at the start */
+        if (c.oom || sink->oom) {
             c.oom = true;
             goto done;
         }
@@ -887,8 +913,10 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
         progress->total = c.total; /* cells removed / cells at the start */
     for (;;) {
         bool any = false;
-        for (int k = 0; k < KINDS; k++)
-            any |= c.next[k].n > 0;
+        for (size_t i = 0; i < c.slab_count && !any; i++)
+            for (int source = 0; source < SOURCES; source++)
+                for (int k = 0; k < KINDS; k++)
+                    any |= c.slabs[i].q[source][!c.cur_side][k].n > 0;
         if (!any) {
             if (c.squares == 0)
                 break;
@@ -897,11 +925,8 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
             continue;
         }
         c.step++;
-        U32Vec *t = c.cur;
-        c.cur = c.next;
-        c.next = t;
-        for (int s = 0; s < KINDS && !c.oom; s++)
-            run_substep(&c, s);
+        c.cur_side = !c.cur_side;
+        run_step(&c);
         if (c.oom)
             goto done;
         apply_lifespan_rule(&c);
@@ -921,9 +946,14 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
     size_t w = 0;
     for (size_t i = 0; i < c.kept.n; i++)
         result->edges[w++] = c.kept.a[i];
-    for (size_t i = 0; i < c.live.n; i++)
-        if (has(c.cells, c.live.a[i].cell >> 3, c.live.a[i].cell & 7))
-            result->edges[w++] = c.live.a[i];
+    for (size_t i = 0; i < c.live.n; i++) {
+        SgIsolatedEdge e = c.live.a[i];
+        if (!has(c.cells, e.cell >> 3, e.cell & 7))
+            continue;
+        if (e.open8 == OPENING_UNKNOWN) /* noted by the last cavity break */
+            e.open8 = edge_opening(&c, e.cell >> 3, e.cell & 7);
+        result->edges[w++] = e;
+    }
     qsort(result->edges, w, sizeof *result->edges, compare_edge_cell);
     result->edge_count = w;
     for (size_t i = 1; i < w; i++)
@@ -938,34 +968,31 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
     ok = true;
 done:
     if (started > 0) {
-        c.job = JOB_EXIT;
-        pthread_barrier_wait(&c.start);
+        pthread_mutex_lock(&c.lock);
+        c.exit = true;
+        pthread_cond_broadcast(&c.changed);
+        pthread_mutex_unlock(&c.lock);
         for (int t = 1; t <= started; t++)
             pthread_join(ids[t], NULL);
-        pthread_barrier_destroy(&c.start);
-        pthread_barrier_destroy(&c.end);
     }
-    pthread_mutex_destroy(&c.gate_lock);
-    pthread_cond_destroy(&c.gate);
-    if (c.workers) {
-        for (int t = 0; t < c.threads; t++) {
-            Worker *wk = &c.workers[t];
-            free(wk->pairs.a);
-            for (int k = 0; k < KINDS; k++) {
-                free(wk->cur[k].a);
-                free(wk->next[k].a);
-            }
-            free(wk->noted.a);
-        }
+    pthread_mutex_destroy(&c.lock);
+    pthread_cond_destroy(&c.changed);
+    for (size_t i = 0; c.slabs && i < c.slab_count; i++)
+        for (int side = 0; side < 2; side++)
+            for (int source = 0; source < SOURCES; source++)
+                for (int k = 0; k < KINDS; k++)
+                    free(c.slabs[i].q[source][side][k].a);
+    free(c.slabs);
+    for (int side = 0; side < 2; side++)
+        for (int k = 0; k < KINDS; k++)
+            free(c.staged.q[SOURCE_OWN][side][k].a);
+    for (int t = 0; c.sinks && t < c.threads; t++) {
+        free(c.sinks[t].pairs.a);
+        free(c.sinks[t].own_noted.a);
     }
-    free(c.workers);
-    free(c.slab_start);
-    for (int k = 0; k < KINDS; k++) {
-        free(c.queue_a[k].a);
-        free(c.queue_b[k].a);
-    }
-    free(c.pairs.a);
-    free(c.sort_scratch.a);
+    free(c.sinks);
+    free(c.done);
+    free(c.busy);
     free(c.live.a);
     free(c.kept.a);
     free(c.cons.slot);

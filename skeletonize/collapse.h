@@ -28,12 +28,13 @@ typedef struct SgCollapseResult {
  * lists cell ids that are never removed. dist8/open8 are the medium's
  * distance and opening in lattice layout (voxel (i,j,k) at the index of
  * vertex (i,j,k), 0 elsewhere). An isolated edge joins the constraint set
- * when lifespan > filter_scale x opening (1: [Cha10]). Sub-steps with at
- * least parallel_grain queued faces (0: none) run on `threads` threads
- * (<= 0: every core); the result is the same. */
+ * when lifespan > filter_scale x opening (1: [Cha10]). parallel_grain > 0:
+ * the collapse runs on `threads` threads (<= 0: every core); 0: on one.
+ * slab_planes: the z planes per slab of the temporal blocking (0: two, the
+ * fewest). The result is the same for any. */
 bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
                  const uint16_t *dist8, const uint16_t *open8, double filter_scale,
-                 int threads, uint32_t parallel_grain, SgProgress *progress,
+                 int threads, uint32_t parallel_grain, uint32_t slab_planes, SgProgress *progress,
                  SgCollapseResult *result, SgError *err);
 void sg_collapse_result_release(SgCollapseResult *r);
 

@@ -50,13 +50,14 @@ typedef struct SgSkeletonOptions {
     bool camera_constraint; /* the camera's voxel joins the constraint set */
     int threads;            /* <= 0: every core */
     bool progress;          /* progress line on a terminal (stderr) */
-    uint32_t parallel_grain; /* n > 0: the collapse's sub-steps with at least
-                               n queued faces run on the threads (same result;
-                               default SG_SKELETON_PARALLEL_GRAIN); 0: the
-                               collapse runs on one thread. On a machine busy
-                               with other work the parallel sub-steps can be
-                               slower (barriers wait for a descheduled
-                               thread): skeletonize --serial-collapse */
+    uint32_t parallel_grain; /* > 0: the collapse runs on the threads (same
+                               result; default SG_SKELETON_PARALLEL_GRAIN, the
+                               value no longer matters); 0: the collapse runs
+                               on one thread: skeletonize --serial-collapse */
+    uint32_t collapse_slab_planes; /* the collapse's slabs of z planes: 0 two
+                               (default), n >= 2 n planes, more than the
+                               grid's: one slab; same result (the tests
+                               compare them) */
     double filter_scale;    /* the lifespan rule keeps an edge when
                                lifespan > filter_scale x opening; 1 is [Cha10]'s
                                parameter-free rule (default), 0 keeps every

@@ -18,10 +18,13 @@ static SgSkeletonOptions quiet_options(int threads)
     sg_skeleton_options_default(&o);
     o.progress = false;
     o.threads = threads;
-    /* every collapse sub-step on the threads, however small, so that the
-     * tests cover the parallel path; deterministic_across_threads compares
-     * it with the sequential one */
+    /* the collapse on the threads, in slabs of two planes (the thinnest:
+     * most work crosses a slab's border), so that small shapes cover the
+     * blocked and parallel paths; deterministic_across_threads and
+     * blocked_collapse_matches_one_sweep compare them with the sequential
+     * sweep */
     o.parallel_grain = 1;
+    o.collapse_slab_planes = 2;
     return o;
 }
 
@@ -252,8 +255,8 @@ Test(skeleton, unfiltered_skeleton_is_hairy)
 }
 
 /* Results do not depend on the thread count (distance transform,
- * opening, complex build and, with grain 1, every collapse sub-step run on
- * threads), on shapes with loops, cavities and constraints. */
+ * opening, complex build and the collapse's slabs run on threads), on
+ * shapes with loops, cavities and constraints. */
 Test(skeleton, deterministic_across_threads)
 {
     SgShape shapes[] = {SG_SHAPE_RING_LAMP, SG_SHAPE_THREE_PILLARS, SG_SHAPE_SHELL, SG_SHAPE_TWO_ROOMS};
@@ -277,6 +280,53 @@ Test(skeleton, deterministic_across_threads)
         cr_expect_eq(st[0].steps, st[1].steps);
         sg_skeleton_release(&s[0]);
         sg_skeleton_release(&s[1]);
+        sg_shape_medium_free(&m);
+    }
+}
+
+/* The collapse in slabs (a wavefront of sub-steps over slabs of z planes,
+ * on one or two threads) removes the same pairs at the same sub-steps as
+ * one sweep of the whole lattice per sub-step (a single slab): the same
+ * skeleton, to the byte, on shapes with loops, cavities and noise. */
+Test(skeleton, blocked_collapse_matches_one_sweep)
+{
+    SgShape shapes[] = {SG_SHAPE_RING_LAMP, SG_SHAPE_THREE_PILLARS, SG_SHAPE_SHELL, SG_SHAPE_TWO_ROOMS};
+    struct {
+        int threads;
+        uint32_t planes;
+    } runs[] = {{1, 1u << 30}, {1, 2}, {2, 2}, {2, 3}, {1, 5}};
+    size_t run_count = sizeof runs / sizeof runs[0];
+    for (size_t i = 0; i < sizeof shapes / sizeof shapes[0]; i++) {
+        SgMedium m;
+        cr_assert(sg_shape_medium(shapes[i], 2, &m));
+        sg_shape_roughen(&m, 0.2, 91);
+        const char *name = sg_shape_info(shapes[i])->name;
+        SgSkeleton one_sweep;
+        SgSkeletonStats one_sweep_stats;
+        for (size_t r = 0; r < run_count; r++) {
+            SgSkeletonOptions o = quiet_options(runs[r].threads);
+            o.collapse_slab_planes = runs[r].planes;
+            SgSkeleton s;
+            SgSkeletonStats st;
+            SgError err = {0};
+            cr_assert(sg_skeletonize(&m, &o, r == 0 ? &one_sweep : &s,
+                                     r == 0 ? &one_sweep_stats : &st, &err), "%s", err.message);
+            if (r == 0)
+                continue;
+            cr_assert_eq(s.node_count, one_sweep.node_count, "%s, %u planes, %d threads", name,
+                         runs[r].planes, runs[r].threads);
+            cr_assert_eq(s.edge_count, one_sweep.edge_count, "%s", name);
+            cr_expect(!memcmp(s.nodes, one_sweep.nodes, s.node_count * sizeof *s.nodes),
+                      "%s, %u planes, %d threads: nodes differ", name, runs[r].planes,
+                      runs[r].threads);
+            cr_expect(!memcmp(s.edges, one_sweep.edges, s.edge_count * sizeof *s.edges),
+                      "%s, %u planes, %d threads: edges differ", name, runs[r].planes,
+                      runs[r].threads);
+            cr_expect_eq(st.steps, one_sweep_stats.steps, "%s", name);
+            cr_expect_eq(st.cavities_broken, one_sweep_stats.cavities_broken, "%s", name);
+            sg_skeleton_release(&s);
+        }
+        sg_skeleton_release(&one_sweep);
         sg_shape_medium_free(&m);
     }
 }
