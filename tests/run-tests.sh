@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs every Criterion test binary given, then prints one closing line
 # "tests: N passed, N failed" over all of them. Exit status 1 if any failed.
-# SG_TEST_JOBS suites run at once (default: the number of cores): each runs
+# SG_TEST_JOBS suites run at once (default: the number of cores + 1): each runs
 # its own tests in parallel too, but a suite spends much of its time in a
 # few long tests, and another suite fills the cores meanwhile. Each suite's
 # output is kept and printed whole, in the order given, with its time.
@@ -15,7 +15,9 @@ export LSAN_OPTIONS="suppressions=$(cd "$(dirname "$0")" && pwd)/lsan.supp:print
 # the library; render/texture_images.cpp)
 export ASAN_OPTIONS="allocator_may_return_null=1:new_delete_type_mismatch=0${ASAN_OPTIONS:+:$ASAN_OPTIONS}"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1${UBSAN_OPTIONS:+:$UBSAN_OPTIONS}"
-jobs_max=${SG_TEST_JOBS:-$(nproc 2>/dev/null || echo 2)}
+# One more than the cores: a suite that waits (the farm's on its cluster,
+# others on the programs they start) leaves a core to the next.
+jobs_max=${SG_TEST_JOBS:-$(($(nproc 2>/dev/null || echo 2) + 1))}
 work=$(mktemp -d "${TMPDIR:-/tmp}/sg-tests.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 
