@@ -30,10 +30,14 @@ else ifeq ($(SANITIZE),1)
 BUILD ?= build/asan
 SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 OPT := -O1
+# line tables only: a sanitizer's report still names file and line, and
+# the build every make test makes takes 9 s less (86 -> 77 s on 2 cores)
+DEBUG := -g1
 else
 BUILD ?= build/release
 OPT := -O2
 endif
+DEBUG ?= -g
 BIN ?= bin
 ifneq ($(filter 1,$(SANITIZE) $(FUZZ)),)
 BIN := $(BUILD)/bin
@@ -41,8 +45,8 @@ endif
 
 WARN := -Wall -Wextra
 CPPFLAGS += -Icommon -I. -D_GNU_SOURCE -MMD -MP
-CFLAGS += -std=c11 $(OPT) -g $(WARN) $(SANFLAGS) -pthread
-CXXFLAGS += -std=c++17 $(OPT) -g $(WARN) $(SANFLAGS) -pthread -Wno-deprecated-declarations
+CFLAGS += -std=c11 $(OPT) $(DEBUG) $(WARN) $(SANFLAGS) -pthread
+CXXFLAGS += -std=c++17 $(OPT) $(DEBUG) $(WARN) $(SANFLAGS) -pthread -Wno-deprecated-declarations
 LDFLAGS += $(SANFLAGS) -pthread
 LDLIBS := -lembree3 -lopenvdb -ltbb -lassimp -lcjson -ldl \
           -lcriterion -lstdc++ -lm

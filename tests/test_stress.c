@@ -402,8 +402,11 @@ Test(stress, same_image_at_any_unit_and_far_from_origin, .timeout = 240)
     const struct {
         double scale, shift;
         const char *tag;
-    } cases[] = {{1e-4, 0, "tiny"}, {1e5, 0, "huge"}, {1, 1e6, "far"}, {1e-4, 1e6 * 1e-4, "tiny_far"}};
-    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+    } cases[] = {{1e5, 0, "huge"}, {1e-4, 1e6 * 1e-4, "tiny_far"}, {1e-4, 0, "tiny"}, {1, 1e6, "far"}};
+    /* under the sanitizers the two that combine the others (every
+     * extreme's code runs in them) */
+    size_t count = sanitized() ? 2 : sizeof cases / sizeof cases[0];
+    for (size_t c = 0; c < count; c++) {
         char name[64];
         snprintf(name, sizeof name, "%s.json", cases[c].tag);
         Result r = pipeline_ok(dir, base_scene(dir, name, cases[c].scale, cases[c].shift), cases[c].tag,
