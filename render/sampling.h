@@ -149,6 +149,14 @@ static inline SgFoldedLobe sg_folded_lobe(Vec3 a, Vec3 n, float p)
     return (SgFoldedLobe){a, v3_dot(a, n), p, (p + 1.0f) * (0.5f * SG_INV_PI), sg_exponent_squarings(p)};
 }
 
+/* w's cosines with a and with a' = a - 2 (a.n) n, the axis mirrored across
+ * the surface: a'.w = a.w - 2 (a.n)(n.w). */
+static inline void sg_folded_cosines(Vec3 a, Vec3 n, Vec3 w, float *c1, float *c2)
+{
+    *c1 = v3_dot(a, w);
+    *c2 = *c1 - 2.0f * v3_dot(a, n) * v3_dot(w, n);
+}
+
 /* The mirrored axis a' = a - 2 (a.n) n gives a'.w = a.w - 2 (a.n)(n.w). */
 static inline float sg_pdf_folded_lobe_at(const SgFoldedLobe *l, Vec3 w, float wn, float *c1, float *c2)
 {

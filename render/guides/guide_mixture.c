@@ -210,11 +210,8 @@ static void mixture_learn(PathGuide *g, int tile, const GuideVertex *v, const Bo
             rec.position = mv->position;
             rec.distance = o->distance;
             rec.no_skeleton = !mv->skeleton;
-            if (mv->skeleton) {
-                Vec3 a = mv->skeleton_axis;
-                rec.cos_axis = v3_dot(a, d);
-                rec.cos_mirror = rec.cos_axis - 2.0f * v3_dot(a, n) * v3_dot(d, n);
-            }
+            if (mv->skeleton)
+                sg_folded_cosines(mv->skeleton_axis, n, d, &rec.cos_axis, &rec.cos_mirror);
         }
         rec.estimate = o->radiance;
     }

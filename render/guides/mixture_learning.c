@@ -1,5 +1,7 @@
 #include "mixture_learning.h"
 
+#include "../sampling.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -208,7 +210,8 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->point = calloc((size_t)l->region_count * 4, sizeof *l->point);
     l->view_point = calloc((size_t)l->region_count * 4, sizeof *l->view_point);
     l->coarse_point = calloc((size_t)l->coarse_count * 4, sizeof *l->coarse_point);
-    if (!l->point || !l->view_point || !l->coarse_point || !l->axis || !l->view_axis || !l->coarse_axis || !l->own_axis || !l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
+    if (!l->point || !l->view_point || !l->coarse_point || !l->axis || !l->view_axis || !l->coarse_axis ||
+        !l->own_axis || !l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
         !l->coarse_touched || !l->stats || !l->coarse || !l->coarse_of || !l->buffers || !l->view_state ||
         !l->view_radiance || !l->changed || !l->flags || !l->seen) {
         sg_mixture_learner_free(l);
@@ -401,10 +404,11 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     st->estimate = v;
     float weight = v * v * rec->pdf;
     float lobe[EXPONENTS];
-    if (rec->no_skeleton)
+    if (rec->no_skeleton) { /* every skeleton candidate draws from the BSDF here */
+        float term = rec->pdf_bsdf > 0.0f ? weight / rec->pdf_bsdf : INFINITY;
         for (int k = 0; k < SKELETON_CANDIDATES; k++)
-            st->term[k] = rec->pdf_bsdf > 0.0f ? weight / rec->pdf_bsdf : INFINITY;
-    else {
+            st->term[k] = term;
+    } else {
         folded_lobe_densities(rec->cos_axis, rec->cos_mirror, lobe);
         for (int k = 0; k < SKELETON_CANDIDATES; k++)
             st->term[k] = candidate_term(k, weight, rec->pdf_bsdf, lobe, l);
@@ -420,13 +424,12 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     }
     if (!has_axis)
         return;
-    float dn = v3_dot(d, rec->normal);
     for (int f = 0; f < FAMILIES; f++) {
         if (f == 1 && !has_point)
             break;
         Vec3 a = f == 0 ? v3(axis[0], axis[1], axis[2]) : sg_mixture_point_axis(point, axis, x);
-        /* the cosines with the lobe's axis and its mirror image across the surface */
-        float c1 = v3_dot(a, d), c2 = c1 - 2.0f * v3_dot(a, rec->normal) * dn;
+        float c1, c2;
+        sg_folded_cosines(a, rec->normal, d, &c1, &c2);
         folded_lobe_densities(c1, c2, lobe);
         for (int k = 0; k < AXIS_CANDIDATES; k++) {
             int c = SKELETON_CANDIDATES + f * AXIS_CANDIDATES + k;
@@ -621,10 +624,8 @@ void sg_mixture_update(SgMixtureLearner *l)
     publish(l);
 }
 
-/* Refits a region's axis on its schedule (AXIS_FIT_FIRST records, then
- * each AXIS_FIT_GROWTH times more, never once settled): the direction of
- * the sum of v d. True when the axis changed; the learned candidates'
- * sums then restart from the records of the next publication on. */
+/* The region's axis or point changed: its learned candidates' sums restart
+ * from the records of the next publication on. */
 static void forget_learned_moments(RegionStats *st, uint32_t generation)
 {
     st->axis_from = generation + 1; /* the records of the passes that use the new axis */
@@ -634,6 +635,9 @@ static void forget_learned_moments(RegionStats *st, uint32_t generation)
     memset(st->axis_moment, 0, sizeof st->axis_moment);
 }
 
+/* Refits a region's axis and point on its schedule (AXIS_FIT_FIRST
+ * records, then each AXIS_FIT_GROWTH times more): the direction of the sum
+ * of v d, the mean of v (x + t d). True when they changed. */
 static bool fit_axis(RegionStats *st, float axis[3], float point[4], uint32_t generation)
 {
     uint64_t due = st->fitted_at ? st->fitted_at * AXIS_FIT_GROWTH : AXIS_FIT_FIRST;
@@ -667,7 +671,7 @@ static void set_axis(SgMixtureLearner *l, uint32_t region, const float axis[3], 
     mark_changed(l, region);
 }
 
-/* A fine region's own fit, once a settling region would not refit. */
+/* A fine region's own fit; a region that has settled keeps the axis it has. */
 static void fit_fine_axis(SgMixtureLearner *l, uint32_t region)
 {
     RegionStats *st = &l->stats[region];
