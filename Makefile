@@ -49,6 +49,7 @@ CFLAGS += -std=c11 $(OPT) $(DEBUG) $(WARN) $(SANFLAGS) -pthread
 CXXFLAGS += -std=c++17 $(OPT) $(DEBUG) $(WARN) $(SANFLAGS) -pthread -Wno-deprecated-declarations
 LDFLAGS += $(SANFLAGS) -pthread
 LDLIBS := -lembree3 -lopenvdb -ltbb -lassimp -lcjson -ldl \
+          -lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 \
           -lcriterion -lstdc++ -lm
 
 # The Open PGL peer (render --sampling openpgl): linked where `make openpgl`
@@ -73,6 +74,8 @@ PROGRAMS := $(addprefix $(BIN)/,$(STEPS))
 IMAGES_CXX := common/image_io.cpp render/texture_images.cpp
 IMAGES_SO := $(BUILD)/libsg_images.so
 IMAGES_OBJ := $(IMAGES_CXX:%.cpp=$(BUILD)/pic/%.o) $(BUILD)/pic/common/error.o $(BUILD)/pic/common/output_file.o
+# EXR through OpenEXR itself, linked in (common/exr_file.h)
+$(BUILD)/common/exr_file.o: CPPFLAGS += -isystem /usr/include/OpenEXR -isystem /usr/include/Imath
 $(BUILD)/common/image_library.o: CPPFLAGS += -DSG_IMAGES_LIBRARY='"$(abspath $(IMAGES_SO))"'
 
 COMMON_C := $(wildcard common/*.c common/*/*.c)

@@ -1,4 +1,6 @@
-// OpenImageIO behind the C header image_io.h: no C++ type crosses it.
+// OpenImageIO behind the C header image_io.h, for every format but EXR
+// (exr_file.cpp: image_io_lazy.c sends each file to one or the other): no
+// C++ type crosses it.
 // Every write goes to a temporary name and is renamed into place.
 #include "image_io.h"
 
@@ -83,19 +85,6 @@ bool check_size(const char *path, int width, int height, const float *rgb, SgErr
 }
 
 } // namespace
-
-extern "C" bool sg_image_write_exr(const char *path, int width, int height, const float *rgb,
-                                   const SgImageAttribute *attributes, int attribute_count,
-                                   SgError *err)
-{
-    if (!check_size(path, width, height, rgb, err))
-        return false;
-    ImageSpec spec(width, height, 3, TypeDesc::FLOAT);
-    spec.attribute("compression", "zip");
-    for (int i = 0; i < attribute_count; i++)
-        spec.attribute(attributes[i].name, attributes[i].value ? attributes[i].value : "");
-    return write_through_temp(path, "openexr", spec, rgb, TypeDesc::FLOAT, err);
-}
 
 extern "C" bool sg_image_write_png(const char *path, int width, int height, const float *rgb,
                                    double exposure, SgError *err)

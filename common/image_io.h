@@ -1,6 +1,7 @@
-/* Image files through OpenImageIO (wrapper: image_io.cpp, loaded on first
- * use through image_io_lazy.c). Images are
- * linear float RGB, row-major from the top-left pixel. */
+/* Image files: EXR through OpenEXR (exr_file.h, linked in), every other
+ * format through OpenImageIO (wrapper: image_io.cpp, loaded on first use;
+ * image_io_lazy.c sends each file to one or the other). Images are linear
+ * float RGB, row-major from the top-left pixel. */
 #ifndef SG_IMAGE_IO_H
 #define SG_IMAGE_IO_H
 
@@ -18,8 +19,9 @@ typedef struct SgImageAttribute {
     const char *value; /* stored as a string attribute */
 } SgImageAttribute;
 
-/* Loads the image library now (it loads on first use: common/image_library.h);
- * false with the cause in err when it cannot be. */
+/* Loads OpenImageIO now (it loads on first use: common/image_library.h),
+ * which PNG and every format but EXR need; false with the cause in err when
+ * it cannot be. */
 bool sg_image_io_ready(SgError *err);
 
 /* Linear float RGB EXR with string attributes (spp, seconds, mode, seed...). */
@@ -29,7 +31,7 @@ bool sg_image_write_exr(const char *path, int width, int height, const float *rg
 /* 8-bit sRGB PNG of rgb * 2^exposure. */
 bool sg_image_write_png(const char *path, int width, int height, const float *rgb,
                         double exposure, SgError *err);
-/* Reads any image OpenImageIO knows as float RGB; caller frees *rgb. */
+/* Reads an EXR, or any image OpenImageIO knows, as float RGB; caller frees *rgb. */
 bool sg_image_read(const char *path, int *width, int *height, float **rgb, SgError *err);
 /* The attribute `name` of an image's header as text (a string attribute as
  * written by sg_image_write_exr, any other type formatted by OpenImageIO)

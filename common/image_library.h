@@ -6,8 +6,9 @@
  * (common/image_io.cpp, render/texture_images.cpp) are built into a shared
  * object of their own, libsg_images.so in the build folder, and the
  * functions of image_io.h and render/texture_images.h open it on first
- * use: a program that never touches an image (skeletonize, a refusal, a
- * scene without image textures) never loads it. SG_IMAGES_LIBRARY names
+ * use: a program that reads and writes only EXR files (common/exr_file.h,
+ * OpenEXR linked in: every render and merge but for a PNG or an image
+ * texture) never loads it. SG_IMAGES_LIBRARY names
  * another copy. */
 #ifndef SG_IMAGE_LIBRARY_H
 #define SG_IMAGE_LIBRARY_H

@@ -416,9 +416,10 @@ int main(int argc, char **argv)
         goto done;
     }
     double exposure = a.has_exposure ? a.exposure : scene->render.exposure;
-    /* the image library now, not after the passes: a render that cannot
-     * write its image says so before it spends its time */
-    if (!sg_image_io_ready(&err))
+    /* OpenImageIO for the PNG now, not after the passes: a render that
+     * cannot write its image says so before it spends its time (the EXR
+     * needs no library loaded) */
+    if (a.png && !sg_image_io_ready(&err))
         goto done;
 
     r = sg_renderer_create(scene, &o, &err);

@@ -12,6 +12,7 @@ checks=(
   "libboost-dev:/usr/include/boost/version.hpp"
   "libtbb-dev:/usr/include/tbb/tbb.h"
   "libopenimageio-dev:/usr/include/OpenImageIO/imageio.h"
+  "libopenexr-dev:/usr/include/OpenEXR/ImfInputFile.h"
   "libassimp-dev:/usr/include/assimp/cimport.h"
   "libcjson-dev:/usr/include/cjson/cJSON.h"
   "libcriterion-dev:/usr/include/criterion/criterion.h"

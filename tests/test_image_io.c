@@ -1,4 +1,4 @@
-/* The OpenImageIO wrapper: EXR round trip with metadata, PNG exposure and
+/* Image files (OpenEXR, and OpenImageIO for the rest): EXR round trip with metadata, PNG exposure and
  * sRGB encoding, errors that name the file, no partial outputs. */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -8,7 +8,9 @@
 #include <unistd.h>
 
 #include "image_io.h"
+#include "image_library.h"
 #include "input_file.h"
+#include "support_files.h"
 
 /* The whole file (the reader the parsers use); the test fails if it cannot be read. */
 static char *read_all(const char *path, size_t *size)
@@ -156,24 +158,79 @@ Test(image_io, errors_name_the_file_and_leave_no_partial_output)
 }
 
 /* OpenImageIO loads on first use (common/image_library.h): without its
- * library an image cannot be written, and the program learns it in one line
- * naming the cause, with no file left. */
-Test(image_io, without_the_image_library_nothing_is_written)
+ * library a PNG cannot be written, and the program learns it in one line
+ * naming the cause, with no file left; an EXR (OpenEXR, linked in) is
+ * written and read all the same, and OpenImageIO is never loaded for it. */
+Test(image_io, without_the_image_library_no_png_but_exr_all_the_same)
 {
     char dir[] = "/tmp/sg-test-nolib-XXXXXX";
     cr_assert_not_null(mkdtemp(dir));
     cr_assert_eq(setenv("SG_IMAGES_LIBRARY", "/nonexistent/libsg_images.so", 1), 0);
-    char path[64];
-    snprintf(path, sizeof path, "%s/a.exr", dir);
+    char png[64], exr[64];
+    snprintf(png, sizeof png, "%s/a.png", dir);
+    snprintf(exr, sizeof exr, "%s/a.exr", dir);
     const float rgb[3] = {1, 2, 3};
+    SgImageAttribute spp = {"spp", "4"};
     SgError err = {0};
+    cr_assert(sg_image_write_exr(exr, 1, 1, rgb, &spp, 1, &err), "%s", err.message);
+    int w, h;
+    float *back = NULL;
+    cr_assert(sg_image_read(exr, &w, &h, &back, &err), "%s", err.message);
+    cr_assert(w == 1 && h == 1 && back[0] == 1 && back[1] == 2 && back[2] == 3);
+    free(back);
+    char value[8];
+    cr_assert(sg_image_read_attribute(exr, "spp", value, sizeof value, &err), "%s", err.message);
+    cr_assert_str_eq(value, "4");
+    unlink(exr);
+
     cr_assert_not(sg_image_io_ready(&err));
     cr_assert(strstr(err.message, "image support") && strstr(err.message, "/nonexistent/libsg_images.so"), "%s",
               err.message);
     cr_assert(strchr(err.message, '\n') == NULL);
     SgError write_err = {0};
-    cr_assert_not(sg_image_write_exr(path, 1, 1, rgb, NULL, 0, &write_err));
+    cr_assert_not(sg_image_write_png(png, 1, 1, rgb, 0.0, &write_err));
     cr_assert_str_eq(write_err.message, err.message);
-    cr_assert_neq(access(path, F_OK), 0, "a file was left");
+    cr_assert_neq(access(png, F_OK), 0, "a file was left");
     rmdir(dir);
+}
+
+/* Our EXR reader (OpenEXR) gives, bit for bit, what OpenImageIO reads from
+ * EXR files others wrote: half floats with PIZ (Tungsten's reference), a
+ * data window away from the origin with alpha, one luminance channel. */
+static void readers_agree(const char *path)
+{
+    typedef bool (*Read)(const char *, int *, int *, float **, SgError *);
+    SgError err = {0};
+    Read oiio_read = (Read)sg_image_library_symbol("sg_image_read", &err);
+    cr_assert_not_null(oiio_read, "%s", err.message);
+    int w, h, ow, oh;
+    float *ours = NULL, *theirs = NULL;
+    cr_assert(sg_image_read(path, &w, &h, &ours, &err), "%s", err.message);
+    cr_assert(oiio_read(path, &ow, &oh, &theirs, &err), "%s", err.message);
+    cr_assert(w == ow && h == oh, "%s: %dx%d, OpenImageIO %dx%d", path, w, h, ow, oh);
+    size_t differ = 0;
+    for (size_t i = 0; i < (size_t)w * h * 3; i++)
+        differ += memcmp(&ours[i], &theirs[i], sizeof(float)) != 0;
+    cr_assert_eq(differ, 0, "%s: %zu of %zu values differ from OpenImageIO's", path, differ, (size_t)w * h * 3);
+    free(ours);
+    free(theirs);
+}
+
+Test(image_io, exr_files_others_wrote_read_as_openimageio_reads_them)
+{
+    const char *tmp = sg_test_tmpdir();
+    char cmd[9000], a[4200], b[4200];
+    snprintf(a, sizeof a, "%s/rgba-half-offset.exr", tmp);
+    snprintf(b, sizeof b, "%s/luminance.exr", tmp);
+    snprintf(cmd, sizeof cmd,
+             "oiiotool --pattern checker:width=3:height=2:color1=0.25,2,7,1:color2=-1,0.5,3e4,0.5 9x7 4 "
+             "--origin +5+3 -d half --compression piz -o %s && "
+             "oiiotool --pattern fill:top=0.1:bottom=9 6x5 1 --chnames Y -d float -o %s",
+             a, b);
+    char err[2048] = "";
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "oiiotool: %s", err);
+    readers_agree(a);
+    readers_agree(b);
+    if (sg_test_have_shared_scenes())
+        readers_agree(sg_test_source_path("../shared/scenes/staircase/TungstenRender.exr"));
 }

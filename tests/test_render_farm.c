@@ -162,10 +162,12 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
 
     /* 3. a shard cancelled while it runs leaves no file; --resume renders it
      * again, and the merge follows */
-    /* long enough that shard 0 is caught running: some 1.2 s of passes in a
-     * release build, as long under the sanitizers (some 3x slower) with
-     * fewer */
-    const int long_spp = getenv("SG_SANITIZED") ? 1600 : 4000;
+    /* long enough that shard 0 is caught running (some 2.5 s of passes
+     * in a release build with two shards on two cores; as long under the
+     * sanitizers with fewer), short enough not to hold up the other
+     * suites: the three other shards, the rerun and the check render all
+     * scale with it */
+    const int long_spp = getenv("SG_SANITIZED") ? 400 : 1200;
     cr_assert_eq(slurm_render(err, "--shards 4 --out %s/farm2 -- --spp %d --size 48x36 --seed 3 >/dev/null", tmp,
                               long_spp), 0,
                  "%s", err);
@@ -181,7 +183,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
             usleep(100000);
     }
     cr_assert(job[0], "shard 0 never ran");
-    usleep(700000); /* well into its passes */
+    usleep(300000); /* into its passes */
     snprintf(cmd, sizeof cmd, "scancel %s", job);
     cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
     /* the merge can no longer run: Slurm drops it (kill-on-invalid-dep);
