@@ -33,12 +33,12 @@ bool sg_image_write_png(const char *path, int width, int height, const float *rg
                         double exposure, SgError *err);
 /* Reads an EXR, or any image OpenImageIO knows, as float RGB; caller frees *rgb. */
 bool sg_image_read(const char *path, int *width, int *height, float **rgb, SgError *err);
-/* The attribute `name` of an image's header as text (a string attribute as
- * written by sg_image_write_exr, any other type formatted by OpenImageIO)
- * into buf; false with the cause in err when the file cannot be opened or
- * has no such attribute. */
+/* The attribute `name` of an EXR file's header as text (a string attribute
+ * as written by sg_image_write_exr, other types as exr_file.h formats
+ * them) into buf; false with the cause in err when the file cannot be
+ * opened, is not an EXR file or has no such attribute. */
 bool sg_image_read_attribute(const char *path, const char *name, char *buf, size_t size, SgError *err);
-/* Every attribute of an image's header as text (each as
+/* Every attribute of an EXR file's header as text (each as
  * sg_image_read_attribute gives it), in the header's order: one allocation
  * holds the *count entries and their strings; the caller frees *attributes.
  * false with the cause in err when the file cannot be read as an image. */

@@ -24,8 +24,6 @@ bool sg_image_io_ready(SgError *err) { return sg_image_library_symbol("sg_image_
 
 typedef bool (*WritePng)(const char *, int, int, const float *, double, SgError *);
 typedef bool (*Read)(const char *, int *, int *, float **, SgError *);
-typedef bool (*ReadAttribute)(const char *, const char *, char *, size_t, SgError *);
-typedef bool (*ReadAttributes)(const char *, SgImageAttribute **, int *, SgError *);
 
 bool sg_image_write_exr(const char *path, int width, int height, const float *rgb,
                         const SgImageAttribute *attributes, int attribute_count, SgError *err)
@@ -65,14 +63,9 @@ bool sg_image_read_attribute(const char *path, const char *name, char *buf, size
 {
     if (size > 0)
         buf[0] = '\0';
-    int kind = exr_or_other(path, err);
-    if (kind < 0)
-        return false;
-    if (kind == 0)
-        CALL(sg_image_read_attribute, ReadAttribute, err, path, name, buf, size, err);
     SgImageAttribute *all;
     int count;
-    if (!sg_exr_read_attributes(path, &all, &count, err))
+    if (!sg_image_read_attributes(path, &all, &count, err))
         return false;
     int found = -1;
     for (int i = 0; i < count && found < 0; i++)
@@ -89,7 +82,7 @@ bool sg_image_read_attributes(const char *path, SgImageAttribute **attributes, i
     *attributes = NULL;
     *count = 0;
     int kind = exr_or_other(path, err);
-    if (kind != 0)
-        return kind > 0 && sg_exr_read_attributes(path, attributes, count, err);
-    CALL(sg_image_read_attributes, ReadAttributes, err, path, attributes, count, err);
+    if (kind == 0)
+        return sg_fail(err, "%s: cannot read: not an OpenEXR file (headers are read from EXR files only)", path);
+    return kind > 0 && sg_exr_read_attributes(path, attributes, count, err);
 }
