@@ -33,8 +33,11 @@ namespace {
 // data window can claim billions (2^28 float RGB pixels are 3 GB).
 constexpr long long max_pixels = 1LL << 28;
 
-bool read_pixels(const char *path, int *width, int *height, std::vector<float> &rgb, SgError *err)
+// The data window as float RGB in one malloc'ed block (*rgb, the caller's
+// to free; NULL on failure).
+bool read_pixels(const char *path, int *width, int *height, float **rgb, SgError *err)
 {
+    *rgb = nullptr;
     try {
         Imf::InputFile in(path);
         const Imath::Box2i dw = in.header().dataWindow();
@@ -51,21 +54,26 @@ bool read_pixels(const char *path, int *width, int *height, std::vector<float> &
                 return sg_fail(err, "%s: cannot read: no channels", path);
             names[0] = names[1] = names[2] = one;
         }
-        rgb.assign((size_t)(w * h * 3), 0.0f);
+        float *pixels = (float *)calloc((size_t)(w * h * 3), sizeof(float));
+        if (!pixels)
+            return sg_fail(err, "%s: out of memory for %lldx%lld pixels", path, w, h);
+        *rgb = pixels;
         Imf::FrameBuffer frame;
         int distinct = names[0] == names[1] ? 1 : 3; // a frame buffer takes a channel once
         for (int c = 0; c < distinct; c++)
-            frame.insert(names[c], Imf::Slice::Make(Imf::FLOAT, rgb.data() + c, dw, 3 * sizeof(float),
+            frame.insert(names[c], Imf::Slice::Make(Imf::FLOAT, pixels + c, dw, 3 * sizeof(float),
                                                     (size_t)w * 3 * sizeof(float)));
         in.setFrameBuffer(frame);
         in.readPixels(dw.min.y, dw.max.y);
         if (distinct == 1)
             for (size_t p = 0; p < (size_t)(w * h); p++)
-                rgb[p * 3 + 1] = rgb[p * 3 + 2] = rgb[p * 3];
+                pixels[p * 3 + 1] = pixels[p * 3 + 2] = pixels[p * 3];
         *width = (int)w;
         *height = (int)h;
         return true;
     } catch (const std::exception &e) {
+        free(*rgb);
+        *rgb = nullptr;
         return sg_fail(err, "%s: cannot read: %s", path, e.what());
     }
 }
@@ -154,11 +162,13 @@ extern "C" bool sg_exr_write(const char *path, int width, int height, const floa
     // The writer does not see every failed write (a full disk while the
     // file's offset table is written in its destructor): the file must read
     // back as written before it takes the target's name.
-    std::vector<float> back;
+    float *back = nullptr;
     int w = 0, h = 0;
     SgError ignored = {};
-    if (!read_pixels(tmp, &w, &h, back, &ignored) || w != width || h != height ||
-        std::memcmp(back.data(), rgb, back.size() * sizeof(float)) != 0) {
+    bool same = read_pixels(tmp, &w, &h, &back, &ignored) && w == width && h == height &&
+                std::memcmp(back, rgb, (size_t)width * height * 3 * sizeof(float)) == 0;
+    free(back);
+    if (!same) {
         std::remove(tmp);
         return sg_fail(err, "%s: cannot write: the file does not read back as written (disk full?)", path);
     }
@@ -167,19 +177,7 @@ extern "C" bool sg_exr_write(const char *path, int width, int height, const floa
 
 extern "C" bool sg_exr_read(const char *path, int *width, int *height, float **rgb, SgError *err)
 {
-    *rgb = nullptr;
-    std::vector<float> pixels;
-    int w = 0, h = 0;
-    if (!read_pixels(path, &w, &h, pixels, err))
-        return false;
-    float *out = (float *)malloc(pixels.size() * sizeof(float));
-    if (!out)
-        return sg_fail(err, "%s: out of memory", path);
-    std::memcpy(out, pixels.data(), pixels.size() * sizeof(float));
-    *width = w;
-    *height = h;
-    *rgb = out;
-    return true;
+    return read_pixels(path, width, height, rgb, err);
 }
 
 extern "C" bool sg_exr_read_attributes(const char *path, SgImageAttribute **attributes, int *count, SgError *err)

@@ -41,7 +41,7 @@ bool sg_image_read_attribute(const char *path, const char *name, char *buf, size
 /* Every attribute of an EXR file's header as text (each as
  * sg_image_read_attribute gives it), in the header's order: one allocation
  * holds the *count entries and their strings; the caller frees *attributes.
- * false with the cause in err when the file cannot be read as an image. */
+ * false with the cause in err when the file cannot be read as an EXR file. */
 bool sg_image_read_attributes(const char *path, SgImageAttribute **attributes, int *count, SgError *err);
 
 #ifdef __cplusplus

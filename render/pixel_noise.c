@@ -23,9 +23,16 @@ typedef struct DeviationStep {
     double n;      /* samples per pixel so far */
     int step;      /* 0: horizontal box, 1: vertical box, 2: relative variance, 3: deviation */
     double eps, relative;
-    double linear; /* k / image_mean^2, the linear MSE's weight */
+    double linear; /* LINEAR_WEIGHT / image_mean^2, the linear MSE's weight */
     double *row_sum;
 } DeviationStep;
+
+/* A pixel's weight in the error the roulette minimizes (pixel_noise.h):
+ * relMSE's, 1 / (I^2 + eps), and the linear MSE's beside it. */
+static inline double pixel_weight(const DeviationStep *d, float mean)
+{
+    return 1.0 / ((double)mean * mean + d->eps) + d->linear;
+}
 
 static void deviation_row(void *vctx, uint64_t row, int thread)
 {
@@ -69,12 +76,12 @@ static void deviation_row(void *vctx, uint64_t row, int thread)
         for (int x = 0; x < w; x++) {
             double m = bounced[x] / n;
             double var = (pn->sum_sq[(size_t)y * w + x] - n * m * m) / (n - 1.0);
-            acc += (var > 0.0 ? var : 0.0) * (1.0 / ((double)mean[x] * mean[x] + d->eps) + d->linear);
+            acc += (var > 0.0 ? var : 0.0) * pixel_weight(d, mean[x]);
         }
         break;
     default:
         for (int x = 0; x < w; x++)
-            mean[x] = (float)sqrt(d->relative / (1.0 / ((double)mean[x] * mean[x] + d->eps) + d->linear));
+            mean[x] = (float)sqrt(d->relative / pixel_weight(d, mean[x]));
     }
     d->row_sum[y] = acc;
 }
