@@ -11,6 +11,7 @@
 #include <stdlib.h>
 
 #include "../render/bsdf.h"
+#include "../render/guides/mixture_learning.h"
 #include "../render/environment.h"
 #include "../render/lights.h"
 #include "../render/sampling.h"
@@ -562,6 +563,30 @@ static void source_case(SgLightSourceKind kind, float radius, uint64_t seed, int
                 sub);
 }
 
+static Vec3 histogram_sample_fn(const void *c, float u0, float u1, float u2)
+{
+    (void)u2;
+    return sg_mixture_histogram_sample(c, u0, u1);
+}
+static float histogram_pdf_fn(const void *c, Vec3 w) { return sg_mixture_histogram_pdf(c, w); }
+
+/* A guided region's learned histogram of directions (equal-area bins):
+ * two bright bins, a gradient, and a row of bins no light came from. */
+static void histogram_case(uint64_t seed, int sub)
+{
+    float cdf[SG_MIXTURE_BINS];
+    double sum = 0.0;
+    for (int b = 0; b < SG_MIXTURE_BINS; b++) {
+        int x = b % SG_MIXTURE_HIST_RES, y = b / SG_MIXTURE_HIST_RES;
+        double w = y == 3 ? 0.0 : 0.1 + 0.05 * x + (b == 37 || b == 200 ? 30.0 : 0.0);
+        cdf[b] = (float)(sum += w);
+    }
+    for (int b = 0; b < SG_MIXTURE_BINS; b++)
+        cdf[b] = (float)(cdf[b] / sum);
+    cdf[SG_MIXTURE_BINS - 1] = 1.0f;
+    assert_chi2("learned histogram", histogram_sample_fn, histogram_pdf_fn, cdf, seed, sub);
+}
+
 #define CHI2_CASES(X) \
     X(cosine_hemisphere_tilted, cosine_hemisphere_tilted_case()) \
     X(cosine_hemisphere_facing_minus_z, cosine_hemisphere_facing_minus_z_case()) \
@@ -594,7 +619,8 @@ static void source_case(SgLightSourceKind kind, float radius, uint64_t seed, int
     X(sky_latlong_map, environment_case(SG_ENVIRONMENT_LATLONG, 32, 16, 28, 16)) \
     X(sky_constant, source_case(SG_LIGHT_INFINITE, 0.0f, 29, 4)) \
     X(sun_disk_10_degrees, source_case(SG_LIGHT_DISTANT, 0.17453f, 30, 32)) \
-    X(sky_through_portal, portal_case(31, 32))
+    X(sky_through_portal, portal_case(31, 32)) \
+    X(learned_histogram, histogram_case(32, 16))
 
 #define CHI2_TEST(name, call) \
     Test(render_sampling, name) { call; }

@@ -31,6 +31,7 @@ typedef struct Mixture {
 typedef struct MixtureVertex {
     ImportanceQuery query;
     SgFoldedLobe lobe; /* the lobe drawn from: the skeleton's or the learned axis's */
+    const float *histogram; /* or the region's learned histogram (its cumulative distribution) */
     SgMixtureCandidate mix;
     uint32_t region;
     bool asked;    /* the guide was queried */
@@ -111,6 +112,7 @@ static void mixture_vertex_begin(PathGuide *g, const GuideHit *h, SgRng *rng, Gu
     mv->mix = x->fixed;
     mv->region = SG_NO_REGION;
     mv->mixture = false;
+    mv->histogram = NULL;
     mv->skeleton = false;
     mv->position = h->p;
     mv->direction = v3(0, 0, 0);
@@ -125,7 +127,11 @@ static void mixture_vertex_begin(PathGuide *g, const GuideHit *h, SgRng *rng, Gu
         lobe_region = state & SG_MIXTURE_STATE_LOBE;
         v->learn = h->may_learn && !(state & SG_MIXTURE_STATE_SETTLED);
         v->rms = sg_mixture_radiance(view, mv->region);
-        if (state & SG_MIXTURE_STATE_AXIS) { /* the region's learned axis or point: no cache query */
+        if ((state & SG_MIXTURE_STATE_AXIS) && mv->mix.learned_histogram) { /* no cache query either */
+            uint32_t e = view->histogram_of[mv->region];
+            mv->mixture = e != SG_NO_REGION;
+            mv->histogram = mv->mixture ? &view->histogram[(size_t)e * SG_MIXTURE_BINS] : NULL;
+        } else if (state & SG_MIXTURE_STATE_AXIS) { /* the region's learned axis or point: no cache query */
             const float *a = &view->axis[3 * (size_t)mv->region];
             Vec3 axis = mv->mix.learned_point ? sg_mixture_point_axis(&view->point[4 * (size_t)mv->region], a, h->p)
                                               : v3(a[0], a[1], a[2]);
@@ -159,6 +165,10 @@ static float mixture_pdf(const GuideVertex *v, Vec3 w, float cos_n)
     const MixtureVertex *mv = mixture_vertex_c(v);
     if (!mv->mixture)
         return guide_bsdf_pdf(v, w, cos_n);
+    if (mv->histogram) {
+        float a = mv->mix.alpha;
+        return a * bsdf_pdf(&v->bsdf, w) + (1.0f - a) * sg_mixture_histogram_pdf(mv->histogram, w);
+    }
     float pdf_bsdf, c1, c2;
     return bsdf_mixture_pdf(&v->bsdf, &mv->lobe, mv->mix.alpha, w, cos_n, &pdf_bsdf, &c1, &c2);
 }
@@ -176,6 +186,14 @@ static Vec3 mixture_sample(GuideVertex *v, const float u[3], float *pdf)
     }
     float alpha = mv->mix.alpha;
     v->by_guide = !(u[0] < alpha);
+    if (mv->histogram) {
+        Vec3 w = v->by_guide ? sg_mixture_histogram_sample(mv->histogram, u[1], u[2])
+                             : bsdf_sample(&v->bsdf, u[0] / alpha, u[1], u[2]);
+        mv->pdf_bsdf = bsdf_pdf(&v->bsdf, w);
+        mv->pdf = *pdf = alpha * mv->pdf_bsdf + (1.0f - alpha) * sg_mixture_histogram_pdf(mv->histogram, w);
+        mv->direction = w;
+        return w;
+    }
     Vec3 w = bsdf_mixture_sample(&v->bsdf, &mv->lobe, alpha, u[0], u[1], u[2]);
     /* with the BSDF's part the learner needs */
     float c1, c2;
@@ -240,7 +258,7 @@ static bool mixture_field_store(const PathGuide *g, FieldBytes *out)
     if (!x->learner)
         return true;
     size_t size = sg_mixture_view_size(x->learner);
-    unsigned char *view = malloc(size);
+    unsigned char *view = size ? malloc(size) : NULL;
     if (!view)
         return false;
     sg_mixture_view_save(x->learner, view);
@@ -308,7 +326,7 @@ static PathGuide *mixture_create(const PathGuideSetup *setup, SgError *err)
     Mixture *x = path_guide_alloc(sizeof *x, &mixture_ops, setup, err);
     if (!x)
         return NULL;
-    x->fixed = (SgMixtureCandidate){o->alpha, o->lobe_exponent, false, false};
+    x->fixed = (SgMixtureCandidate){o->alpha, o->lobe_exponent, false, false, false};
     x->alpha_learned = o->alpha == SG_ALPHA_LEARNED;
     x->roulette_learns = o->roulette == SG_ROULETTE_LEARNED;
     x->pixels = (uint64_t)o->width * (uint64_t)o->height;
@@ -341,6 +359,6 @@ const PathGuideKind guide_mixture_kind = {
              .lobe_exponent = 16.0f,
              .learns = true,
              .learned_roulette = true,
-             .training_passes = 32},
+             .training_passes = 128},
     .create = mixture_create,
 };

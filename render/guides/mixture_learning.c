@@ -1,5 +1,6 @@
 #include "mixture_learning.h"
 
+#include "../environment.h"
 #include "../sampling.h"
 
 #include <math.h>
@@ -8,19 +9,25 @@
 
 /* BSDF alone first: with equal estimates the cheaper, safer choice wins. */
 const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES] = {
-    {1.0f, 16.0f, false, false}, {0.8f, 4.0f, false, false}, {0.8f, 16.0f, false, false},
-    {0.8f, 64.0f, false, false}, {0.6f, 4.0f, false, false}, {0.6f, 16.0f, false, false},
-    {0.6f, 64.0f, false, false}, {0.7f, 4.0f, true, false},  {0.7f, 16.0f, true, false},
-    {0.7f, 64.0f, true, false},  {0.4f, 4.0f, true, false},  {0.4f, 16.0f, true, false},
-    {0.4f, 64.0f, true, false},  {0.7f, 4.0f, true, true},   {0.7f, 16.0f, true, true},
-    {0.7f, 64.0f, true, true},   {0.4f, 4.0f, true, true},   {0.4f, 16.0f, true, true},
-    {0.4f, 64.0f, true, true}};
+    {1.0f, 16.0f, false, false, false}, {0.8f, 4.0f, false, false, false}, {0.8f, 16.0f, false, false, false},
+    {0.8f, 64.0f, false, false, false}, {0.6f, 4.0f, false, false, false}, {0.6f, 16.0f, false, false, false},
+    {0.6f, 64.0f, false, false, false}, {0.7f, 4.0f, true, false, false},  {0.7f, 16.0f, true, false, false},
+    {0.7f, 64.0f, true, false, false},  {0.4f, 4.0f, true, false, false},  {0.4f, 16.0f, true, false, false},
+    {0.4f, 64.0f, true, false, false},  {0.7f, 4.0f, true, true, false},   {0.7f, 16.0f, true, true, false},
+    {0.7f, 64.0f, true, true, false},   {0.4f, 4.0f, true, true, false},   {0.4f, 16.0f, true, true, false},
+    {0.4f, 64.0f, true, true, false},   {0.7f, 16.0f, true, false, true}, {0.45f, 16.0f, true, false, true},
+    {0.2f, 16.0f, true, false, true}};
 #define SKELETON_CANDIDATES SG_MIXTURE_SKELETON_CANDIDATES
-/* the learned candidates come in two families of six: around the learned
- * direction (family 0), toward the learned point (family 1) */
-#define FAMILIES 2
+/* the learned candidates come in families: six around the learned
+ * direction (family 0), six toward the learned point (family 1), three
+ * drawing from the learned histogram (family 2) */
+#define FAMILIES 3
 #define AXIS_CANDIDATES 6
-_Static_assert(SKELETON_CANDIDATES + FAMILIES * AXIS_CANDIDATES == SG_MIXTURE_CANDIDATES, "candidate families");
+#define HISTOGRAM_FAMILY 2
+#define HISTOGRAM_CANDIDATES 3
+_Static_assert(SKELETON_CANDIDATES + HISTOGRAM_FAMILY * AXIS_CANDIDATES + HISTOGRAM_CANDIDATES ==
+                   SG_MIXTURE_CANDIDATES,
+               "candidate families");
 /* The candidates' lobe exponents, each a power of 4 of the one before, so
  * that a record computes cos^e for all of them by squaring. */
 #define EXPONENTS 3
@@ -29,7 +36,7 @@ static const float exponents[EXPONENTS] = {4.0f, 16.0f, 64.0f};
 /* Samples a region needs before its own estimate is trusted, and after
  * which it stops learning. */
 #define MIN_SAMPLES 256u
-#define SETTLED_SAMPLES 4096
+#define SETTLED_SAMPLES SG_MIXTURE_SETTLED_SAMPLES
 /* A region fits its axis when its records reach AXIS_FIT_FIRST, then each
  * time they grow AXIS_FIT_GROWTH times (each refit forgets the moments
  * measured around the old axis), never once it settles; its learned
@@ -38,7 +45,12 @@ static const float exponents[EXPONENTS] = {4.0f, 16.0f, 64.0f};
 #define AXIS_FIT_FIRST 256u
 #define AXIS_FIT_GROWTH 4u
 #define AXIS_MIN_SAMPLES 128u
-/* Vertices a region needs before its outgoing radiance is used. */
+/* A fine region fits a histogram of its own, rather than use its coarse
+ * region's, from this many records on (at its axis's refits); every bin
+ * keeps HISTOGRAM_FLOOR of the density spread evenly, so that a bin no
+ * record has reached yet can still be drawn. */
+#define HISTOGRAM_OWN_SAMPLES 1024u
+#define HISTOGRAM_FLOOR 0.1f/* Vertices a region needs before its outgoing radiance is used. */
 #define RADIANCE_MIN_SAMPLES 64u
 /* A coarse region, or the whole scene, with this many guided bounces and
  * as many vertices stops taking records: it is only a fallback, and adding
@@ -60,6 +72,7 @@ typedef struct StoredRecord {
     float radiance;                    /* outgoing radiance estimate, < 0 none */
     bool lobe;                         /* a guided bounce: estimate and terms set */
     bool axis_terms[FAMILIES];         /* the learned candidates' terms are set */
+    int16_t bin;                       /* the direction's histogram bin, -1: none */
     uint32_t generation;               /* the view's when the record was made */
     float fit[3];                      /* v d: the axis fit's share (zero: none) */
     float point_fit[4];                /* v (x + t d) and v: the point fit's share */
@@ -87,7 +100,7 @@ typedef struct RegionStats {
      * while the current axis was in use (generation axis_from or later) */
     double fit[3], point_fit[4];
     uint64_t fitted_at;
-    uint32_t axis_from;
+    uint32_t axis_from[FAMILIES];
     uint64_t axis_samples[FAMILIES];
     double axis_weight[FAMILIES], axis_weighted[FAMILIES];
     double axis_moment[FAMILIES][AXIS_CANDIDATES];
@@ -140,6 +153,17 @@ struct SgMixtureLearner {
     float *point, *coarse_point, *view_point; /* 4 floats a region: x, y, z, 1 where there is one */
     uint8_t *own_axis;
     uint32_t generation;   /* publications so far */
+    /* learned histograms, one entry per fine region then per coarse one
+     * (SG_MIXTURE_BINS floats each, untouched pages cost nothing): the sums
+     * of v per bin, the distribution fitted from them, and the view's copy;
+     * entries fitted since the last publication are listed in
+     * histogram_changed; per fine region the entry it uses (histogram_of,
+     * and the view's) and whether it is its own */
+    float *histogram_sum, *histogram, *view_histogram;
+    uint32_t *histogram_of, *view_histogram_of;
+    uint8_t *own_histogram, *histogram_dirty;
+    uint32_t *histogram_changed;
+    uint32_t histogram_changed_count;
     float *radiance;       /* per fine region, as learned */
     float global_radiance;
     /* what the renderer reads (the view) is a copy, brought up to date by
@@ -210,7 +234,17 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->point = calloc((size_t)l->region_count * 4, sizeof *l->point);
     l->view_point = calloc((size_t)l->region_count * 4, sizeof *l->view_point);
     l->coarse_point = calloc((size_t)l->coarse_count * 4, sizeof *l->coarse_point);
-    if (!l->point || !l->view_point || !l->coarse_point || !l->axis || !l->view_axis || !l->coarse_axis ||
+    size_t entries = (size_t)l->region_count + l->coarse_count;
+    l->histogram_sum = calloc(entries * SG_MIXTURE_BINS, sizeof *l->histogram_sum);
+    l->histogram = calloc(entries * SG_MIXTURE_BINS, sizeof *l->histogram);
+    l->view_histogram = calloc(entries * SG_MIXTURE_BINS, sizeof *l->view_histogram);
+    l->histogram_of = malloc(sizeof *l->histogram_of * l->region_count);
+    l->view_histogram_of = malloc(sizeof *l->view_histogram_of * l->region_count);
+    l->own_histogram = calloc(l->region_count, 1);
+    l->histogram_dirty = calloc(entries, 1);
+    l->histogram_changed = malloc(sizeof *l->histogram_changed * entries);
+    if (!l->histogram_sum || !l->histogram || !l->view_histogram || !l->histogram_of || !l->view_histogram_of ||
+        !l->own_histogram || !l->histogram_dirty || !l->histogram_changed || !l->point || !l->view_point || !l->coarse_point || !l->axis || !l->view_axis || !l->coarse_axis ||
         !l->own_axis || !l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
         !l->coarse_touched || !l->stats || !l->coarse || !l->coarse_of || !l->buffers || !l->view_state ||
         !l->view_radiance || !l->changed || !l->flags || !l->seen) {
@@ -254,6 +288,10 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
         l->view.of_state[k] = sg_mixture_candidates[k < SG_MIXTURE_CANDIDATES ? k : initial];
     l->view.axis = l->view_axis;
     l->view.point = l->view_point;
+    for (uint32_t i = 0; i < l->region_count; i++)
+        l->histogram_of[i] = l->view_histogram_of[i] = SG_NO_REGION;
+    l->view.histogram_of = l->view_histogram_of;
+    l->view.histogram = l->view_histogram;
     memset(l->coarse_choice, -1, l->coarse_count);
     l->global_choice = -1;
     return l;
@@ -289,6 +327,14 @@ void sg_mixture_learner_free(SgMixtureLearner *l)
     free(l->point);
     free(l->view_point);
     free(l->coarse_point);
+    free(l->histogram_sum);
+    free(l->histogram);
+    free(l->view_histogram);
+    free(l->histogram_of);
+    free(l->view_histogram_of);
+    free(l->own_histogram);
+    free(l->histogram_dirty);
+    free(l->histogram_changed);
     free(l);
 }
 
@@ -383,7 +429,8 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     st->radiance = rec->radiance >= 0.0f && isfinite(rec->radiance) ? rec->radiance : -1.0f;
     st->lobe = rec->lobe;
     st->estimate = 0.0f;
-    st->axis_terms[0] = st->axis_terms[1] = false;
+    memset(st->axis_terms, 0, sizeof st->axis_terms);
+    st->bin = -1;
     st->generation = l->view.generation;
     memset(st->fit, 0, sizeof st->fit);
     memset(st->point_fit, 0, sizeof st->point_fit);
@@ -393,12 +440,14 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     const float *point = &l->view_point[4 * (size_t)rec->region];
     bool has_axis = axis[0] != 0.0f || axis[1] != 0.0f || axis[2] != 0.0f;
     bool has_point = has_axis && point[3] > 0.0f;
+    uint32_t histogram = l->view.histogram_of[rec->region];
     bool has_direction = rec->direction.x != 0.0f || rec->direction.y != 0.0f || rec->direction.z != 0.0f;
     float v = rec->estimate;
     if (!(v > 0.0f) || !isfinite(v)) {
         /* a sample that brought nothing back */
         st->axis_terms[0] = has_axis;
         st->axis_terms[1] = has_point;
+        st->axis_terms[HISTOGRAM_FAMILY] = histogram != SG_NO_REGION;
         return;
     }
     st->estimate = v;
@@ -417,6 +466,18 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
         return;
     Vec3 d = rec->direction, x = rec->position;
     st->fit[0] = v * d.x, st->fit[1] = v * d.y, st->fit[2] = v * d.z;
+    st->bin = (int16_t)sg_mixture_histogram_bin(d);
+    if (histogram != SG_NO_REGION) {
+        float p_histogram =
+            sg_mixture_histogram_pdf(&l->view.histogram[(size_t)histogram * SG_MIXTURE_BINS], d);
+        for (int k = 0; k < HISTOGRAM_CANDIDATES; k++) {
+            int c = SKELETON_CANDIDATES + HISTOGRAM_FAMILY * AXIS_CANDIDATES + k;
+            float a = sg_mixture_candidates[c].alpha;
+            float p = a * rec->pdf_bsdf + (1.0f - a) * p_histogram;
+            st->term[c] = p > 0.0f ? weight / p : INFINITY;
+        }
+        st->axis_terms[HISTOGRAM_FAMILY] = true;
+    }
     float t = rec->distance;
     if (t > 0.0f && isfinite(t)) {
         st->point_fit[0] = v * (x.x + t * d.x), st->point_fit[1] = v * (x.y + t * d.y);
@@ -424,7 +485,7 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     }
     if (!has_axis)
         return;
-    for (int f = 0; f < FAMILIES; f++) {
+    for (int f = 0; f < HISTOGRAM_FAMILY; f++) {
         if (f == 1 && !has_point)
             break;
         Vec3 a = f == 0 ? v3(axis[0], axis[1], axis[2]) : sg_mixture_point_axis(point, axis, x);
@@ -457,10 +518,9 @@ static void add_record(RegionStats *st, const StoredRecord *rec)
     if (!(w > 0.0) || !isfinite(w))
         return;
     st->weight += w; /* a bounce that brought nothing back still counts */
-    /* records drawn while the learned axis and point were in use */
-    bool current = rec->generation >= st->axis_from;
+    /* records drawn while the learned axis, point and histogram were in use */
     for (int f = 0; f < FAMILIES; f++)
-        if (current && rec->axis_terms[f]) {
+        if (rec->generation >= st->axis_from[f] && rec->axis_terms[f]) {
             st->axis_samples[f]++;
             st->axis_weight[f] += w;
         }
@@ -474,10 +534,10 @@ static void add_record(RegionStats *st, const StoredRecord *rec)
     for (int i = 0; i < 4; i++)
         st->point_fit[i] += rec->point_fit[i];
     for (int f = 0; f < FAMILIES; f++) {
-        if (!current || !rec->axis_terms[f])
+        if (rec->generation < st->axis_from[f] || !rec->axis_terms[f])
             continue;
         st->axis_weighted[f] += w * rec->estimate;
-        for (int k = 0; k < AXIS_CANDIDATES; k++)
+        for (int k = 0; k < (f == HISTOGRAM_FAMILY ? HISTOGRAM_CANDIDATES : AXIS_CANDIDATES); k++)
             st->axis_moment[f][k] += w * rec->term[SKELETON_CANDIDATES + f * AXIS_CANDIDATES + k];
     }
 }
@@ -595,6 +655,7 @@ static void publish(SgMixtureLearner *l)
         memcpy(l->view_radiance, l->radiance, sizeof *l->radiance * l->region_count);
         memcpy(l->view_axis, l->axis, 3 * sizeof *l->axis * l->region_count);
         memcpy(l->view_point, l->point, 4 * sizeof *l->point * l->region_count);
+        memcpy(l->view_histogram_of, l->histogram_of, sizeof *l->histogram_of * l->region_count);
     } else
         for (uint32_t i = 0; i < l->changed_count; i++) {
             uint32_t r = l->changed[i];
@@ -602,7 +663,15 @@ static void publish(SgMixtureLearner *l)
             l->view_radiance[r] = l->radiance[r];
             memcpy(&l->view_axis[3 * (size_t)r], &l->axis[3 * (size_t)r], 3 * sizeof *l->axis);
             memcpy(&l->view_point[4 * (size_t)r], &l->point[4 * (size_t)r], 4 * sizeof *l->point);
+            l->view_histogram_of[r] = l->histogram_of[r];
         }
+    for (uint32_t i = 0; i < l->histogram_changed_count; i++) {
+        size_t e = l->histogram_changed[i];
+        memcpy(&l->view_histogram[e * SG_MIXTURE_BINS], &l->histogram[e * SG_MIXTURE_BINS],
+               SG_MIXTURE_BINS * sizeof *l->histogram);
+        l->histogram_dirty[e] = 0;
+    }
+    l->histogram_changed_count = 0;
     l->view.generation = ++l->generation;
     for (uint32_t i = 0; i < l->changed_count; i++)
         l->flags[l->changed[i]] &= (uint8_t)~REGION_CHANGED;
@@ -626,13 +695,43 @@ void sg_mixture_update(SgMixtureLearner *l)
 
 /* The region's axis or point changed: its learned candidates' sums restart
  * from the records of the next publication on. */
+static void forget_family(RegionStats *st, int f, uint32_t generation)
+{
+    st->axis_from[f] = generation + 1; /* the records of the passes that use the new axis */
+    st->axis_samples[f] = 0;
+    st->axis_weight[f] = st->axis_weighted[f] = 0.0;
+    memset(st->axis_moment[f], 0, sizeof st->axis_moment[f]);
+}
+
 static void forget_learned_moments(RegionStats *st, uint32_t generation)
 {
-    st->axis_from = generation + 1; /* the records of the passes that use the new axis */
-    memset(st->axis_samples, 0, sizeof st->axis_samples);
-    memset(st->axis_weight, 0, sizeof st->axis_weight);
-    memset(st->axis_weighted, 0, sizeof st->axis_weighted);
-    memset(st->axis_moment, 0, sizeof st->axis_moment);
+    for (int f = 0; f < FAMILIES; f++)
+        forget_family(st, f, generation);
+}
+
+/* Fits histogram entry e from its sums (false: nothing to fit): the
+ * sums' share of each bin, with HISTOGRAM_FLOOR spread evenly, as a
+ * cumulative distribution; listed for the next publication. */
+static bool fit_histogram(SgMixtureLearner *l, size_t e)
+{
+    const float *sum = &l->histogram_sum[e * SG_MIXTURE_BINS];
+    double total = 0.0;
+    for (int b = 0; b < SG_MIXTURE_BINS; b++)
+        total += sum[b];
+    if (!(total > 0.0) || !isfinite(total))
+        return false;
+    float *cdf = &l->histogram[e * SG_MIXTURE_BINS];
+    double scale = (1.0 - HISTOGRAM_FLOOR) / total, floor = HISTOGRAM_FLOOR / SG_MIXTURE_BINS, c = 0.0;
+    for (int b = 0; b < SG_MIXTURE_BINS; b++) {
+        c += sum[b] * scale + floor;
+        cdf[b] = (float)c;
+    }
+    cdf[SG_MIXTURE_BINS - 1] = 1.0f;
+    if (!l->histogram_dirty[e]) {
+        l->histogram_dirty[e] = 1;
+        l->histogram_changed[l->histogram_changed_count++] = (uint32_t)e;
+    }
+    return true;
 }
 
 /* Refits a region's axis and point on its schedule (AXIS_FIT_FIRST
@@ -680,6 +779,10 @@ static void fit_fine_axis(SgMixtureLearner *l, uint32_t region)
     if (!fit_axis(st, &l->axis[3 * (size_t)region], &l->point[4 * (size_t)region], l->generation))
         return;
     l->own_axis[region] = 1;
+    if (st->samples >= HISTOGRAM_OWN_SAMPLES && fit_histogram(l, region)) {
+        l->own_histogram[region] = 1;
+        l->histogram_of[region] = region;
+    }
     mark_changed(l, region);
 }
 
@@ -699,6 +802,9 @@ void sg_mixture_learn(SgMixtureLearner *l)
             const StoredRecord *rec = &b->data[i];
             uint32_t c = l->coarse_of[rec->region];
             add_record(&l->stats[rec->region], rec);
+            bool sums = rec->bin >= 0 && rec->estimate > 0.0f;
+            if (sums && l->stats[rec->region].samples < SETTLED_SAMPLES)
+                l->histogram_sum[(size_t)rec->region * SG_MIXTURE_BINS + (size_t)rec->bin] += rec->estimate;
             if (!(l->flags[rec->region] & REGION_SEEN)) {
                 l->flags[rec->region] |= REGION_SEEN;
                 l->seen[l->seen_count++] = rec->region;
@@ -712,6 +818,8 @@ void sg_mixture_learn(SgMixtureLearner *l)
             if (fallback_settled(&l->coarse[c]))
                 continue;
             add_record(&l->coarse[c], rec);
+            if (sums)
+                l->histogram_sum[((size_t)l->region_count + c) * SG_MIXTURE_BINS + (size_t)rec->bin] += rec->estimate;
             if (!l->coarse_touched[c]) {
                 l->coarse_touched[c] = 1;
                 coarse_list[coarse++] = c;
@@ -739,6 +847,7 @@ void sg_mixture_learn(SgMixtureLearner *l)
         l->coarse_touched[c] = 0;
         bool refitted =
             fit_axis(&l->coarse[c], &l->coarse_axis[3 * (size_t)c], &l->coarse_point[4 * (size_t)c], l->generation);
+        bool new_histogram = refitted && fit_histogram(l, (size_t)l->region_count + c);
         int8_t k = (int8_t)choose(&l->coarse[c], &l->coarse_totals, SG_MIXTURE_CANDIDATES);
         bool rechosen = k != l->coarse_choice[c];
         /* its radiance goes to its sparse fine regions each time its
@@ -762,6 +871,11 @@ void sg_mixture_learn(SgMixtureLearner *l)
                     uint32_t f = sg_mixture_region_of_cell(&l->view, (uint32_t)x, (uint32_t)y, (uint32_t)z, bin);
                     if (refitted && !l->own_axis[f])
                         set_axis(l, f, &l->coarse_axis[3 * (size_t)c], &l->coarse_point[4 * (size_t)c]);
+                    if (new_histogram && !l->own_histogram[f]) { /* its histogram is the coarse one, refitted */
+                        l->histogram_of[f] = l->region_count + c;
+                        forget_family(&l->stats[f], HISTOGRAM_FAMILY, l->generation);
+                        mark_changed(l, f);
+                    }
                     if (rechosen && l->choice[f] < 0)
                         refresh_state(l, f);
                     if (answers_radiance && !(l->flags[f] & REGION_OWN_RADIANCE))
@@ -821,10 +935,38 @@ bool sg_mixture_region_point(const SgMixtureLearner *l, uint32_t region, Vec3 *p
 }
 
 /* region count, the scene's radiance, then per region its state byte,
- * radiance, axis and point */
-size_t sg_mixture_view_size(const SgMixtureLearner *l)
+ * radiance, axis and point; then the histograms in use: their count, each
+ * entry's index and distribution, and per region the entry it uses */
+static size_t fixed_view_size(const SgMixtureLearner *l)
 {
     return sizeof(uint32_t) + sizeof(float) + (size_t)l->region_count * (1 + 8 * sizeof(float));
+}
+
+#define HISTOGRAM_BYTES (sizeof(uint32_t) + SG_MIXTURE_BINS * sizeof(float))
+
+/* The histogram entries some region's view uses, marked in `used` (one
+ * byte an entry); their count. */
+static uint32_t used_histograms(const SgMixtureLearner *l, uint8_t *used)
+{
+    uint32_t n = 0;
+    for (uint32_t r = 0; r < l->region_count; r++) {
+        uint32_t e = l->view_histogram_of[r];
+        if (e != SG_NO_REGION && !used[e]) {
+            used[e] = 1;
+            n++;
+        }
+    }
+    return n;
+}
+
+size_t sg_mixture_view_size(const SgMixtureLearner *l)
+{
+    uint8_t *used = calloc((size_t)l->region_count + l->coarse_count, 1);
+    if (!used)
+        return 0;
+    uint32_t n = used_histograms(l, used);
+    free(used);
+    return fixed_view_size(l) + sizeof(uint32_t) + n * HISTOGRAM_BYTES + sizeof(uint32_t) * l->region_count;
 }
 
 void sg_mixture_view_save(const SgMixtureLearner *l, void *out)
@@ -836,21 +978,94 @@ void sg_mixture_view_save(const SgMixtureLearner *l, void *out)
     memcpy(o + 8 + l->region_count, l->view_radiance, sizeof(float) * l->region_count);
     memcpy(o + 8 + l->region_count * (size_t)5, l->view_axis, 3 * sizeof(float) * l->region_count);
     memcpy(o + 8 + l->region_count * (size_t)17, l->view_point, 4 * sizeof(float) * l->region_count);
+    o += fixed_view_size(l);
+    uint32_t entries = l->region_count + l->coarse_count;
+    uint8_t *used = calloc(entries, 1);
+    uint32_t n = used ? used_histograms(l, used) : 0;
+    memcpy(o, &n, sizeof n);
+    o += sizeof n;
+    for (uint32_t e = 0; used && e < entries; e++)
+        if (used[e]) {
+            memcpy(o, &e, sizeof e);
+            memcpy(o + sizeof e, &l->view_histogram[(size_t)e * SG_MIXTURE_BINS], SG_MIXTURE_BINS * sizeof(float));
+            o += HISTOGRAM_BYTES;
+        }
+    memcpy(o, l->view_histogram_of, sizeof(uint32_t) * l->region_count);
+    free(used);
 }
 
 bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size)
 {
     const unsigned char *i = in;
-    uint32_t regions;
-    if (size != sg_mixture_view_size(l))
+    uint32_t regions, n;
+    size_t fixed = fixed_view_size(l), entries = (size_t)l->region_count + l->coarse_count;
+    if (size < fixed + sizeof n)
         return false;
     memcpy(&regions, i, sizeof regions);
-    if (regions != l->region_count)
+    memcpy(&n, i + fixed, sizeof n);
+    if (regions != l->region_count || n > entries ||
+        size != fixed + sizeof n + n * HISTOGRAM_BYTES + sizeof(uint32_t) * l->region_count)
         return false;
+    const unsigned char *h = i + fixed + sizeof n, *of = h + n * HISTOGRAM_BYTES;
+    for (uint32_t k = 0; k < n; k++, h += HISTOGRAM_BYTES) {
+        uint32_t e;
+        memcpy(&e, h, sizeof e);
+        const float *cdf = (const float *)(const void *)(h + sizeof e);
+        float last = 0.0f;
+        memcpy(&last, &cdf[SG_MIXTURE_BINS - 1], sizeof last);
+        if (e >= entries || last != 1.0f)
+            return false;
+        memcpy(&l->view_histogram[(size_t)e * SG_MIXTURE_BINS], h + sizeof e, SG_MIXTURE_BINS * sizeof(float));
+    }
+    for (uint32_t r = 0; r < l->region_count; r++) {
+        uint32_t e;
+        memcpy(&e, of + sizeof e * r, sizeof e);
+        if (e != SG_NO_REGION && e >= entries)
+            return false;
+        l->view_histogram_of[r] = e;
+    }
     memcpy(&l->view.global_radiance, i + 4, sizeof(float));
     memcpy(l->view_state, i + 8, l->region_count);
     memcpy(l->view_radiance, i + 8 + l->region_count, sizeof(float) * l->region_count);
     memcpy(l->view_axis, i + 8 + l->region_count * (size_t)5, 3 * sizeof(float) * l->region_count);
     memcpy(l->view_point, i + 8 + l->region_count * (size_t)17, 4 * sizeof(float) * l->region_count);
     return true;
+}
+
+/* ---- the histogram's density ------------------------------------------------ */
+
+uint32_t sg_mixture_histogram_bin(Vec3 w)
+{
+    float u, v;
+    environment_sphere_to_square(SG_ENVIRONMENT_EQUAL_AREA, w, &u, &v);
+    int x = (int)(u * SG_MIXTURE_HIST_RES), y = (int)(v * SG_MIXTURE_HIST_RES);
+    x = x < 0 ? 0 : x >= SG_MIXTURE_HIST_RES ? SG_MIXTURE_HIST_RES - 1 : x;
+    y = y < 0 ? 0 : y >= SG_MIXTURE_HIST_RES ? SG_MIXTURE_HIST_RES - 1 : y;
+    return (uint32_t)(y * SG_MIXTURE_HIST_RES + x);
+}
+
+float sg_mixture_histogram_pdf(const float *cdf, Vec3 w)
+{
+    uint32_t b = sg_mixture_histogram_bin(w);
+    float p = cdf[b] - (b ? cdf[b - 1] : 0.0f);
+    return fmaxf(p, 0.0f) * (SG_MIXTURE_BINS / (4.0f * SG_PI));
+}
+
+Vec3 sg_mixture_histogram_sample(const float *cdf, float u1, float u2)
+{
+    /* the first bin whose cumulative probability exceeds u1 */
+    uint32_t lo = 0, hi = SG_MIXTURE_BINS - 1;
+    while (lo < hi) {
+        uint32_t mid = (lo + hi) / 2;
+        if (cdf[mid] > u1)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    float below = lo ? cdf[lo - 1] : 0.0f, p = cdf[lo] - below;
+    float s = p > 0.0f ? (u1 - below) / p : 0.5f;
+    s = fminf(fmaxf(s, 0.0f), 0x1.fffffep-1f);
+    float u = ((float)(lo % SG_MIXTURE_HIST_RES) + s) * (1.0f / SG_MIXTURE_HIST_RES);
+    float v = ((float)(lo / SG_MIXTURE_HIST_RES) + u2) * (1.0f / SG_MIXTURE_HIST_RES);
+    return environment_square_to_sphere(SG_ENVIRONMENT_EQUAL_AREA, u, v);
 }

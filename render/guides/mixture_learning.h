@@ -70,23 +70,43 @@ extern "C" {
 
 #define SG_NO_REGION UINT32_MAX
 #define SG_MIXTURE_SKELETON_CANDIDATES 7
-#define SG_MIXTURE_CANDIDATES 19
+#define SG_MIXTURE_CANDIDATES 22
 
 /* A choice of mixture: BSDF probability, lobe exponent, and whether the
  * lobe's axis is the region's learned one (learned_axis: its learned
  * direction, or with learned_point the direction to its learned point)
- * rather than the skeleton's. */
+ * rather than the skeleton's, or (learned_histogram, with learned_axis)
+ * the guide is the region's learned histogram of directions instead of a
+ * lobe. */
 typedef struct SgMixtureCandidate {
     float alpha, exponent;
-    bool learned_axis, learned_point;
+    bool learned_axis, learned_point, learned_histogram;
 } SgMixtureCandidate;
+
+/* A region's learned histogram of directions: where its bounces' light
+ * came from (the sum of v over the records whose direction fell in each
+ * bin, an unbiased estimate of the integral of f cos L over the bin,
+ * whatever density drew them), as a density piecewise constant over the
+ * bins of the equal-area square map of the sphere (every bin the same
+ * solid angle, 4 pi / SG_MIXTURE_BINS). Light that reaches a region from
+ * several lit patches has several peaks, which one lobe cannot follow. */
+#define SG_MIXTURE_HIST_RES 16
+#define SG_MIXTURE_BINS (SG_MIXTURE_HIST_RES * SG_MIXTURE_HIST_RES)
 
 /* Candidate 0 is the BSDF alone; 1..6 pair alpha 0.8 or 0.6 with a wide,
  * middle or narrow lobe toward the skeleton's importance point (exponents
  * 4, 16, 64: the paper's adaptive strength, "small near direct lighting,
  * strong far away"); 7..12 pair alpha 0.7 or 0.4 with the same lobes
- * around the region's learned direction, 13..18 toward its learned point. */
+ * around the region's learned direction, 13..18 toward its learned point;
+ * 19..21 pair alpha 0.7, 0.45 or 0.2 with the region's learned histogram. */
 extern const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES];
+/* Records after which a region stops learning (settles): its choice stays,
+ * and where it is the BSDF alone its bounces no longer ask the cache. High:
+ * a region's axis, point and histogram keep being refitted as its records
+ * grow fourfold (on Sponza, learning until 4096 records and then no more
+ * left guided's relMSE 2x above what 128 training passes reach when every
+ * region keeps learning). */
+#define SG_MIXTURE_SETTLED_SAMPLES 262144u
 /* Where a region (and its coarse region) has too few samples yet: a mild
  * mixture, so that the first passes already try the lobe and learn its
  * worth from its own samples (better on the corridor and the window test
@@ -149,6 +169,12 @@ typedef struct SgMixtureView {
      * where its state has SG_MIXTURE_STATE_AXIS */
     const float *axis;
     const float *point;
+    /* per region: the histogram it uses (its own or its coarse region's),
+     * as an index into `histogram` (SG_MIXTURE_BINS floats each: the
+     * cumulative distribution over the bins, the last 1), or
+     * SG_NO_REGION: none */
+    const uint32_t *histogram_of;
+    const float *histogram;
     uint32_t generation;           /* publications so far: the records' stamp */
     /* per region: root mean square of what a bounce brings back per unit
      * throughput (its coarse region's where it has too few samples), < 0:
@@ -263,6 +289,15 @@ static inline Vec3 sg_mixture_point_axis(const float point[4], const float axis[
     }
     return v3(axis[0], axis[1], axis[2]);
 }
+
+/* The bin of a unit direction in the equal-area square map, and the map's
+ * point (u, v) in [0, 1)^2 (environment.c's map, pbrt-v4's). */
+uint32_t sg_mixture_histogram_bin(Vec3 w);
+/* A histogram's density at w (solid angle), and a direction drawn from it
+ * with u1, u2 in [0, 1): a bin by its probability, then a point uniform in
+ * the bin's square (uniform in its solid angle: the map keeps areas). */
+float sg_mixture_histogram_pdf(const float *cdf, Vec3 w);
+Vec3 sg_mixture_histogram_sample(const float *cdf, float u1, float u2);
 
 #ifdef __cplusplus
 }
