@@ -1,6 +1,5 @@
 #include "mixture_learning.h"
 
-#include "../environment.h"
 #include "../sampling.h"
 
 #include <math.h>
@@ -1034,21 +1033,50 @@ bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size)
 
 /* ---- the histogram's density ------------------------------------------------ */
 
-uint32_t sg_mixture_histogram_bin(Vec3 w)
+/* The octahedral map of the sphere onto the square [-1, 1]^2: w / |w|_1 on
+ * the octahedron, its lower half folded out to the corners. No
+ * trigonometry either way (a bounce draws and evaluates it several times;
+ * the equal-area map's atan, sin and cos cost the Cornell box 40% of its
+ * rays per second). Its solid angle per unit of the square is 1 / |p|^3
+ * for p on the octahedron (|p|_1 = 1), i.e. |w|_1^3 for unit w: between 1
+ * and 3^1.5 across the square, so a bin's solid angle is not all equal and
+ * the density within a bin follows that factor. */
+static inline void octahedral_square(Vec3 w, float *px, float *py, float *l1)
 {
-    float u, v;
-    environment_sphere_to_square(SG_ENVIRONMENT_EQUAL_AREA, w, &u, &v);
-    int x = (int)(u * SG_MIXTURE_HIST_RES), y = (int)(v * SG_MIXTURE_HIST_RES);
+    float s = fabsf(w.x) + fabsf(w.y) + fabsf(w.z);
+    float x = w.x / s, y = w.y / s;
+    if (w.z < 0.0f) {
+        float fx = copysignf(1.0f - fabsf(y), x), fy = copysignf(1.0f - fabsf(x), y);
+        x = fx, y = fy;
+    }
+    *px = x, *py = y, *l1 = s;
+}
+
+static inline uint32_t octahedral_bin(float px, float py)
+{
+    int x = (int)((px + 1.0f) * (0.5f * SG_MIXTURE_HIST_RES)), y = (int)((py + 1.0f) * (0.5f * SG_MIXTURE_HIST_RES));
     x = x < 0 ? 0 : x >= SG_MIXTURE_HIST_RES ? SG_MIXTURE_HIST_RES - 1 : x;
     y = y < 0 ? 0 : y >= SG_MIXTURE_HIST_RES ? SG_MIXTURE_HIST_RES - 1 : y;
     return (uint32_t)(y * SG_MIXTURE_HIST_RES + x);
 }
 
+uint32_t sg_mixture_histogram_bin(Vec3 w)
+{
+    float px, py, l1;
+    octahedral_square(w, &px, &py, &l1);
+    return octahedral_bin(px, py);
+}
+
 float sg_mixture_histogram_pdf(const float *cdf, Vec3 w)
 {
-    uint32_t b = sg_mixture_histogram_bin(w);
+    float px, py, l1;
+    octahedral_square(w, &px, &py, &l1);
+    uint32_t b = octahedral_bin(px, py);
     float p = cdf[b] - (b ? cdf[b - 1] : 0.0f);
-    return fmaxf(p, 0.0f) * (SG_MIXTURE_BINS / (4.0f * SG_PI));
+    /* the bin's probability over its area of the square (4 / bins), times
+     * the square's area per solid angle, |p|^3 = 1 / |w|_1^3 */
+    float inv = 1.0f / l1;
+    return fmaxf(p, 0.0f) * (SG_MIXTURE_BINS * 0.25f) * inv * inv * inv;
 }
 
 Vec3 sg_mixture_histogram_sample(const float *cdf, float u1, float u2)
@@ -1065,7 +1093,13 @@ Vec3 sg_mixture_histogram_sample(const float *cdf, float u1, float u2)
     float below = lo ? cdf[lo - 1] : 0.0f, p = cdf[lo] - below;
     float s = p > 0.0f ? (u1 - below) / p : 0.5f;
     s = fminf(fmaxf(s, 0.0f), 0x1.fffffep-1f);
-    float u = ((float)(lo % SG_MIXTURE_HIST_RES) + s) * (1.0f / SG_MIXTURE_HIST_RES);
-    float v = ((float)(lo / SG_MIXTURE_HIST_RES) + u2) * (1.0f / SG_MIXTURE_HIST_RES);
-    return environment_square_to_sphere(SG_ENVIRONMENT_EQUAL_AREA, u, v);
+    const float cell = 2.0f / SG_MIXTURE_HIST_RES;
+    float x = -1.0f + ((float)(lo % SG_MIXTURE_HIST_RES) + s) * cell;
+    float y = -1.0f + ((float)(lo / SG_MIXTURE_HIST_RES) + u2) * cell;
+    float z = 1.0f - fabsf(x) - fabsf(y);
+    if (z < 0.0f) {
+        float fx = copysignf(1.0f - fabsf(y), x), fy = copysignf(1.0f - fabsf(x), y);
+        x = fx, y = fy;
+    }
+    return v3_normalize(v3(x, y, z));
 }

@@ -87,9 +87,9 @@ typedef struct SgMixtureCandidate {
  * came from (the sum of v over the records whose direction fell in each
  * bin, an unbiased estimate of the integral of f cos L over the bin,
  * whatever density drew them), as a density piecewise constant over the
- * bins of the equal-area square map of the sphere (every bin the same
- * solid angle, 4 pi / SG_MIXTURE_BINS). Light that reaches a region from
- * several lit patches has several peaks, which one lobe cannot follow. */
+ * bins of the octahedral square map of the sphere. Light that reaches a
+ * region from several lit patches has several peaks, which one lobe cannot
+ * follow. */
 #define SG_MIXTURE_HIST_RES 16
 #define SG_MIXTURE_BINS (SG_MIXTURE_HIST_RES * SG_MIXTURE_HIST_RES)
 
@@ -290,12 +290,11 @@ static inline Vec3 sg_mixture_point_axis(const float point[4], const float axis[
     return v3(axis[0], axis[1], axis[2]);
 }
 
-/* The bin of a unit direction in the equal-area square map, and the map's
- * point (u, v) in [0, 1)^2 (environment.c's map, pbrt-v4's). */
+/* The bin of a unit direction in the octahedral square map. */
 uint32_t sg_mixture_histogram_bin(Vec3 w);
 /* A histogram's density at w (solid angle), and a direction drawn from it
  * with u1, u2 in [0, 1): a bin by its probability, then a point uniform in
- * the bin's square (uniform in its solid angle: the map keeps areas). */
+ * the bin's square. */
 float sg_mixture_histogram_pdf(const float *cdf, Vec3 w);
 Vec3 sg_mixture_histogram_sample(const float *cdf, float u1, float u2);
 
