@@ -1009,9 +1009,8 @@ bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size)
     for (uint32_t k = 0; k < n; k++, h += HISTOGRAM_BYTES) {
         uint32_t e;
         memcpy(&e, h, sizeof e);
-        const float *cdf = (const float *)(const void *)(h + sizeof e);
-        float last = 0.0f;
-        memcpy(&last, &cdf[SG_MIXTURE_BINS - 1], sizeof last);
+        float last; /* a cumulative distribution ends at 1 */
+        memcpy(&last, h + sizeof e + (SG_MIXTURE_BINS - 1) * sizeof(float), sizeof last);
         if (e >= entries || last != 1.0f)
             return false;
         memcpy(&l->view_histogram[(size_t)e * SG_MIXTURE_BINS], h + sizeof e, SG_MIXTURE_BINS * sizeof(float));
