@@ -40,9 +40,12 @@
  * a point, the mean of their ends weighted by v (where its light comes
  * from, as the skeleton's importance point says where the light lies), and
  * a lobe toward it from each vertex (parallax: the direction changes across
- * the region) competes too. A learned axis is fixed during a pass (each pass stays
- * unbiased); its candidates' moments are taken only from records made
- * while it was in use.
+ * the region) competes too. Light from several lit patches has several
+ * peaks that one lobe cannot follow: the region also keeps a histogram of
+ * where its light came from (SG_MIXTURE_BINS below), and candidates that
+ * draw from it compete as well. A learned axis, point or histogram is
+ * fixed during a pass (each pass stays unbiased); its candidates' moments
+ * are taken only from records made while it was in use.
  *
  * Every vertex of a learning path also reports what its bounce brought
  * back (all that came after the bounce, per unit throughput of the
