@@ -254,6 +254,34 @@ Test(skeleton, unfiltered_skeleton_is_hairy)
     sg_shape_medium_free(&m);
 }
 
+/* The lifespan rule on edges due within DUE_MOST steps (held until their
+ * step) and on edges due later (tested every step) answers alike: with
+ * scales so large that no edge lives long enough, both keep none and give
+ * the same skeleton, smaller than a weakly filtered one. */
+Test(skeleton, lifespan_rule_far_and_near_agree)
+{
+    SgMedium m;
+    cr_assert(sg_shape_medium(SG_SHAPE_PILLAR_ROOM, 3, &m));
+    sg_shape_roughen(&m, 0.25, 4242);
+    /* a hairy skeleton; near (edges due within open8 x 250 steps); far */
+    const double scales[3] = {0.25, 2000.0, 100000.0};
+    SgSkeleton s[3];
+    for (int i = 0; i < 3; i++) {
+        SgSkeletonOptions o = quiet_options(2);
+        o.filter_scale = scales[i];
+        SgSkeletonStats st;
+        skeletonize_checked(&m, &o, &s[i], &st, "scaled filter");
+    }
+    cr_assert_lt(s[1].node_count, s[0].node_count);
+    cr_assert_eq(s[1].node_count, s[2].node_count);
+    cr_assert_eq(s[1].edge_count, s[2].edge_count);
+    cr_assert(!memcmp(s[1].nodes, s[2].nodes, s[1].node_count * sizeof *s[1].nodes));
+    cr_assert(!memcmp(s[1].edges, s[2].edges, s[1].edge_count * sizeof *s[1].edges));
+    for (int i = 0; i < 3; i++)
+        sg_skeleton_release(&s[i]);
+    sg_shape_medium_free(&m);
+}
+
 /* Results do not depend on the thread count (distance transform,
  * opening, complex build and the collapse's slabs run on threads), on
  * shapes with loops, cavities and constraints. */
