@@ -8,6 +8,7 @@
 
 #include "hash.h"
 #include "importance_cache_format.h"
+#include "memory.h"
 
 /* Bricks of 4^3 voxels; brick (i, j, k) at index i + bx (j + by k). */
 static inline size_t brick_at(const SgVisibility *v, const int c[3])
@@ -43,6 +44,7 @@ bool sg_visibility_init(SgVisibility *v, const SgGrid *g, SgError *err)
         sg_visibility_release(v);
         return sg_fail(err, "out of memory for the visibility bricks");
     }
+    sg_memory_prefer_huge_pages(v->bits, bx * by * bz * sizeof *v->bits);
     /* The bricks' words, row by row of the grid (in its memory order). */
     for (int z = 0; z < g->nz; z++)
         for (int y = 0; y < g->ny; y++) {

@@ -217,6 +217,7 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
     L->work = work;
     L->threads = threads_used;
     sg_memory_prefer_huge_pages(key, total * key_size);
+    sg_memory_prefer_huge_pages(changed, tile_count * TILE * TILE * sizeof *changed);
     if (wide) {
         L->shift = 32;
         L->node_mask = 0xffffffffu;
