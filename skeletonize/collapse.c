@@ -895,6 +895,49 @@ static int popcount8(unsigned x)
     return n;
 }
 
+/* The collapse's set-up, a slab per task: counts and queues the first
+ * free faces, those of vertices next to the outside of the medium. A
+ * face's queue is its vertex's slab's, filled by that slab's task alone in
+ * the order one thread would (planes, rows, vertices upwards). */
+typedef struct SetupCount {
+    uint64_t total, squares; /* the slab's cells, its squares */
+    bool oom;
+} SetupCount;
+
+typedef struct SetupPass {
+    Collapse *c;
+    SetupCount *slab; /* per slab */
+} SetupPass;
+
+static void setup_slab(void *ctx, uint64_t i, int thread)
+{
+    (void)thread;
+    Collapse *c = ((SetupPass *)ctx)->c;
+    SetupCount *count = &((SetupPass *)ctx)->slab[i];
+    Sink sk;
+    memset(&sk, 0, sizeof sk);
+    sink_aim(c, &sk, (size_t)i, KINDS - 1); /* for the first step */
+    /* vertex z (grid coordinates) is lattice plane z + 1 */
+    long lo = (long)(i * c->slab_planes) - 1, hi = (long)((i + 1) * c->slab_planes) - 1;
+    for (long z = lo < 0 ? 0 : lo; z < hi && z <= c->cx->nz; z++)
+        for (int y = 0; y <= c->cx->ny; y++) {
+            size_t v = sg_complex_vertex(c->cx, 0, y, (int)z);
+            for (int x = 0; x <= c->cx->nx; x++, v++) {
+                unsigned bits = c->cells[v];
+                if (!bits)
+                    continue;
+                count->total += (uint64_t)popcount8(bits);
+                count->squares += (uint64_t)popcount8(bits & SQUARE_BITS);
+                if (interior_vertex(c, v))
+                    continue;
+                for (unsigned m = 0; m < 7; m++)
+                    if (bits >> m & 1)
+                        consider(c, &sk, (uint32_t)(v * 8 + m));
+            }
+        }
+    count->oom = sk.oom;
+}
+
 bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
                  const uint16_t *dist8, const uint16_t *open8, double filter_scale,
                  int threads, uint32_t parallel_grain, uint32_t slab_planes, SgProgress *progress,
@@ -955,30 +998,20 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
     c.threads = started + 1;
 
     /* the first free faces: only vertices next to the outside of the medium */
-    Sink *sink = &c.sinks[0];
-    sink_aim(&c, sink, NO_SLAB, KINDS - 1); /* for the first step */
-    for (int z = 0; z <= cx->nz; z++) {
-        for (int y = 0; y <= cx->ny; y++) {
-            size_t v = sg_complex_vertex(cx, 0, y, z);
-            for (int x = 0; x <= cx->nx; x++, v++) {
-                unsigned bits = c.cells[v];
-                if (!bits)
-                    continue;
-                c.total += (uint64_t)popcount8(bits);
-                c.squares += (uint64_t)popcount8(bits & SQUARE_BITS);
-                if (interior_vertex(&c, v))
-                    continue;
-                for (unsigned m = 0; m < 7; m++)
-                    if (bits >> m & 1)
-                        consider(&c, sink, (uint32_t)(v * 8 + m));
-            }
-        }
-        distribute_staged(&c); /* plane by plane: the border is large at the start */
-        if (c.oom || sink->oom) {
-            c.oom = true;
-            goto done;
+    SetupPass setup = {&c, calloc(c.slab_count, sizeof *setup.slab)};
+    if (!setup.slab) {
+        c.oom = true;
+    } else {
+        sg_parallel_for(c.slab_count, threads, setup_slab, &setup);
+        for (size_t i = 0; i < c.slab_count; i++) {
+            c.total += setup.slab[i].total;
+            c.squares += setup.slab[i].squares;
+            c.oom |= setup.slab[i].oom;
         }
     }
+    free(setup.slab);
+    if (c.oom)
+        goto done;
 
     if (progress)
         progress->total = c.total; /* cells removed / cells at the start */

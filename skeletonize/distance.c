@@ -360,9 +360,10 @@ static void batch_plane(void *ctx, uint64_t i, int thread)
               b->scratch + i * (size_t)g->nx * (size_t)g->ny);
 }
 
-/* Rewrites buffer, a value of src_size bytes per voxel in the grid's
- * layout, as the 16-bit values `values` computes, in the output layout,
- * in the same memory: planes are computed a batch at a time on the
+/* Rewrites buffer (capacity bytes), a value of src_size bytes per voxel in
+ * the grid's layout, as the 16-bit values `values` computes, in the output
+ * layout, in the same memory (grown if need be: allocate it large enough,
+ * a realloc that moves it costs a fresh array's first touch): planes are computed a batch at a time on the
  * threads into scratch, then copied to their place. The order keeps every
  * batch's writes off the planes still to read: with 4-byte sources the
  * output lies below them (planes upwards), with 2-byte ones at or above
@@ -370,11 +371,12 @@ static void batch_plane(void *ctx, uint64_t i, int thread)
  * weighs more than the halved values save) the output gets its own
  * array. On success the buffer is consumed and the output returned; NULL:
  * out of memory, the buffer untouched. */
-static uint16_t *to_layout(EdtContext *c, void *buffer, size_t src_size, PlaneValues values)
+static uint16_t *to_layout(EdtContext *c, void *buffer, size_t capacity, size_t src_size,
+                           PlaneValues values)
 {
     const SgGrid *g = c->grid;
     const size_t nx = (size_t)g->nx, plane = nx * (size_t)g->ny;
-    const size_t in_bytes = src_size * sg_grid_count(g), out_bytes = layout_count(c) * 2;
+    const size_t in_bytes = capacity, out_bytes = layout_count(c) * 2;
     const int batch = c->threads > 2 ? c->threads : 2, dir = src_size == 4 ? 1 : -1;
     bool in_place = src_size != 4 || out_bytes <= in_bytes;
     for (int n = 0; n < g->nz && in_place; n += batch) {
@@ -496,11 +498,15 @@ static bool distance_opening(const SgGrid *g, int threads, bool lattice, uint16_
     uint32_t bound = 0;
     for (int z = 0; z < g->nz; z++)
         bound = c.plane_max[z] > bound ? c.plane_max[z] : bound;
+    size_t d2_16_bytes = n * sizeof *c.d2_16;
     if (bound < 65536) {
-        c.z_out16 = malloc(n * sizeof *c.z_out16);
+        /* room for dist8 in the output layout, written over it at the end */
+        if (layout_count(&c) > n)
+            d2_16_bytes = layout_count(&c) * sizeof *c.d2_16;
+        c.z_out16 = malloc(d2_16_bytes);
         if (!c.z_out16)
             goto done;
-        sg_memory_prefer_huge_pages(c.z_out16, n * sizeof *c.z_out16);
+        sg_memory_prefer_huge_pages(c.z_out16, d2_16_bytes);
         sg_parallel_for((uint64_t)g->ny, c.threads, edt_z, &c);
         /* the 32-bit array, done with, holds the ball centres next: its
          * pages are the process's already (the kernel clears every page
@@ -539,17 +545,17 @@ static bool distance_opening(const SgGrid *g, int threads, bool lattice, uint16_
         sg_parallel_for((uint64_t)g->nz, c.threads, open_x, &c);
         sg_parallel_for((uint64_t)g->nz, c.threads, open_y, &c);
         sg_parallel_for((uint64_t)g->ny, c.threads, open_z, &c);
-        *open8_out = to_layout(&c, c.cand, sizeof *c.cand, opening_plane);
+        *open8_out = to_layout(&c, c.cand, n * sizeof *c.cand, sizeof *c.cand, opening_plane);
         if (!*open8_out)
             goto done;
         c.cand = NULL;
     }
     if (c.d2_16) {
-        *dist8_out = to_layout(&c, c.d2_16, sizeof *c.d2_16, distance_plane);
+        *dist8_out = to_layout(&c, c.d2_16, d2_16_bytes, sizeof *c.d2_16, distance_plane);
         if (*dist8_out)
             c.d2_16 = NULL;
     } else {
-        *dist8_out = to_layout(&c, c.d2, sizeof *c.d2, distance_plane);
+        *dist8_out = to_layout(&c, c.d2, n * sizeof *c.d2, sizeof *c.d2, distance_plane);
         if (*dist8_out)
             c.d2 = NULL;
     }
