@@ -345,7 +345,7 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
     double tolerance = options->run_tolerance > 0 ? options->run_tolerance : 0;
     SgVisibility vis = {0};
     if (ok)
-        ok = sg_visibility_init(&vis, grid, err);
+        ok = sg_visibility_init(&vis, grid, threads, err);
     SgProgress progress;
     sg_progress_begin(&progress, "importance points", L);
     for (uint32_t k = 0; ok && k < L; k++) {

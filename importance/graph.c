@@ -9,6 +9,7 @@
 #include "hash.h"
 #include "importance_cache_format.h"
 #include "memory.h"
+#include "threads.h"
 
 /* Bricks of 4^3 voxels; brick (i, j, k) at index i + bx (j + by k). */
 static inline size_t brick_at(const SgVisibility *v, const int c[3])
@@ -30,7 +31,24 @@ static inline bool medium_at(const SgVisibility *v, const int c[3])
     return g->voxels[sg_grid_index(g, c[0], c[1], c[2])] != 0;
 }
 
-bool sg_visibility_init(SgVisibility *v, const SgGrid *g, SgError *err)
+/* The words of the bricks of z slab bz, row by row of the grid (in its
+ * memory order); a slab per task. */
+static void brick_words(void *ctx, uint64_t bz, int thread)
+{
+    (void)thread;
+    const SgVisibility *v = ctx;
+    const SgGrid *g = v->grid;
+    for (int z = (int)bz * 4; z < (int)bz * 4 + 4 && z < g->nz; z++)
+        for (int y = 0; y < g->ny; y++) {
+            const uint8_t *row = g->voxels + sg_grid_index(g, 0, y, z);
+            uint64_t *words = v->bits + v->bx * ((size_t)(y >> 2) + v->by * (size_t)(z >> 2));
+            int shift = (y & 3) << 2 | (z & 3) << 4;
+            for (int x = 0; x < g->nx; x++)
+                words[x >> 2] |= (uint64_t)(row[x] != 0) << (shift | (x & 3));
+        }
+}
+
+bool sg_visibility_init(SgVisibility *v, const SgGrid *g, int threads, SgError *err)
 {
     memset(v, 0, sizeof *v);
     v->grid = g;
@@ -45,15 +63,7 @@ bool sg_visibility_init(SgVisibility *v, const SgGrid *g, SgError *err)
         return sg_fail(err, "out of memory for the visibility bricks");
     }
     sg_memory_prefer_huge_pages(v->bits, bx * by * bz * sizeof *v->bits);
-    /* The bricks' words, row by row of the grid (in its memory order). */
-    for (int z = 0; z < g->nz; z++)
-        for (int y = 0; y < g->ny; y++) {
-            const uint8_t *row = g->voxels + sg_grid_index(g, 0, y, z);
-            uint64_t *words = v->bits + bx * ((size_t)(y >> 2) + by * (size_t)(z >> 2));
-            int shift = (y & 3) << 2 | (z & 3) << 4;
-            for (int x = 0; x < g->nx; x++)
-                words[x >> 2] |= (uint64_t)(row[x] != 0) << (shift | (x & 3));
-        }
+    sg_parallel_for(bz, threads, brick_words, v);
     /* A brick is full when its word is all ones (bricks that stick out of
      * the grid never are): clearance 255 for now, 0 for the others. */
     for (size_t b = 0; b < bx * by * bz; b++)

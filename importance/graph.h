@@ -34,7 +34,8 @@ typedef struct SgVisibility {
     size_t bx, by, bz;
 } SgVisibility;
 
-bool sg_visibility_init(SgVisibility *vis, const SgGrid *grid, SgError *err);
+/* threads: for the bricks' words (<= 0: every core) */
+bool sg_visibility_init(SgVisibility *vis, const SgGrid *grid, int threads, SgError *err);
 void sg_visibility_release(SgVisibility *vis);
 bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3]);
 

@@ -473,7 +473,7 @@ static void scattered_medium(const Scatter *sc, SgMedium *m, SgRng *rng, SgVisib
         sgt_box(m, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], 0);
     }
     SgError err = {0};
-    cr_assert(sg_visibility_init(vis, &m->grid, &err));
+    cr_assert(sg_visibility_init(vis, &m->grid, 2, &err));
 }
 
 Test(importance_visibility, brick_jumps_agree_with_plain_walk)
