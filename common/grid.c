@@ -28,6 +28,9 @@ bool sg_grid_init(SgGrid *grid, int nx, int ny, int nz, const double origin[3],
     grid->voxels = calloc((size_t)bytes, 1);
     if (!grid->voxels)
         return sg_fail(err, "out of memory for a %dx%dx%d grid (%.0f MB)", nx, ny, nz, bytes / 1e6);
+    /* 2 MB pages: the first touch of a large grid (the medium's read) was
+     * mostly page faults, one per 4 KB */
+    sg_memory_prefer_huge_pages(grid->voxels, (size_t)bytes);
     grid->nx = nx;
     grid->ny = ny;
     grid->nz = nz;

@@ -231,26 +231,39 @@ extern "C" bool sg_medium_read(SgMedium *m, const char *path, SgError *err)
             return sg_fail(err, "%s: %s", path, why);
         }
         SgGrid *g = &m->grid;
+        // Active tiles (our files are pruned: the medium's inside is mostly
+        // tiles) row by row, then the leaves' active voxels: far faster
+        // than a value iterator over every voxel of the tiles.
         auto set_box = [&](const openvdb::CoordBBox &box) {
             // 64-bit counters: a box may end at INT_MAX
+            const std::size_t width = (std::size_t)((std::int64_t)box.max().x() - box.min().x() + 1);
             for (std::int64_t k = box.min().z(); k <= box.max().z(); k++)
                 for (std::int64_t j = box.min().y(); j <= box.max().y(); j++)
-                    for (std::int64_t i = box.min().x(); i <= box.max().x(); i++)
-                        g->voxels[sg_grid_index(g, i - shift.x(), j - shift.y(), k - shift.z())] = 1;
+                    std::memset(g->voxels + sg_grid_index(g, box.min().x() - shift.x(), j - shift.y(),
+                                                          k - shift.z()),
+                                1, width);
         };
-        if (auto bgrid = openvdb::gridPtrCast<openvdb::BoolGrid>(base)) {
-            for (auto it = bgrid->cbeginValueOn(); it; ++it)
-                if (it.getValue()) {
+        auto fill = [&](const auto &grid, auto on) {
+            auto tile = grid.cbeginValueOn();
+            tile.setMaxDepth(tile.getLeafDepth() - 1);
+            for (; tile; ++tile)
+                if (on(tile.getValue())) {
                     openvdb::CoordBBox box;
-                    it.getBoundingBox(box);
+                    tile.getBoundingBox(box);
                     set_box(box);
                 }
+            for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf)
+                for (auto v = leaf->cbeginValueOn(); v; ++v)
+                    if (on(*v)) {
+                        const openvdb::Coord c = v.getCoord();
+                        g->voxels[sg_grid_index(g, c.x() - shift.x(), c.y() - shift.y(),
+                                                c.z() - shift.z())] = 1;
+                    }
+        };
+        if (auto bgrid = openvdb::gridPtrCast<openvdb::BoolGrid>(base)) {
+            fill(*bgrid, [](bool value) { return value; });
         } else if (auto mgrid = openvdb::gridPtrCast<openvdb::MaskGrid>(base)) {
-            for (auto it = mgrid->cbeginValueOn(); it; ++it) {
-                openvdb::CoordBBox box;
-                it.getBoundingBox(box);
-                set_box(box);
-            }
+            fill(*mgrid, [](bool) { return true; });
         } else {
             sg_grid_release(&m->grid);
             return sg_fail(err, "%s: grid \"%s\" is of type %s, not bool or mask", path,

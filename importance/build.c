@@ -10,6 +10,7 @@
 #include "importance.h"
 #include "importance_cache_format.h"
 #include "labels.h"
+#include "memory.h"
 #include "output_file.h"
 #include "progress.h"
 #include "threads.h"
@@ -34,6 +35,20 @@ typedef struct BlockPass {
 /* Labels of one block in local order (x fastest); NONE outside the grid. */
 static void block_labels(const SgLabelGrid *l, int bi, int bj, int bk, uint32_t out[512])
 {
+    if (l->key32 && (bi + 1) * 8 <= l->nx && (bj + 1) * 8 <= l->ny && (bk + 1) * 8 <= l->nz) {
+        /* inside the grid, 32-bit keys (the common case): rows of keys */
+        const uint32_t mask = l->node_mask;
+        for (int z = 0; z < 8; z++)
+            for (int y = 0; y < 8; y++) {
+                const uint32_t *row = l->key32 + (size_t)(bi * 8 + 1) +
+                                      l->px * ((size_t)(bj * 8 + y + 1) + l->py * (size_t)(bk * 8 + z + 1));
+                for (int x = 0; x < 8; x++) {
+                    uint32_t node = row[x] & mask;
+                    *out++ = node == mask ? SG_CACHE_NONE : node;
+                }
+            }
+        return;
+    }
     int n = 0;
     for (int z = 0; z < 8; z++)
         for (int y = 0; y < 8; y++)
@@ -330,7 +345,7 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
     double tolerance = options->run_tolerance > 0 ? options->run_tolerance : 0;
     SgVisibility vis = {0};
     if (ok)
-        ok = sg_visibility_init(&vis, grid, err);
+        ok = sg_visibility_init(&vis, grid, threads, err);
     SgProgress progress;
     sg_progress_begin(&progress, "importance points", L);
     for (uint32_t k = 0; ok && k < L; k++) {
@@ -422,6 +437,7 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
         file = calloc(file_size, 1);
         if (!file)
             ok = sg_fail(err, "%s: out of memory for a %zu-byte cache", out_path, file_size);
+        sg_memory_prefer_huge_pages(file, file_size); /* fewer first-touch faults */
     }
     if (ok) {
         memcpy(header.magic, SG_CACHE_MAGIC, 8);

@@ -8,104 +8,117 @@
 
 #include "hash.h"
 #include "importance_cache_format.h"
+#include "memory.h"
+#include "threads.h"
 
-static inline bool level_full(const SgVisibility *v, int level, const int c[3])
+/* Bricks of 4^3 voxels; brick (i, j, k) at index i + bx (j + by k). */
+static inline size_t brick_at(const SgVisibility *v, const int c[3])
 {
-    int sh = level ? 4 : 2;
-    size_t b = (size_t)(c[0] >> sh) +
-               v->bx[level] * ((size_t)(c[1] >> sh) + v->by[level] * (size_t)(c[2] >> sh));
-    return v->full[level][b >> 6] >> (b & 63) & 1;
+    return (size_t)(c[0] >> 2) + v->bx * ((size_t)(c[1] >> 2) + v->by * (size_t)(c[2] >> 2));
 }
 
-/* Medium test: the brick bits (a few hundred KB, cache resident) spare
- * most loads from the byte grid, whose z neighbours are far apart. */
+/* Medium test: with the accelerator, a bit of the voxel's brick word (a
+ * brick is 64 bits: x + 4 y + 16 z; the words, an eighth of the grid's
+ * bytes, keep a line's next voxels in the same cache line far more often
+ * than the byte grid, whose z neighbours are a plane apart). */
 static inline bool medium_at(const SgVisibility *v, const int c[3])
 {
     const SgGrid *g = v->grid;
     if (!sg_grid_inside(g, c[0], c[1], c[2]))
         return false;
-    if (v->full[0] && level_full(v, 0, c))
-        return true;
+    if (v->bits)
+        return v->bits[brick_at(v, c)] >> ((c[0] & 3) | (c[1] & 3) << 2 | (c[2] & 3) << 4) & 1;
     return g->voxels[sg_grid_index(g, c[0], c[1], c[2])] != 0;
 }
 
-bool sg_visibility_init(SgVisibility *v, const SgGrid *g, SgError *err)
+/* The words of the bricks of z slab bz, row by row of the grid (in its
+ * memory order); a slab per task. */
+static void brick_words(void *ctx, uint64_t bz, int thread)
+{
+    (void)thread;
+    const SgVisibility *v = ctx;
+    const SgGrid *g = v->grid;
+    for (int z = (int)bz * 4; z < (int)bz * 4 + 4 && z < g->nz; z++)
+        for (int y = 0; y < g->ny; y++) {
+            const uint8_t *row = g->voxels + sg_grid_index(g, 0, y, z);
+            uint64_t *words = v->bits + v->bx * ((size_t)(y >> 2) + v->by * (size_t)(z >> 2));
+            int shift = (y & 3) << 2 | (z & 3) << 4;
+            for (int x = 0; x < g->nx; x++)
+                words[x >> 2] |= (uint64_t)(row[x] != 0) << (shift | (x & 3));
+        }
+}
+
+bool sg_visibility_init(SgVisibility *v, const SgGrid *g, int threads, SgError *err)
 {
     memset(v, 0, sizeof *v);
     v->grid = g;
-    size_t bz[2];
-    for (int level = 0; level < 2; level++) {
-        int size = level ? 16 : 4;
-        v->bx[level] = ((size_t)g->nx + size - 1) / size;
-        v->by[level] = ((size_t)g->ny + size - 1) / size;
-        bz[level] = ((size_t)g->nz + size - 1) / size;
-        size_t count = v->bx[level] * v->by[level] * bz[level];
-        v->full[level] = calloc((count + 63) / 64, sizeof *v->full[level]);
-        if (!v->full[level]) {
-            sg_visibility_release(v);
-            return sg_fail(err, "out of memory for the visibility bricks");
+    v->bx = ((size_t)g->nx + 3) / 4;
+    v->by = ((size_t)g->ny + 3) / 4;
+    v->bz = ((size_t)g->nz + 3) / 4;
+    const size_t bx = v->bx, by = v->by, bz = v->bz;
+    v->clear = malloc(bx * by * bz);
+    v->bits = calloc(bx * by * bz, sizeof *v->bits);
+    if (!v->clear || !v->bits) {
+        sg_visibility_release(v);
+        return sg_fail(err, "out of memory for the visibility bricks");
+    }
+    sg_memory_prefer_huge_pages(v->bits, bx * by * bz * sizeof *v->bits);
+    sg_parallel_for(bz, threads, brick_words, v);
+    /* A brick is full when its word is all ones (bricks that stick out of
+     * the grid never are): clearance 255 for now, 0 for the others. */
+    for (size_t b = 0; b < bx * by * bz; b++)
+        v->clear[b] = v->bits[b] == UINT64_MAX ? 255 : 0;
+    /* Clearance: the chessboard distance, in bricks, to the nearest brick
+     * that is not full, the bricks outside the grid counting as not full
+     * (capped at 255). Two raster passes of the 26-neighbourhood with unit
+     * steps, forward then backward, give it exactly [Rosenfeld & Pfaltz
+     * 1966]. Every brick within chessboard distance r - 1 of a brick of
+     * clearance r is full (and inside the grid). */
+    for (int pass = 0; pass < 2; pass++) {
+        int dir = pass ? -1 : 1;
+        for (size_t n = 0; n < bx * by * bz; n++) {
+            size_t b = pass ? bx * by * bz - 1 - n : n;
+            if (!v->clear[b])
+                continue;
+            long i = (long)(b % bx), j = (long)(b / bx % by), k = (long)(b / (bx * by));
+            unsigned best = v->clear[b];
+            /* the 13 neighbours before b in this pass's order */
+            for (int dz = -1; dz <= 0; dz++)
+                for (int dy = -1; dy <= 1; dy++)
+                    for (int dx = -1; dx <= 1; dx++) {
+                        if (dz == 0 && (dy > 0 || (dy == 0 && dx >= 0)))
+                            continue;
+                        long x = i + dir * dx, y = j + dir * dy, z = k + dir * dz;
+                        unsigned d = 0; /* outside the grid */
+                        if (x >= 0 && y >= 0 && z >= 0 && x < (long)bx && y < (long)by &&
+                            z < (long)bz)
+                            d = v->clear[(size_t)x + bx * ((size_t)y + by * (size_t)z)];
+                        if (d + 1 < best)
+                            best = d + 1;
+                    }
+            v->clear[b] = (uint8_t)best;
         }
     }
-    /* A brick is full when each of its 16 x-rows is 4 medium voxels (bricks
-     * that stick out of the grid are never full). */
-    for (size_t bk = 0; bk < bz[0]; bk++)
-        for (size_t bj = 0; bj < v->by[0]; bj++)
-            for (size_t bi = 0; bi < v->bx[0]; bi++) {
-                if ((bi + 1) * 4 > (size_t)g->nx || (bj + 1) * 4 > (size_t)g->ny ||
-                    (bk + 1) * 4 > (size_t)g->nz)
-                    continue;
-                bool full = true;
-                for (int z = 0; z < 4 && full; z++)
-                    for (int y = 0; y < 4 && full; y++) {
-                        const uint8_t *row = g->voxels + sg_grid_index(g, (int)bi * 4,
-                                                                       (int)bj * 4 + y,
-                                                                       (int)bk * 4 + z);
-                        full = row[0] && row[1] && row[2] && row[3];
-                    }
-                if (full) {
-                    size_t b = bi + v->bx[0] * (bj + v->by[0] * bk);
-                    v->full[0][b >> 6] |= (uint64_t)1 << (b & 63);
-                }
-            }
-    /* A super-brick is full when its 64 bricks are. */
-    for (size_t sk = 0; sk < bz[1]; sk++)
-        for (size_t sj = 0; sj < v->by[1]; sj++)
-            for (size_t si = 0; si < v->bx[1]; si++) {
-                bool full = true;
-                for (int z = 0; z < 4 && full; z++)
-                    for (int y = 0; y < 4 && full; y++)
-                        for (int x = 0; x < 4 && full; x++) {
-                            int c[3] = {(int)(si * 16) + 4 * x, (int)(sj * 16) + 4 * y,
-                                        (int)(sk * 16) + 4 * z};
-                            full = c[0] < g->nx && c[1] < g->ny && c[2] < g->nz &&
-                                   level_full(v, 0, c);
-                        }
-                if (full) {
-                    size_t b = si + v->bx[1] * (sj + v->by[1] * sk);
-                    v->full[1][b >> 6] |= (uint64_t)1 << (b & 63);
-                }
-            }
     return true;
 }
 
 void sg_visibility_release(SgVisibility *v)
 {
-    free(v->full[0]);
-    free(v->full[1]);
+    free(v->clear);
+    free(v->bits);
     memset(v, 0, sizeof *v);
 }
 
-/* Inside an all-medium cube of `size` voxels (aligned): advance every axis
- * by its crossings before the first one that leaves the cube. Returns true
- * when the segment ends inside the cube. */
+/* Inside a box of voxels [lo, hi] known to pass the walk's test: advance
+ * every axis by its crossings before the first one that leaves the box.
+ * Returns true when the segment ends inside the box. */
 static inline bool jump_through(int cur[3], int64_t m[3], const int64_t len[3],
-                                const int64_t step[3], int size)
+                                const int64_t step[3], const int lo[3], const int hi[3])
 {
     int exit_axis = -1;
     int64_t exit_index = 0;
     for (int x = 0; x < 3; x++) {
-        int in = cur[x] & (size - 1);
-        int64_t k = step[x] > 0 ? size - in : in + 1; /* crossings to leave */
+        int64_t k = step[x] > 0 ? hi[x] - cur[x] + 1 : cur[x] - lo[x] + 1; /* crossings to leave */
         int64_t index = m[x] + k - 1;
         if (index >= len[x])
             continue; /* the segment ends before leaving along x */
@@ -135,7 +148,11 @@ static inline bool jump_through(int cur[3], int64_t m[3], const int64_t len[3],
     return false;
 }
 
-bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3])
+/* The voxel walk from a to b. need 0: whether every voxel after a is
+ * medium (the visibility test); need >= 1: whether every voxel, a
+ * included, lies in a brick of clearance >= need (the chunk test of the
+ * importance points; needs the accelerator). */
+static bool walk(const SgVisibility *vis, const int a[3], const int b[3], int need)
 {
     /* Amanatides & Woo between voxel centres, in exact integer arithmetic:
      * along axis x the segment crosses a voxel boundary at parameters
@@ -143,9 +160,11 @@ bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3])
      * next crossings is a cross-multiplication. Crossings that coincide
      * (the segment passes through an edge or corner) step diagonally,
      * consistent with the medium's 26-connectivity.
-     * Inside an all-medium brick or super-brick the walk jumps to its exit:
-     * the first crossing that leaves it is found per axis, and every axis
-     * is advanced by its crossings before that one (counted in closed form). */
+     * In a brick of clearance r every brick within chessboard distance
+     * r - max(need, 1) passes the test, so the walk jumps to the exit of
+     * that cube of bricks: the first crossing that leaves it is found per
+     * axis, and every axis is advanced by its crossings before that one
+     * (counted in closed form). */
     int cur[3] = {a[0], a[1], a[2]};
     int64_t len[3], step[3], m[3] = {0, 0, 0};
     for (int x = 0; x < 3; x++) {
@@ -155,13 +174,21 @@ bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3])
     }
     if (!sg_grid_inside(vis->grid, a[0], a[1], a[2]) || !sg_grid_inside(vis->grid, b[0], b[1], b[2]))
         return false;
+    const int floor_need = need > 0 ? need : 1;
+    if (need > 0 && vis->clear[brick_at(vis, cur)] < need)
+        return false;
     for (;;) {
-        if (vis->full[1] && level_full(vis, 1, cur)) {
-            if (jump_through(cur, m, len, step, 16))
-                return true;
-        } else if (vis->full[0] && level_full(vis, 0, cur)) {
-            if (jump_through(cur, m, len, step, 4))
-                return true;
+        if (vis->clear) {
+            int r = vis->clear[brick_at(vis, cur)] - floor_need;
+            if (r >= 0) {
+                int lo[3], hi[3];
+                for (int x = 0; x < 3; x++) {
+                    lo[x] = ((cur[x] >> 2) - r) * 4;
+                    hi[x] = ((cur[x] >> 2) + r) * 4 + 3;
+                }
+                if (jump_through(cur, m, len, step, lo, hi))
+                    return true;
+            }
         }
         int best = -1;
         for (int x = 0; x < 3; x++) {
@@ -179,14 +206,19 @@ bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3])
                 cur[x] += (int)step[x];
                 m[x]++;
             }
-        if (!medium_at(vis, cur))
+        if (need > 0 ? vis->clear[brick_at(vis, cur)] < need : !medium_at(vis, cur))
             return false;
     }
 }
 
+bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3])
+{
+    return walk(vis, a, b, 0);
+}
+
 bool sg_importance_visible(const SgGrid *grid, const int a[3], const int b[3])
 {
-    SgVisibility plain = {grid, {NULL, NULL}, {0, 0}, {0, 0}};
+    SgVisibility plain = {.grid = grid};
     return sg_visibility_test(&plain, a, b);
 }
 
@@ -345,6 +377,105 @@ static double voxel_distance(const int a[3], const int b[3])
     return sqrt(d0 * d0 + d1 * d1 + d2 * d2);
 }
 
+/* Distance from voxel centre p to the segment between voxel centres a and b. */
+static double segment_distance(const int p[3], const int a[3], const int b[3])
+{
+    double ab[3], ap[3], ab2 = 0, t = 0;
+    for (int x = 0; x < 3; x++) {
+        ab[x] = b[x] - a[x];
+        ap[x] = p[x] - a[x];
+        ab2 += ab[x] * ab[x];
+        t += ab[x] * ap[x];
+    }
+    t = ab2 > 0 ? t / ab2 : 0;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    double d2 = 0;
+    for (int x = 0; x < 3; x++) {
+        double e = ap[x] - t * ab[x];
+        d2 += e * e;
+    }
+    return sqrt(d2);
+}
+
+/* Whether one walk shows every node of path[lo..hi] visible from voxel
+ * n (false: it could not tell). Let reach be the largest distance of those
+ * nodes from the segment S = [n, path[hi]]. The distance to S is convex,
+ * so each segment [n, path[i]] stays within reach of S; a voxel the walk
+ * n -> path[i] visits meets that segment, so its centre is within
+ * sqrt(3)/2 + reach of S, hence within sqrt(3) + reach of the centre of a
+ * voxel c that the walk n -> path[hi] visits (those voxels cover S). When
+ * c's brick has clearance r, every voxel whose centre is nearer to c's
+ * than 4 r - 3 is medium, inside the grid. So if every voxel of the walk
+ * along S has 4 r - 3 > sqrt(3) + reach, every walk n -> path[i] meets
+ * medium voxels only: the same answer as testing them one by one. */
+static bool chunk_visible(const SgVisibility *vis, const SgSkeleton *s, const int n[3],
+                          const uint32_t *path, size_t lo, size_t hi)
+{
+    const int *end = s->nodes[path[hi]].voxel;
+    double reach = 0;
+    for (size_t i = lo; i < hi; i++) {
+        double d = segment_distance(s->nodes[path[i]].voxel, n, end);
+        reach = d > reach ? d : reach;
+    }
+    double need = floor((sqrt(3.0) + reach + 3.0) / 4.0 + 1e-9) + 1;
+    return need <= 255 && walk(vis, n, end, (int)need);
+}
+
+/* Index of the first node of path[lo..hi] hidden from voxel n (hi + 1:
+ * none): a chunk shown visible by one walk, else its halves in order. */
+static size_t first_hidden(const SgVisibility *vis, const SgSkeleton *s, const int n[3],
+                           const uint32_t *path, size_t lo, size_t hi)
+{
+    if (hi - lo < 2) {
+        for (size_t i = lo; i <= hi; i++)
+            if (!sg_visibility_test(vis, n, s->nodes[path[i]].voxel))
+                return i;
+        return hi + 1;
+    }
+    if (chunk_visible(vis, s, n, path, lo, hi))
+        return hi + 1;
+    size_t mid = lo + (hi - lo) / 2;
+    size_t f = first_hidden(vis, s, n, path, lo, mid);
+    return f <= mid ? f : first_hidden(vis, s, n, path, mid + 1, hi);
+}
+
+enum { RUN_CHUNK_FIRST = 8, RUN_CHUNK_MOST = 128 };
+
+/* The exact run (every node tested, in effect): the path toward the light
+ * in chunks of 8, 16, ... 128 nodes, each settled by first_hidden. Sums
+ * the visible nodes' positions in path order; returns their count. */
+static uint32_t exact_run(const SgVisibility *vis, const SgSkeleton *s, const uint32_t *pred,
+                          const double *dist, uint32_t node, double sum[3])
+{
+    const int *n = s->nodes[node].voxel;
+    uint32_t path[RUN_CHUNK_MOST], count = 0;
+    size_t chunk = RUN_CHUNK_FIRST;
+    uint32_t x = pred[node];
+    while (x != SG_CACHE_NONE) {
+        size_t c = 0;
+        bool last = false;
+        for (;;) {
+            path[c++] = x;
+            if (dist[x] == 0 || pred[x] == SG_CACHE_NONE) {
+                last = true; /* the light's node: the run ends here */
+                break;
+            }
+            x = pred[x];
+            if (c == chunk)
+                break;
+        }
+        size_t f = first_hidden(vis, s, n, path, 0, c - 1);
+        for (size_t i = 0; i < f; i++, count++)
+            for (int a = 0; a < 3; a++)
+                sum[a] += s->nodes[path[i]].position[a];
+        if (f < c || last)
+            break;
+        if (chunk < RUN_CHUNK_MOST)
+            chunk *= 2;
+    }
+    return count;
+}
+
 void sg_importance_point(const SgVisibility *vis, const SgSkeleton *s, const uint32_t *pred,
                          const double *dist, uint32_t node, const double light_position[3],
                          double tolerance, float point[3])
@@ -366,6 +497,10 @@ void sg_importance_point(const SgVisibility *vis, const SgSkeleton *s, const uin
     uint32_t count = 0;
     bool reached = false;
     uint32_t m = pred[node];
+    if (tolerance <= 0 && vis->clear) {
+        count = exact_run(vis, s, pred, dist, node, sum);
+        m = SG_CACHE_NONE; /* done */
+    }
     while (m != SG_CACHE_NONE && !reached) {
         double budget = tolerance * voxel_distance(n->voxel, s->nodes[m].voxel);
         double span = 0;

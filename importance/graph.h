@@ -24,15 +24,18 @@ void sg_graph_shortest_paths(const SgGraph *graph, const uint32_t *sources,
                              void *heap_memory);
 size_t sg_graph_heap_bytes(const SgGraph *graph);
 
-/* Segment visibility with a two-level occupancy accelerator: a bit per
- * 4^3 brick and per 16^3 super-brick that is all medium. */
+/* Segment visibility with an accelerator: per 4^3 brick, its medium
+ * voxels as the bits of a word, and its clearance, the chessboard distance
+ * in bricks to the nearest brick that is not all medium (0 for those). */
 typedef struct SgVisibility {
     const SgGrid *grid;
-    uint64_t *full[2]; /* level 0: 4^3 bricks, level 1: 16^3; NULL: no accelerator */
-    size_t bx[2], by[2];
+    uint64_t *bits;    /* bx * by * bz bricks; NULL: no accelerator */
+    uint8_t *clear;
+    size_t bx, by, bz;
 } SgVisibility;
 
-bool sg_visibility_init(SgVisibility *vis, const SgGrid *grid, SgError *err);
+/* threads: for the bricks' words (<= 0: every core) */
+bool sg_visibility_init(SgVisibility *vis, const SgGrid *grid, int threads, SgError *err);
 void sg_visibility_release(SgVisibility *vis);
 bool sg_visibility_test(const SgVisibility *vis, const int a[3], const int b[3]);
 

@@ -127,6 +127,25 @@ static void mark_changed(Labeller *L, size_t g)
     L->changed[tile * TILE * TILE + y % TILE + TILE * (z % TILE)] |= (uint32_t)1 << (x % TILE);
 }
 
+/* A pass over the padded z planes, a plane per task: count[k] is plane k's. */
+typedef struct PlaneJob {
+    const Labeller *L;
+    const SgGrid *grid;
+    uint64_t *count;
+} PlaneJob;
+
+/* Runs body on every padded z plane (pz of them) and sums their counts. */
+static uint64_t each_plane(const Labeller *L, const SgGrid *grid, size_t pz, uint64_t *count,
+                           SgParallelBody body)
+{
+    PlaneJob job = {L, grid, count};
+    sg_parallel_for(pz, L->threads, body, &job);
+    uint64_t sum = 0;
+    for (size_t k = 0; k < pz; k++)
+        sum += count[k];
+    return sum;
+}
+
 /* An outbox entry: padded index and key, one word when the key is 32 bits. */
 #define KEY_T uint32_t
 #define PASS(name) name##_32
@@ -190,7 +209,8 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
     Tile **phase = L ? malloc(tile_count * sizeof *phase) : NULL;
     uint32_t *changed = L ? calloc(tile_count * TILE * TILE, sizeof *changed) : NULL;
     Workspace *work = L ? calloc((size_t)threads_used, sizeof *work) : NULL;
-    bool ok = L && key && tiles && phase && changed && work;
+    uint64_t *plane_count = calloc(pz, sizeof *plane_count); /* per padded z plane */
+    bool ok = L && key && tiles && phase && changed && work && plane_count;
     for (int t = 0; ok && t < threads_used; t++)
         ok = (work[t].local = malloc((size_t)TL * TL * TL * key_size)) != NULL;
     if (!ok) {
@@ -202,6 +222,7 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
         free(phase);
         free(changed);
         free(work);
+        free(plane_count);
         return sg_fail(err, "out of memory for the nearest-node labels (%zu voxels)", total);
     }
     L->key = key;
@@ -217,6 +238,7 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
     L->work = work;
     L->threads = threads_used;
     sg_memory_prefer_huge_pages(key, total * key_size);
+    sg_memory_prefer_huge_pages(changed, tile_count * TILE * TILE * sizeof *changed);
     if (wide) {
         L->shift = 32;
         L->node_mask = 0xffffffffu;
@@ -230,7 +252,7 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
             L->distance_limit = distance_limit;
     }
 
-    uint64_t medium = wide ? fill_64(L, grid, px, py, total) : fill_32(L, grid, px, py, total);
+    uint64_t medium = each_plane(L, grid, pz, plane_count, wide ? fill_plane_64 : fill_plane_32);
     int n = 0;
     for (int dz = -1; dz <= 1; dz++)
         for (int dy = -1; dy <= 1; dy++)
@@ -311,9 +333,10 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
     if (rounds > 0 && !more)
         rounds--; /* the last round found nothing to do */
 
-    uint64_t labelled = ok && !*overflow ? (wide ? count_labelled_64(L, total)
-                                                 : count_labelled_32(L, total))
-                                         : 0;
+    uint64_t labelled = ok && !*overflow
+                            ? each_plane(L, grid, pz, plane_count, wide ? count_plane_64 : count_plane_32)
+                            : 0;
+    free(plane_count);
     uint64_t node_mask = L->node_mask;
     for (int t = 0; t < threads_used; t++) {
         free(work[t].local);

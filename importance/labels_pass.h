@@ -151,25 +151,42 @@ static void PASS(apply)(Labeller *L, size_t tiles)
         L->work[t].outbox.count = 0;
 }
 
-/* Blocked cells everywhere, unseen on the medium; counts the medium. */
-static uint64_t PASS(fill)(Labeller *L, const SgGrid *grid, size_t px, size_t py, size_t total)
+/* Padded z plane k: blocked cells everywhere, unseen on the medium;
+ * counts its medium (a plane per task). */
+static void PASS(fill_plane)(void *ctx, uint64_t k, int thread)
 {
-    KEY_T *key = L->key;
+    (void)thread;
+    PlaneJob *job = ctx;
+    const Labeller *L = job->L;
+    const SgGrid *grid = job->grid;
+    KEY_T *plane = (KEY_T *)L->key + L->plane * k;
     const KEY_T blocked = (KEY_T)L->node_mask, unseen = (KEY_T)~(KEY_T)0;
     uint64_t medium = 0;
-    for (size_t v = 0; v < total; v++)
-        key[v] = blocked;
-    for (int k = 0; k < grid->nz; k++)
-        for (int j = 0; j < grid->ny; j++) {
-            const uint8_t *row = grid->voxels + sg_grid_index(grid, 0, j, k);
-            KEY_T *krow = key + 1 + px * ((size_t)(j + 1) + py * (size_t)(k + 1));
-            for (int i = 0; i < grid->nx; i++)
-                if (row[i]) {
-                    krow[i] = unseen;
-                    medium++;
-                }
-        }
-    return medium;
+    for (size_t v = 0; v < L->plane; v++)
+        plane[v] = blocked;
+    for (int j = 0; k >= 1 && k <= (uint64_t)grid->nz && j < grid->ny; j++) {
+        const uint8_t *row = grid->voxels + sg_grid_index(grid, 0, j, (int)k - 1);
+        KEY_T *krow = plane + 1 + L->px * (size_t)(j + 1);
+        for (int i = 0; i < grid->nx; i++)
+            if (row[i]) {
+                krow[i] = unseen;
+                medium++;
+            }
+    }
+    job->count[k] = medium;
+}
+
+/* Padded z plane k: its voxels with a node. */
+static void PASS(count_plane)(void *ctx, uint64_t k, int thread)
+{
+    (void)thread;
+    PlaneJob *job = ctx;
+    const Labeller *L = job->L;
+    const KEY_T *plane = (const KEY_T *)L->key + L->plane * k;
+    uint64_t labelled = 0;
+    for (size_t v = 0; v < L->plane; v++)
+        labelled += (plane[v] & L->node_mask) != L->node_mask;
+    job->count[k] = labelled;
 }
 
 /* Seeds voxel v with node s unless a lower node stands there already. */
@@ -182,11 +199,3 @@ static bool PASS(seed)(Labeller *L, size_t v, uint32_t s)
     return true;
 }
 
-static uint64_t PASS(count_labelled)(const Labeller *L, size_t total)
-{
-    const KEY_T *key = L->key;
-    uint64_t labelled = 0;
-    for (size_t v = 0; v < total; v++)
-        labelled += (key[v] & L->node_mask) != L->node_mask;
-    return labelled;
-}

@@ -30,31 +30,6 @@ static size_t lattice_index3(const SgComplex *cx, const int p[3])
     return sg_complex_vertex(cx, p[0], p[1], p[2]);
 }
 
-/* Grid layout to lattice layout in place: the array grows to the lattice
- * (realloc, usually without a copy) and the rows move up, the last first
- * (a row's place in the lattice is never below its place in the grid, and
- * never below the end of any row still to move), with the padding zeroed
- * behind them. A second array beside the first was the step's peak. */
-static bool to_lattice(const SgComplex *cx, const SgGrid *g, uint16_t **values, SgError *err)
-{
-    uint16_t *lat = realloc(*values, cx->vertex_count * sizeof *lat);
-    if (!lat)
-        return sg_fail(err, "skeleton: out of memory");
-    *values = lat;
-    sg_memory_prefer_huge_pages(lat, cx->vertex_count * sizeof *lat);
-    const size_t nx = (size_t)g->nx;
-    size_t end = cx->vertex_count; /* lat[end ..] is in place */
-    for (int k = g->nz - 1; k >= 0; k--)
-        for (int j = g->ny - 1; j >= 0; j--) {
-            size_t to = sg_complex_vertex(cx, 0, j, k), from = sg_grid_index(g, 0, j, k);
-            memmove(lat + to, lat + from, nx * sizeof *lat);
-            memset(lat + to + nx, 0, (end - to - nx) * sizeof *lat);
-            end = to;
-        }
-    memset(lat, 0, end * sizeof *lat);
-    return true;
-}
-
 typedef struct Anchor {
     uint32_t vertex_cell; /* cell id of the constrained 0-cell */
     uint32_t constraint;  /* index into the caller's constraint list */
@@ -132,14 +107,13 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
     sg_progress_begin(&progress, "skeleton: distance", 0);
     if (!opt.progress)
         progress.enabled = false;
-    if (!sg_distance_opening(g, opt.threads, &dist8, &open8, err))
+    if (!sg_distance_opening_lattice(g, opt.threads, &dist8, &open8, err))
         goto done;
     stats.seconds_distance = sg_seconds() - t0;
+    /* dist8 and open8 come in lattice layout (voxel (i,j,k) at vertex
+     * (i,j,k)): the collapse reads the voxels around a cell without
+     * dividing indices */
     if (!sg_complex_build(&cx, g, opt.threads, err))
-        goto done;
-    /* lattice layout (voxel (i,j,k) at vertex (i,j,k)): the collapse reads
-     * the voxels around a cell without dividing indices */
-    if (!to_lattice(&cx, g, &dist8, err) || !to_lattice(&cx, g, &open8, err))
         goto done;
 
     anchors = calloc(constraint_count ? constraint_count : 1, sizeof *anchors);

@@ -102,6 +102,11 @@ bool sg_skeletonize_grid(const SgGrid *grid, uint32_t constraint_count, const in
  * distance.c). Arrays have nx*ny*nz entries, x fastest; free() them. */
 bool sg_distance_opening(const SgGrid *grid, int threads, uint16_t **dist8, uint16_t **open8,
                          SgError *err);
+/* The same values in the collapse's lattice layout (complex.h: sizes
+ * n + 3, voxel (x, y, z) at vertex (x + 1, y + 1, z + 1), zero on the
+ * padding), written there in place of a second array. */
+bool sg_distance_opening_lattice(const SgGrid *grid, int threads, uint16_t **dist8,
+                                 uint16_t **open8, SgError *err);
 
 #ifdef __cplusplus
 }

@@ -446,23 +446,44 @@ Test(importance_visibility, agrees_with_dense_sampling)
     sgt_medium_free(&m);
 }
 
+/* An open medium of dims with count solid boxes at random places (rng
+ * seeded with seed, stream), w voxels more than one along x (and along y
+ * and z when thick), w below widths; every long_every-th box long_size
+ * voxels longer along long_axis. vis: its accelerator. */
+typedef struct Scatter {
+    int dims[3];
+    uint64_t seed, stream;
+    int count, widths;
+    bool thick;
+    int long_every, long_axis, long_size;
+} Scatter;
+
+static void scattered_medium(const Scatter *sc, SgMedium *m, SgRng *rng, SgVisibility *vis)
+{
+    sgt_medium_open(m, sc->dims[0], sc->dims[1], sc->dims[2]);
+    sg_rng_seed(rng, sc->seed, sc->stream);
+    for (int i = 0; i < sc->count; i++) {
+        int lo[3], hi[3];
+        for (int a = 0; a < 3; a++)
+            lo[a] = (int)(sg_rng_float(rng) * sc->dims[a]);
+        int w = (int)(sg_rng_float(rng) * sc->widths);
+        for (int a = 0; a < 3; a++)
+            hi[a] = lo[a] + (a == 0 || sc->thick ? w : 0) +
+                    (a == sc->long_axis && i % sc->long_every == 0 ? sc->long_size : 0);
+        sgt_box(m, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], 0);
+    }
+    SgError err = {0};
+    cr_assert(sg_visibility_init(vis, &m->grid, 2, &err));
+}
+
 Test(importance_visibility, brick_jumps_agree_with_plain_walk)
 {
     /* Open rooms with scattered solid voxels and slabs: the accelerated walk
      * (jumps through all-medium 4x4x4 bricks) answers like the plain one. */
     SgMedium m;
-    sgt_medium_open(&m, 61, 45, 38);
     SgRng rng;
-    sg_rng_seed(&rng, 11, 2);
-    for (int i = 0; i < 60; i++) {
-        int x = (int)(sg_rng_float(&rng) * 61), y = (int)(sg_rng_float(&rng) * 45),
-            z = (int)(sg_rng_float(&rng) * 38);
-        int w = (int)(sg_rng_float(&rng) * 4);
-        sgt_box(&m, x, y, z, x + w, y + (i % 3 == 0 ? 12 : 0), z, 0);
-    }
     SgVisibility fast;
-    SgError err = {0};
-    cr_assert(sg_visibility_init(&fast, &m.grid, &err));
+    scattered_medium(&(Scatter){{61, 45, 38}, 11, 2, 60, 4, false, 3, 1, 12}, &m, &rng, &fast);
     int visible = 0, total = 20000;
     for (int t = 0; t < total; t++) {
         int a[3], b[3];
@@ -476,6 +497,94 @@ Test(importance_visibility, brick_jumps_agree_with_plain_walk)
     }
     cr_assert(visible > total / 10 && visible < total * 9 / 10, "visible %d", visible);
     sg_visibility_release(&fast);
+    sgt_medium_free(&m);
+}
+
+Test(importance_visibility, brick_clearance_is_the_chessboard_distance)
+{
+    /* Each brick's clearance against brute force: the chessboard distance,
+     * in bricks, to the nearest brick that is not all medium or lies
+     * outside the grid (bricks sticking out of it are not full). */
+    SgMedium m;
+    SgRng rng;
+    SgVisibility vis;
+    scattered_medium(&(Scatter){{70, 45, 38}, 5, 3, 6, 1, false, 1, 0, 0}, &m, &rng, &vis);
+    const long bx = (long)vis.bx, by = (long)vis.by, bz = (long)vis.bz;
+    int deepest = 0;
+    for (long k = 0; k < bz; k++)
+        for (long j = 0; j < by; j++)
+            for (long i = 0; i < bx; i++) {
+                long best = 255;
+                for (long z = -1; z <= bz; z++)
+                    for (long y = -1; y <= by; y++)
+                        for (long x = -1; x <= bx; x++) {
+                            bool outside = x < 0 || y < 0 || z < 0 || x >= bx || y >= by || z >= bz;
+                            bool full = !outside && (x + 1) * 4 <= 70 && (y + 1) * 4 <= 45 &&
+                                        (z + 1) * 4 <= 38;
+                            for (int v = 0; v < 64 && full; v++)
+                                full = sg_grid_get(&m.grid, (int)x * 4 + (v & 3),
+                                                   (int)y * 4 + (v >> 2 & 3), (int)z * 4 + (v >> 4)) != 0;
+                            if (full)
+                                continue;
+                            long d = labs(x - i);
+                            d = labs(y - j) > d ? labs(y - j) : d;
+                            d = labs(z - k) > d ? labs(z - k) : d;
+                            best = d < best ? d : best;
+                        }
+                int got = vis.clear[i + bx * (j + by * k)];
+                cr_assert_eq(got, best, "brick (%ld %ld %ld): %d, brute force %ld", i, j, k, got, best);
+                deepest = got > deepest ? got : deepest;
+            }
+    cr_assert_geq(deepest, 3, "no deep brick: the test would not check the jumps");
+    sg_visibility_release(&vis);
+    sgt_medium_free(&m);
+}
+
+Test(importance_points, chunked_runs_match_every_node_tested)
+{
+    /* A winding skeleton path through rooms with pillars and thin slabs:
+     * each node's importance point found by the accelerated walk (whole
+     * chunks of the run shown visible by one walk along a clear tube) is
+     * the same float for float as with every node of its run tested. */
+    SgMedium m;
+    SgRng rng;
+    SgVisibility fast, plain = {.grid = &m.grid};
+    scattered_medium(&(Scatter){{96, 64, 48}, 13, 4, 40, 3, true, 4, 2, 20}, &m, &rng, &fast);
+    SgSkeleton s = {0};
+    int p[6][3] = {{4, 4, 4}, {80, 10, 8}, {90, 50, 20}, {30, 58, 40}, {10, 30, 44}, {60, 32, 24}};
+    uint32_t last = SG_CACHE_NONE;
+    for (int i = 0; i + 1 < 6; i++)
+        last = sgt_line(&s, last, p[i], p[i + 1]);
+    SgGraph graph;
+    SgError err = {0};
+    cr_assert(sg_graph_build(&s, &graph, &err));
+    uint32_t N = s.node_count;
+    double *dist = malloc(N * sizeof *dist);
+    uint32_t *pred = malloc(N * sizeof *pred);
+    void *heap = malloc(sg_graph_heap_bytes(&graph));
+    cr_assert(dist && pred && heap);
+    sg_graph_shortest_paths(&graph, &last, 1, dist, pred, heap);
+    const double light[3] = {60.5, 32.5, 24.5};
+    int far_sighted = 0;
+    for (uint32_t n = 0; n < N; n++) {
+        float a[3], b[3];
+        sg_importance_point(&plain, &s, pred, dist, n, light, 0, a);
+        sg_importance_point(&fast, &s, pred, dist, n, light, 0, b);
+        cr_assert(memcmp(a, b, sizeof a) == 0, "node %u: (%g %g %g) against (%g %g %g)", n,
+                  b[0], b[1], b[2], a[0], a[1], a[2]);
+        double d = 0;
+        for (int x = 0; x < 3; x++)
+            d += (a[x] - s.nodes[n].position[x]) * (a[x] - s.nodes[n].position[x]);
+        far_sighted += d > 20 * 20;
+    }
+    /* many runs span several chunks (the point is their barycenter) */
+    cr_assert_gt(far_sighted, (int)N / 10, "%d of %u nodes see far", far_sighted, N);
+    sg_visibility_release(&fast);
+    free(dist);
+    free(pred);
+    free(heap);
+    sg_graph_release(&graph);
+    sg_skeleton_release(&s);
     sgt_medium_free(&m);
 }
 

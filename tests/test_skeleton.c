@@ -254,6 +254,34 @@ Test(skeleton, unfiltered_skeleton_is_hairy)
     sg_shape_medium_free(&m);
 }
 
+/* The lifespan rule on edges due within DUE_MOST steps (held until their
+ * step) and on edges due later (tested every step) answers alike: with
+ * scales so large that no edge lives long enough, both keep none and give
+ * the same skeleton, smaller than a weakly filtered one. */
+Test(skeleton, lifespan_rule_far_and_near_agree)
+{
+    SgMedium m;
+    cr_assert(sg_shape_medium(SG_SHAPE_PILLAR_ROOM, 3, &m));
+    sg_shape_roughen(&m, 0.25, 4242);
+    /* a hairy skeleton; near (edges due within open8 x 250 steps); far */
+    const double scales[3] = {0.25, 2000.0, 100000.0};
+    SgSkeleton s[3];
+    for (int i = 0; i < 3; i++) {
+        SgSkeletonOptions o = quiet_options(2);
+        o.filter_scale = scales[i];
+        SgSkeletonStats st;
+        skeletonize_checked(&m, &o, &s[i], &st, "scaled filter");
+    }
+    cr_assert_lt(s[1].node_count, s[0].node_count);
+    cr_assert_eq(s[1].node_count, s[2].node_count);
+    cr_assert_eq(s[1].edge_count, s[2].edge_count);
+    cr_assert(!memcmp(s[1].nodes, s[2].nodes, s[1].node_count * sizeof *s[1].nodes));
+    cr_assert(!memcmp(s[1].edges, s[2].edges, s[1].edge_count * sizeof *s[1].edges));
+    for (int i = 0; i < 3; i++)
+        sg_skeleton_release(&s[i]);
+    sg_shape_medium_free(&m);
+}
+
 /* Results do not depend on the thread count (distance transform,
  * opening, complex build and the collapse's slabs run on threads), on
  * shapes with loops, cavities and constraints. */
@@ -519,6 +547,57 @@ Test(distance, exact_edt_and_opening_bound)
 }
 
 /* ---- a real scene: Sponza (third-party, in ../shared/scenes) ---- */
+
+/* The lattice layout's values (the collapse's: sizes n + 3, voxel (x,y,z)
+ * at vertex (x+1, y+1, z+1)) are the grid layout's, with zero padding. */
+static void check_lattice_layout(const SgGrid *g)
+{
+    uint16_t *d8, *o8, *ld8, *lo8;
+    SgError err = {0};
+    cr_assert(sg_distance_opening(g, 2, &d8, &o8, &err));
+    cr_assert(sg_distance_opening_lattice(g, 1, &ld8, &lo8, &err));
+    const size_t lx = (size_t)g->nx + 3, ly = (size_t)g->ny + 3, lz = (size_t)g->nz + 3;
+    size_t nonzero = 0;
+    for (size_t v = 0; v < lx * ly * lz; v++) {
+        int x = (int)(v % lx) - 1, y = (int)(v / lx % ly) - 1, z = (int)(v / (lx * ly)) - 1;
+        bool in = sg_grid_inside(g, x, y, z);
+        size_t i = in ? sg_grid_index(g, x, y, z) : 0;
+        cr_assert_eq(ld8[v], in ? d8[i] : 0, "%dx%dx%d: distance at (%d %d %d)", g->nx, g->ny,
+                     g->nz, x, y, z);
+        cr_assert_eq(lo8[v], in ? o8[i] : 0, "%dx%dx%d: opening at (%d %d %d)", g->nx, g->ny,
+                     g->nz, x, y, z);
+        nonzero += ld8[v] != 0;
+    }
+    cr_assert_gt(nonzero, 0);
+    free(d8);
+    free(o8);
+    free(ld8);
+    free(lo8);
+}
+
+Test(distance, lattice_layout_matches_grid_layout)
+{
+    /* a rough room (written in place, planes upwards and downwards), a tiny
+     * grid (its padding outweighs the halved values: an array of its own),
+     * and a slab whose in-plane distances pass 256 voxels (the 32-bit path) */
+    SgMedium m;
+    cr_assert(sg_shape_medium(SG_SHAPE_PILLAR_ROOM, 1, &m));
+    sg_shape_roughen(&m, 0.3, 7);
+    check_lattice_layout(&m.grid);
+    sg_shape_medium_free(&m);
+    SgGrid tiny = small_grid(3);
+    tiny.voxels[sg_grid_index(&tiny, 1, 1, 1)] = 1;
+    tiny.voxels[sg_grid_index(&tiny, 1, 2, 1)] = 1;
+    check_lattice_layout(&tiny);
+    sg_grid_release(&tiny);
+    SgGrid slab;
+    SgError err = {0};
+    double o[3] = {0, 0, 0};
+    cr_assert(sg_grid_init(&slab, 600, 560, 3, o, 1.0, &err));
+    memset(slab.voxels, 1, sg_grid_count(&slab));
+    check_lattice_layout(&slab);
+    sg_grid_release(&slab);
+}
 
 #include "../voxelize/voxelize.h"
 #include "support_files.h"
