@@ -49,7 +49,8 @@ static const float exponents[EXPONENTS] = {4.0f, 16.0f, 64.0f};
  * keeps HISTOGRAM_FLOOR of the density spread evenly, so that a bin no
  * record has reached yet can still be drawn. */
 #define HISTOGRAM_OWN_SAMPLES 1024u
-#define HISTOGRAM_FLOOR 0.1f/* Vertices a region needs before its outgoing radiance is used. */
+#define HISTOGRAM_FLOOR 0.1f
+/* Vertices a region needs before its outgoing radiance is used. */
 #define RADIANCE_MIN_SAMPLES 64u
 /* A coarse region, or the whole scene, with this many guided bounces and
  * as many vertices stops taking records: it is only a fallback, and adding
@@ -399,13 +400,13 @@ static void folded_lobe_densities(float cos_axis, float cos_mirror, float lobe[E
     }
 }
 
-/* v^2 p / p_k for candidate k. p_k = 0: that candidate could never have
+/* v^2 p / p_k for candidate k, whose guide (lobe or histogram) has density
+ * pdf_guide at the direction. p_k = 0: that candidate could never have
  * drawn this direction, which carries light: it would be biased. */
-static float candidate_term(int k, float weight, float pdf_bsdf, const float lobe[EXPONENTS],
-                            const SgMixtureLearner *l)
+static float candidate_term(int k, float weight, float pdf_bsdf, float pdf_guide)
 {
     float a = sg_mixture_candidates[k].alpha;
-    float p = a * pdf_bsdf + (1.0f - a) * lobe[l->exponent_of[k]];
+    float p = a * pdf_bsdf + (1.0f - a) * pdf_guide;
     return p > 0.0f ? weight / p : INFINITY;
 }
 
@@ -459,7 +460,7 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     } else {
         folded_lobe_densities(rec->cos_axis, rec->cos_mirror, lobe);
         for (int k = 0; k < SKELETON_CANDIDATES; k++)
-            st->term[k] = candidate_term(k, weight, rec->pdf_bsdf, lobe, l);
+            st->term[k] = candidate_term(k, weight, rec->pdf_bsdf, lobe[l->exponent_of[k]]);
     }
     if (!has_direction)
         return;
@@ -471,9 +472,7 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
             sg_mixture_histogram_pdf(&l->view.histogram[(size_t)histogram * SG_MIXTURE_BINS], d);
         for (int k = 0; k < HISTOGRAM_CANDIDATES; k++) {
             int c = SKELETON_CANDIDATES + HISTOGRAM_FAMILY * AXIS_CANDIDATES + k;
-            float a = sg_mixture_candidates[c].alpha;
-            float p = a * rec->pdf_bsdf + (1.0f - a) * p_histogram;
-            st->term[c] = p > 0.0f ? weight / p : INFINITY;
+            st->term[c] = candidate_term(c, weight, rec->pdf_bsdf, p_histogram);
         }
         st->axis_terms[HISTOGRAM_FAMILY] = true;
     }
@@ -493,7 +492,7 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
         folded_lobe_densities(c1, c2, lobe);
         for (int k = 0; k < AXIS_CANDIDATES; k++) {
             int c = SKELETON_CANDIDATES + f * AXIS_CANDIDATES + k;
-            st->term[c] = candidate_term(c, weight, rec->pdf_bsdf, lobe, l);
+            st->term[c] = candidate_term(c, weight, rec->pdf_bsdf, lobe[l->exponent_of[c]]);
         }
         st->axis_terms[f] = true;
     }
@@ -692,8 +691,8 @@ void sg_mixture_update(SgMixtureLearner *l)
     publish(l);
 }
 
-/* The region's axis or point changed: its learned candidates' sums restart
- * from the records of the next publication on. */
+/* A family's axis, point or histogram changed: its candidates' sums
+ * restart from the records of the next publication on. */
 static void forget_family(RegionStats *st, int f, uint32_t generation)
 {
     st->axis_from[f] = generation + 1; /* the records of the passes that use the new axis */
@@ -802,7 +801,7 @@ void sg_mixture_learn(SgMixtureLearner *l)
             uint32_t c = l->coarse_of[rec->region];
             add_record(&l->stats[rec->region], rec);
             bool sums = rec->bin >= 0 && rec->estimate > 0.0f;
-            if (sums && l->stats[rec->region].samples < SETTLED_SAMPLES)
+            if (sums)
                 l->histogram_sum[(size_t)rec->region * SG_MIXTURE_BINS + (size_t)rec->bin] += rec->estimate;
             if (!(l->flags[rec->region] & REGION_SEEN)) {
                 l->flags[rec->region] |= REGION_SEEN;
@@ -1040,15 +1039,20 @@ bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size)
  * for p on the octahedron (|p|_1 = 1), i.e. |w|_1^3 for unit w: between 1
  * and 3^1.5 across the square, so a bin's solid angle is not all equal and
  * the density within a bin follows that factor. */
+/* The fold between the octahedron's lower half and the square's corners:
+ * its own inverse. */
+static inline void octahedral_fold(float *x, float *y)
+{
+    float fx = copysignf(1.0f - fabsf(*y), *x), fy = copysignf(1.0f - fabsf(*x), *y);
+    *x = fx, *y = fy;
+}
+
 static inline void octahedral_square(Vec3 w, float *px, float *py, float *l1)
 {
     float s = fabsf(w.x) + fabsf(w.y) + fabsf(w.z);
-    float x = w.x / s, y = w.y / s;
-    if (w.z < 0.0f) {
-        float fx = copysignf(1.0f - fabsf(y), x), fy = copysignf(1.0f - fabsf(x), y);
-        x = fx, y = fy;
-    }
-    *px = x, *py = y, *l1 = s;
+    *px = w.x / s, *py = w.y / s, *l1 = s;
+    if (w.z < 0.0f)
+        octahedral_fold(px, py);
 }
 
 static inline uint32_t octahedral_bin(float px, float py)
@@ -1096,9 +1100,7 @@ Vec3 sg_mixture_histogram_sample(const float *cdf, float u1, float u2)
     float x = -1.0f + ((float)(lo % SG_MIXTURE_HIST_RES) + s) * cell;
     float y = -1.0f + ((float)(lo / SG_MIXTURE_HIST_RES) + u2) * cell;
     float z = 1.0f - fabsf(x) - fabsf(y);
-    if (z < 0.0f) {
-        float fx = copysignf(1.0f - fabsf(y), x), fy = copysignf(1.0f - fabsf(x), y);
-        x = fx, y = fy;
-    }
+    if (z < 0.0f)
+        octahedral_fold(&x, &y);
     return v3_normalize(v3(x, y, z));
 }
