@@ -3,6 +3,7 @@
  * triangles, bounds and geometry hash. */
 #include "scene_builder.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -279,7 +280,24 @@ static bool group_lights(SgSceneBuilder *b, SgError *err)
     return true;
 }
 
-static void compute_bounds_and_hash(SgScene *s)
+/* An image's bytes into the hash, not its path: the same scene named from
+ * another directory (or by an absolute path) keeps its hash, and an image
+ * changed in place changes it. */
+static bool hash_file(uint64_t *h, const char *scene_path, const char *file, SgError *err)
+{
+    FILE *f = fopen(file, "rb");
+    if (!f)
+        return sg_fail(err, "%s: cannot read the sky image %s: %s", scene_path, file, strerror(errno));
+    unsigned char buf[65536];
+    size_t n;
+    while ((n = fread(buf, 1, sizeof buf, f)) > 0)
+        *h = sg_hash_bytes(*h, buf, n);
+    bool ok = !ferror(f);
+    fclose(f);
+    return ok || sg_fail(err, "%s: cannot read the sky image %s", scene_path, file);
+}
+
+static bool compute_bounds_and_hash(SgScene *s, const char *path, SgError *err)
 {
     for (int a = 0; a < 3; a++) {
         s->bounds_min[a] = INFINITY;
@@ -318,8 +336,8 @@ static void compute_bounds_and_hash(SgScene *s)
         h = sg_hash_bytes(h, &l->cos_cone, sizeof l->cos_cone);
         h = sg_hash_bytes(h, &l->cos_falloff_start, sizeof l->cos_falloff_start);
         h = sg_hash_bytes(h, &l->angular_radius, sizeof l->angular_radius);
-        if (l->image_path)
-            h = sg_hash_bytes(h, l->image_path, strlen(l->image_path));
+        if (l->image_path && !hash_file(&h, path, l->image_path, err))
+            return false;
         h = sg_hash_bytes(h, &layout, sizeof layout);
         h = sg_hash_bytes(h, l->light_to_world, sizeof l->light_to_world);
         h = sg_hash_bytes(h, &portal, sizeof portal);
@@ -327,6 +345,7 @@ static void compute_bounds_and_hash(SgScene *s)
             h = sg_hash_bytes(h, l->portal, sizeof l->portal);
     }
     s->geometry_hash = h;
+    return true;
 }
 
 void sg_scene_triangle_normal(const SgScene *scene, uint32_t t, double n[3])
@@ -389,8 +408,7 @@ bool sg_builder_finish(SgSceneBuilder *b, SgError *err)
     if (b->scene->uvs && !reserve_uvs(b, b->scene->vertex_count, err)) /* the meshes after the last with uv */
         return false;
     b->scene->degenerate_dropped = b->dropped_degenerate;
-    compute_bounds_and_hash(b->scene);
-    return true;
+    return compute_bounds_and_hash(b->scene, b->path, err);
 }
 
 void sg_scene_add_warning(SgScene *s, const char *fmt, ...)

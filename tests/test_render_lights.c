@@ -487,3 +487,55 @@ Test(render_lights, renderer_refuses_a_missing_sky_image_and_no_light)
                                 &err));
     cr_expect(strstr(err.message, "odd.exr") && strstr(err.message, "3x2"), "%s", err.message);
 }
+
+/* The scene's hash (what a cache and a shard are checked against) takes a
+ * sky image's bytes, not its path: the scene named from another directory
+ * keeps it, the image changed in place changes it, a missing image is
+ * refused when the scene loads, naming the image. */
+Test(render_lights, a_sky_images_bytes_not_its_path_make_the_scene_hash)
+{
+    char dir[4096], json[4200], image[4200], cwd[4096];
+    snprintf(dir, sizeof dir, "%s", sg_test_tmpdir());
+    snprintf(json, sizeof json, "%s/sky.json", dir);
+    snprintf(image, sizeof image, "%s/sky.exr", dir);
+    cr_assert(getcwd(cwd, sizeof cwd));
+    FILE *f = fopen(json, "w");
+    cr_assert(f);
+    fputs("{\"lights\": [{\"type\": \"quad\", \"corners\": [[0,2,0], [1,2,0], [1,2,1], [0,2,1]], "
+          "\"radiance\": [1, 1, 1]}, {\"type\": \"sky\", \"image\": \"sky.exr\"}]}",
+          f);
+    fclose(f);
+    f = fopen(image, "wb");
+    cr_assert(f);
+    fputs("first bytes", f);
+    fclose(f);
+
+    SgError err = {0};
+    SgScene *absolute = sg_scene_load(json, &err);
+    cr_assert(absolute, "%s", err.message);
+    cr_assert_eq(chdir(dir), 0);
+    SgScene *relative = sg_scene_load("sky.json", &err);
+    cr_assert(relative, "%s", err.message);
+    cr_expect_eq(absolute->geometry_hash, relative->geometry_hash, "named from its own directory: %016llx, by its "
+                 "absolute path: %016llx", (unsigned long long)relative->geometry_hash,
+                 (unsigned long long)absolute->geometry_hash);
+    sg_scene_free(relative);
+
+    f = fopen(image, "wb");
+    cr_assert(f);
+    fputs("other bytes", f);
+    fclose(f);
+    SgScene *changed = sg_scene_load("sky.json", &err);
+    cr_assert(changed, "%s", err.message);
+    cr_expect_neq(absolute->geometry_hash, changed->geometry_hash, "the image changed, the hash did not");
+    sg_scene_free(changed);
+    sg_scene_free(absolute);
+
+    remove(image);
+    SgScene *missing = sg_scene_load("sky.json", &err);
+    cr_expect_null(missing, "a scene whose sky image is missing loaded");
+    cr_expect(strstr(err.message, "sky.json") && strstr(err.message, "sky.exr") && strstr(err.message, "cannot read"),
+              "%s", err.message);
+    sg_scene_free(missing);
+    cr_assert_eq(chdir(cwd), 0);
+}
