@@ -63,9 +63,13 @@ static const char *precompute(const char *scene, const char *dir)
  * skeleton rule's exponent 4; seeds 1000 + k, 80x60), not by 32 runs of
  * it: each run loaded some 260 shared objects and the scene again, which
  * cost more than its render (bin/render's own options are test_render_cli's
- * subject, and cache_for_other_geometry_is_refused runs it here). */
-static void image_means_opts(const SgScene *scene, const char *scene_path, const char *cache, SgSampling mode,
-                             bool no_openings, int seeds, int spp, double *mean, double *se)
+ * subject, and cache_for_other_geometry_is_refused runs it here). Where
+ * pixel_noise is given, also the pixels' mean relative variance between
+ * seeds (a pixel's variance over its mean squared plus a tenth of the image
+ * mean's, squared): the noise a user sees, which the image mean averages
+ * mostly away. */
+static void image_noise(const SgScene *scene, const char *scene_path, const char *cache, SgSampling mode,
+                        bool no_openings, int seeds, int spp, double *mean, double *se, double *pixel_noise)
 {
     SgRenderOptions o;
     sg_render_options_default(&o, scene);
@@ -80,7 +84,8 @@ static void image_means_opts(const SgScene *scene, const char *scene_path, const
     if (mode != SG_SAMPLING_BSDF)
         cr_assert(sg_importance_file_open(&guide, cache, scene, scene_path, &o.importance, &e), "%s", e.message);
     float *rgb = malloc(sizeof(float) * 3 * 80 * 60);
-    cr_assert_not_null(rgb);
+    double *sum = calloc(80 * 60, sizeof *sum), *sum2 = calloc(80 * 60, sizeof *sum2);
+    cr_assert(rgb && sum && sum2);
     double s = 0, ss = 0;
     for (int k = 0; k < seeds; k++) {
         o.seed = 1000 + (uint64_t)k;
@@ -94,6 +99,11 @@ static void image_means_opts(const SgScene *scene, const char *scene_path, const
         for (int i = 0; i < 3 * 80 * 60; i++)
             m += rgb[i];
         m /= 3.0 * 80 * 60;
+        for (int p = 0; p < 80 * 60; p++) {
+            double v = (rgb[3 * p] + rgb[3 * p + 1] + rgb[3 * p + 2]) / 3.0;
+            sum[p] += v;
+            sum2[p] += v * v;
+        }
         s += m;
         ss += m * m;
     }
@@ -101,6 +111,22 @@ static void image_means_opts(const SgScene *scene, const char *scene_path, const
     sg_importance_file_close(&guide);
     *mean = s / seeds;
     *se = sqrt(fmax(0.0, ss / seeds - *mean * *mean) / (seeds - 1));
+    if (pixel_noise) {
+        double eps = 0.01 * *mean * *mean, n = 0;
+        for (int p = 0; p < 80 * 60; p++) {
+            double m = sum[p] / seeds, var = fmax(0.0, sum2[p] / seeds - m * m) * seeds / (seeds - 1);
+            n += var / (m * m + eps);
+        }
+        *pixel_noise = n / (80 * 60);
+    }
+    free(sum);
+    free(sum2);
+}
+
+static void image_means_opts(const SgScene *scene, const char *scene_path, const char *cache, SgSampling mode,
+                             bool no_openings, int seeds, int spp, double *mean, double *se)
+{
+    image_noise(scene, scene_path, cache, mode, no_openings, seeds, spp, mean, se, NULL);
 }
 
 static void image_means(const SgScene *scene, const char *scene_path, const char *cache, SgSampling mode,
@@ -414,4 +440,54 @@ Test(render_pipeline, the_suns_importance_points_lead_into_its_rays, .timeout = 
     cr_expect(sg_scene_guide_light(loaded, 0).kind == SG_GUIDE_LIGHT_OUTSIDE &&
               sg_scene_guide_light(loaded, 1).kind == SG_GUIDE_LIGHT_SUN);
     sg_scene_free(loaded);
+}
+
+/* data/north-room: a sky image through a north window, its sun (90% of
+ * the image's power) behind the house. The precompute finds the window;
+ * through it the sky's light samples reach the sky, while the image's own
+ * sampling spends most of them on a sun the walls hide: the same image
+ * mean, far less noise in the pixels. */
+Test(render_pipeline, the_north_rooms_window_is_found_and_its_hidden_sun_costs_no_light_samples, .timeout = 240)
+{
+    if (!have_programs())
+        cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
+    const char *dir = sg_test_tmpdir(), *scene = "data/north-room/north-room.json";
+    const char *cache_path = precompute(scene, dir);
+    SgScene *loaded = load_scene(scene);
+    cr_assert_eq(sg_scene_guide_light_count(loaded), 1, "the outside is the one light");
+    SgError e = {0};
+    SgImportanceCache *cache = sg_cache_open(cache_path, &e);
+    cr_assert(cache, "%s", e.message);
+    cr_assert(sg_cache_decode(cache, 1u << 30));
+    Vec3(*corners)[4];
+    uint32_t openings;
+    const double origin[3] = {0, 0, 0};
+    cr_assert(openings_find(cache, loaded->bounds_min, loaded->bounds_max, origin, &corners, &openings));
+    cr_assert_eq(openings, 1, "openings found: %u", openings);
+    double h = sg_cache_voxel_size(cache), lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int c = 0; c < 4; c++) {
+        const float w[3] = {corners[0][c].x, corners[0][c].y, corners[0][c].z};
+        for (int a = 0; a < 3; a++)
+            lo[a] = fmin(lo[a], w[a]), hi[a] = fmax(hi[a], w[a]);
+    }
+    free(corners);
+    sg_cache_close(cache);
+    /* the window, x 1.9-3.1, y 0.9-2.0, where the wall (z 4.0-4.2) meets
+     * the scene's bounds */
+    cr_expect(fabs(lo[2] - 4.2) < 1e-5 && fabs(hi[2] - 4.2) < 1e-5, "on the bounds' face: z %g..%g", lo[2], hi[2]);
+    cr_expect(fabs(lo[0] - 1.9) <= h && fabs(hi[0] - 3.1) <= h && fabs(lo[1] - 0.9) <= h && fabs(hi[1] - 2.0) <= h,
+              "the window [1.9, 3.1] x [0.9, 2.0] within a voxel (%g): [%g, %g] x [%g, %g]", h, lo[0], hi[0], lo[1],
+              hi[1]);
+
+    double mo, so, no, ms, ss, ns;
+    image_noise(loaded, scene, cache_path, SG_SAMPLING_GUIDED, false, 4, 8, &mo, &so, &no);
+    image_noise(loaded, scene, cache_path, SG_SAMPLING_GUIDED, true, 4, 8, &ms, &ss, &ns);
+    sg_scene_free(loaded);
+    cr_log_info("north room: through the window %.6f +- %.6f, pixel noise %.4g; over the sky's sphere %.6f +- "
+                "%.6f, pixel noise %.4g", mo, so, no, ms, ss, ns);
+    cr_assert_gt(mo, 0.0);
+    cr_expect(fabs(mo - ms) < 3 * sqrt(so * so + ss * ss), "the image means differ: %.6f through the window, %.6f "
+              "over the sphere", mo, ms);
+    /* measured: 0.243 through it, 1.30 over the sphere */
+    cr_expect(no < ns / 2, "the window does not halve the pixels' noise: %g through it, %g over the sphere", no, ns);
 }
