@@ -315,6 +315,28 @@ static const char *lit_room(const char *dir, bool window, const char *lights)
  * light, the importance point at the floor leads up through the opening,
  * and guided renders the closed form rho L F (F: the opening's form factor
  * from the floor's centre) as bsdf does. */
+/* The openings the precompute found in the cache of scene `loaded`: there
+ * must be exactly one; its corners' bounding box into lo, hi. Returns the
+ * voxel size, the tolerance of where an opening can lie. */
+static double the_one_opening(SgImportanceCache *cache, const SgScene *loaded, double lo[3], double hi[3])
+{
+    cr_assert(sg_cache_decode(cache, 1u << 30));
+    Vec3(*corners)[4];
+    uint32_t openings;
+    const double origin[3] = {0, 0, 0};
+    cr_assert(openings_find(cache, loaded->bounds_min, loaded->bounds_max, origin, &corners, &openings));
+    cr_assert_eq(openings, 1, "openings found: %u", openings);
+    for (int a = 0; a < 3; a++)
+        lo[a] = INFINITY, hi[a] = -INFINITY;
+    for (int c = 0; c < 4; c++) {
+        const float w[3] = {corners[0][c].x, corners[0][c].y, corners[0][c].z};
+        for (int a = 0; a < 3; a++)
+            lo[a] = fmin(lo[a], w[a]), hi[a] = fmax(hi[a], w[a]);
+    }
+    free(corners);
+    return sg_cache_voxel_size(cache);
+}
+
 Test(render_pipeline, guided_follows_the_sky_through_a_window, .timeout = 240)
 {
     if (!have_programs())
@@ -341,19 +363,7 @@ Test(render_pipeline, guided_follows_the_sky_through_a_window, .timeout = 240)
               "not in the opening", q[0], q[1], q[2], cx, cz);
     /* the opening found: one rectangle on the ceiling's plane, the window's
      * own within a voxel */
-    cr_assert(sg_cache_decode(cache, 1u << 30));
-    Vec3(*corners)[4];
-    uint32_t openings;
-    const double origin[3] = {0, 0, 0};
-    cr_assert(openings_find(cache, loaded->bounds_min, loaded->bounds_max, origin, &corners, &openings));
-    cr_assert_eq(openings, 1, "openings found: %u", openings);
-    double h = sg_cache_voxel_size(cache), lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int c = 0; c < 4; c++) {
-        const float w[3] = {corners[0][c].x, corners[0][c].y, corners[0][c].z};
-        for (int a = 0; a < 3; a++)
-            lo[a] = fmin(lo[a], w[a]), hi[a] = fmax(hi[a], w[a]);
-    }
-    free(corners);
+    double lo[3], hi[3], h = the_one_opening(cache, loaded, lo, hi);
     cr_expect(fabs(lo[1] - 2) < 1e-6 && fabs(hi[1] - 2) < 1e-6, "on the ceiling's plane: y %g..%g", lo[1], hi[1]);
     cr_expect(fabs(lo[0] + 0.5) <= h && fabs(hi[0] - 0.5) <= h && fabs(lo[2] + 0.3) <= h && fabs(hi[2] - 0.3) <= h,
               "the window [-0.5, 0.5] x [-0.3, 0.3] within a voxel (%g): [%g, %g] x [%g, %g]", h, lo[0], hi[0], lo[2],
@@ -458,19 +468,7 @@ Test(render_pipeline, the_north_rooms_window_is_found_and_its_hidden_sun_costs_n
     SgError e = {0};
     SgImportanceCache *cache = sg_cache_open(cache_path, &e);
     cr_assert(cache, "%s", e.message);
-    cr_assert(sg_cache_decode(cache, 1u << 30));
-    Vec3(*corners)[4];
-    uint32_t openings;
-    const double origin[3] = {0, 0, 0};
-    cr_assert(openings_find(cache, loaded->bounds_min, loaded->bounds_max, origin, &corners, &openings));
-    cr_assert_eq(openings, 1, "openings found: %u", openings);
-    double h = sg_cache_voxel_size(cache), lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int c = 0; c < 4; c++) {
-        const float w[3] = {corners[0][c].x, corners[0][c].y, corners[0][c].z};
-        for (int a = 0; a < 3; a++)
-            lo[a] = fmin(lo[a], w[a]), hi[a] = fmax(hi[a], w[a]);
-    }
-    free(corners);
+    double lo[3], hi[3], h = the_one_opening(cache, loaded, lo, hi);
     sg_cache_close(cache);
     /* the window, x 1.9-3.1, y 0.9-2.0, where the wall (z 4.0-4.2) meets
      * the scene's bounds */
