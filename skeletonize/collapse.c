@@ -212,7 +212,11 @@ struct Collapse {
     pthread_cond_t changed;
     uint8_t *done;      /* sub-steps done, per slab, this step */
     uint8_t *busy;      /* a thread works on the slab */
+    uint64_t *slab_work; /* faces queued per slab at the step's start */
+    uint64_t schedule_state; /* tests: != 0, the shuffled schedule's random state */
+    bool stuck;         /* the shuffled schedule found nothing ready */
     size_t lowest;      /* slabs below have done the step */
+    size_t region_lo[MAX_THREADS], region_hi[MAX_THREADS]; /* each thread's slabs this step */
     size_t remaining;   /* (slab, sub-step)s not yet done this step */
     bool exit;
 };
@@ -474,7 +478,7 @@ static void run_slab_substep(Collapse *c, Sink *sk, size_t i, int s)
     for (int source = 0; source < SOURCES; source++) {
         U32Vec *q = &sq->q[source][c->cur_side][s];
         for (size_t x = 0; x < q->n; x++) {
-            uint32_t f = q->a[x], g;
+            uint32_t f = q->a[x], g = 0;
             if (free_kind(c, f, &g) == s &&
                 (!vec_push_u32(&sk->pairs, f) || !vec_push_u32(&sk->pairs, g)))
                 sk->oom = true;
@@ -518,28 +522,68 @@ static bool slab_ready(const Collapse *c, size_t i)
     return true;
 }
 
-/* Under the lock: the ready slab of lowest wave (slab + sub-step), lowest
- * sub-step first, as the serial order; sub-steps with nothing queued are
- * done on the spot. NO_SLAB: none ready. */
-static size_t pick_slab(Collapse *c)
+/* The ready slab of lowest wave (slab + sub-step) in [lo, hi), NO_SLAB if
+ * none. Under the lock. */
+static size_t lowest_wave_ready(const Collapse *c, size_t lo, size_t hi)
+{
+    size_t best = NO_SLAB, best_wave = SIZE_MAX;
+    for (size_t i = lo; i < hi && i <= best_wave; i++) {
+        if (!slab_ready(c, i))
+            continue;
+        size_t wave = i + c->done[i];
+        if (wave < best_wave) {
+            best = i;
+            best_wave = wave;
+        }
+    }
+    return best;
+}
+
+/* Under the lock: thread t's next (slab, sub-step): the ready slab of
+ * lowest wave in its own region, as the serial order runs them, else in
+ * any; sub-steps with nothing queued are done on the spot. NO_SLAB: none
+ * ready. */
+static size_t pick_slab(Collapse *c, int t)
 {
     for (;;) {
         while (c->lowest < c->slab_count && c->done[c->lowest] == KINDS)
             c->lowest++;
-        size_t best = NO_SLAB, best_wave = SIZE_MAX;
-        for (size_t i = c->lowest; i < c->slab_count && i <= best_wave; i++) {
-            if (!slab_ready(c, i))
-                continue;
-            size_t wave = i + c->done[i];
-            if (wave < best_wave) {
-                best = i;
-                best_wave = wave;
-            }
-        }
+        size_t lo = c->region_lo[t] > c->lowest ? c->region_lo[t] : c->lowest;
+        size_t best = lowest_wave_ready(c, lo, c->region_hi[t]);
+        if (best == NO_SLAB)
+            best = lowest_wave_ready(c, c->lowest, c->slab_count);
         if (best == NO_SLAB || slab_has_work(c, best, c->done[best]))
             return best;
         c->done[best]++;
         c->remaining--;
+    }
+}
+
+/* Each thread's region this step: contiguous slabs holding about an equal
+ * share of the faces queued at the step's start. A thread keeps to its
+ * region while it has a ready slab there, so a slab's sub-steps mostly
+ * run on one core and its lines stay in that core's cache; it helps
+ * elsewhere when it has none. */
+static void split_regions(Collapse *c)
+{
+    uint64_t total = 0;
+    uint64_t *work = c->slab_work;
+    for (size_t i = 0; i < c->slab_count; i++) {
+        uint64_t n = 0;
+        for (int source = 0; source < SOURCES; source++)
+            for (int k = 0; k < KINDS; k++)
+                n += c->slabs[i].q[source][c->cur_side][k].n;
+        work[i] = n;
+        total += n;
+    }
+    size_t i = 0;
+    uint64_t sum = 0;
+    for (int t = 0; t < c->threads; t++) {
+        c->region_lo[t] = i;
+        uint64_t target = total * (uint64_t)(t + 1) / (uint64_t)c->threads;
+        while (i < c->slab_count && (t + 1 == c->threads || sum + work[i] / 2 < target))
+            sum += work[i++];
+        c->region_hi[t] = i;
     }
 }
 
@@ -551,7 +595,7 @@ static void work_on_steps(Collapse *c, int t)
     for (;;) {
         if (c->exit || (t == 0 && c->remaining == 0))
             return;
-        size_t i = pick_slab(c);
+        size_t i = pick_slab(c, t);
         if (i == NO_SLAB) {
             if (t == 0 && c->remaining == 0)
                 return;
@@ -586,16 +630,67 @@ static void run_step_parallel(Collapse *c)
     memset(c->done, 0, c->slab_count);
     c->lowest = 0;
     c->remaining = c->slab_count * KINDS;
+    split_regions(c);
     pthread_cond_broadcast(&c->changed);
     work_on_steps(c, 0);
     pthread_mutex_unlock(&c->lock);
+}
+
+/* The tests' schedule: one thread plays two, each taking a random ready
+ * (slab, sub-step) when free, the two finishing in a random order; no
+ * empty sub-step skipped. Any order the readiness rule allows must give
+ * the same complex, so a fault in the rule shows as a different skeleton
+ * on one thread, reproducibly. */
+static uint64_t schedule_random(Collapse *c)
+{
+    uint64_t x = c->schedule_state; /* xorshift64 */
+    x ^= x << 13;
+    x ^= x >> 7;
+    x ^= x << 17;
+    return c->schedule_state = x;
+}
+
+static void run_step_shuffled(Collapse *c)
+{
+    Sink *sk = &c->sinks[0];
+    uint64_t *ready = c->slab_work; /* free during a step */
+    size_t flight[2];
+    int flight_substep[2], n = 0;
+    memset(c->done, 0, c->slab_count);
+    for (size_t remaining = c->slab_count * KINDS; remaining > 0 && !sk->oom; remaining--) {
+        while (n < 2) {
+            size_t count = 0;
+            for (size_t i = 0; i < c->slab_count; i++)
+                if (slab_ready(c, i))
+                    ready[count++] = i;
+            if (count == 0)
+                break;
+            size_t i = (size_t)ready[schedule_random(c) % count];
+            c->busy[i] = 1;
+            flight[n] = i;
+            flight_substep[n++] = c->done[i];
+        }
+        if (n == 0) { /* the rule left nothing ready: a fault, not a schedule */
+            c->stuck = true;
+            return;
+        }
+        int j = n == 2 ? (int)(schedule_random(c) & 1) : 0;
+        run_slab_substep(c, sk, flight[j], flight_substep[j]);
+        c->busy[flight[j]] = 0;
+        c->done[flight[j]]++;
+        n--;
+        flight[j] = flight[n];
+        flight_substep[j] = flight_substep[n];
+    }
 }
 
 /* Runs step c->step (its queues on c->cur_side), then gathers what the
  * threads found. */
 static void run_step(Collapse *c)
 {
-    if (c->threads > 1)
+    if (c->schedule_state)
+        run_step_shuffled(c);
+    else if (c->threads > 1)
         run_step_parallel(c);
     else
         run_step_serial(c);
@@ -940,8 +1035,9 @@ static void setup_slab(void *ctx, uint64_t i, int thread)
 
 bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
                  const uint16_t *dist8, const uint16_t *open8, double filter_scale,
-                 int threads, uint32_t parallel_grain, uint32_t slab_planes, SgProgress *progress,
-                 SgCollapseResult *result, SgError *err)
+                 int threads, uint32_t parallel_grain, uint32_t slab_planes,
+                 uint64_t schedule_seed, SgProgress *progress, SgCollapseResult *result,
+                 SgError *err)
 {
     memset(result, 0, sizeof *result);
     Helper helpers[MAX_THREADS];
@@ -973,7 +1069,8 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
         c.slab_planes = (size_t)cx->lz;
     c.slab_count = ((size_t)cx->lz + c.slab_planes - 1) / c.slab_planes;
     c.slab_cells = (uint64_t)c.slab_planes * c.st[2] * 8;
-    c.threads = parallel_grain ? sg_thread_count(threads) : 1;
+    c.threads = parallel_grain && !schedule_seed ? sg_thread_count(threads) : 1;
+    c.schedule_state = schedule_seed;
     if (c.threads > MAX_THREADS)
         c.threads = MAX_THREADS;
     if (c.slab_count < 4)
@@ -982,7 +1079,8 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
     c.sinks = calloc((size_t)c.threads, sizeof *c.sinks);
     c.done = malloc(c.slab_count);
     c.busy = calloc(c.slab_count, 1);
-    if (!c.slabs || !c.sinks || !c.done || !c.busy) {
+    c.slab_work = calloc(c.slab_count, sizeof *c.slab_work);
+    if (!c.slabs || !c.sinks || !c.done || !c.busy || !c.slab_work) {
         c.oom = true;
         goto done;
     }
@@ -1031,7 +1129,9 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
         c.step++;
         c.cur_side = !c.cur_side;
         run_step(&c);
-        if (c.oom)
+        if (c.stuck)
+            sg_fail(err, "collapse: internal error: no (slab, sub-step) ready");
+        if (c.oom || c.stuck)
             goto done;
         apply_lifespan_rule(&c);
         if (c.oom)
@@ -1095,6 +1195,7 @@ done:
     free(c.sinks);
     free(c.done);
     free(c.busy);
+    free(c.slab_work);
     free(c.live.a);
     for (size_t l = 0; l < c.due_count; l++)
         free(c.due[l].a);

@@ -31,10 +31,13 @@ typedef struct SgCollapseResult {
  * when lifespan > filter_scale x opening (1: [Cha10]). parallel_grain > 0:
  * the collapse runs on `threads` threads (<= 0: every core); 0: on one.
  * slab_planes: the z planes per slab of the temporal blocking (0: two, the
- * fewest). The result is the same for any. */
+ * fewest). schedule_seed: 0, the usual schedule; else (tests) one
+ * thread takes random ready (slab, sub-step)s, two at a time. The result
+ * is the same for any. */
 bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
                  const uint16_t *dist8, const uint16_t *open8, double filter_scale,
-                 int threads, uint32_t parallel_grain, uint32_t slab_planes, SgProgress *progress,
+                 int threads, uint32_t parallel_grain, uint32_t slab_planes,
+                 uint64_t schedule_seed, SgProgress *progress,
                  SgCollapseResult *result, SgError *err);
 void sg_collapse_result_release(SgCollapseResult *r);
 

@@ -139,7 +139,8 @@ bool sg_skeletonize_grid(const SgGrid *g, uint32_t constraint_count, const int (
     if (!opt.progress)
         progress.enabled = false;
     if (!sg_collapse(&cx, anchor_cells, anchor_count, dist8, open8, opt.filter_scale, opt.threads,
-                     opt.parallel_grain, opt.collapse_slab_planes, &progress,
+                     opt.parallel_grain, opt.collapse_slab_planes, opt.collapse_schedule_seed,
+                     &progress,
                      &col, err))
         goto done;
     sg_progress_end(&progress);

@@ -58,6 +58,11 @@ typedef struct SgSkeletonOptions {
                                (default), n >= 2 n planes, more than the
                                grid's: one slab; same result (the tests
                                compare them) */
+    uint64_t collapse_schedule_seed; /* tests: 0 (default) the usual
+                               schedule; else one thread plays two, taking
+                               random ready (slab, sub-step)s: any order the
+                               collapse's readiness rule allows gives the
+                               same result */
     double filter_scale;    /* the lifespan rule keeps an edge when
                                lifespan > filter_scale x opening; 1 is [Cha10]'s
                                parameter-free rule (default), 0 keeps every

@@ -18,9 +18,9 @@ scenes=(
 )
 [ "${SG_QUICK:-0}" = 1 ] && scenes=("${scenes[0]}" "${scenes[1]}" "sponza (quick: res 200)|data/external/sponza.json|200")
 
-# step NAME COMMAND...: runs it, prints "seconds peakMB"
-timed() { /usr/bin/time -f '%e %M %U' -o "$out/t" "$@" >/dev/null 2>"$out/err" || { echo "fail"; return 1; }
-          awk '{printf "%.2f %.0f %.2f", $1, $2/1024, $3}' "$out/t"; }
+# timed COMMAND...: runs it, prints "wall-seconds peakMB CPU-seconds" (CPU: user + system)
+timed() { /usr/bin/time -f '%e %M %U %S' -o "$out/t" "$@" >/dev/null 2>"$out/err" || { echo "fail"; return 1; }
+          awk '{printf "%.2f %.0f %.2f", $1, $2/1024, $3 + $4}' "$out/t"; }
 echo "| scene | grid@res | medium voxels | voxelize s | skeletonize s | importance s | total s | peak MB | cache MB |"
 echo "|---|---|---|---|---|---|---|---|---|"
 for entry in "${scenes[@]}"; do
