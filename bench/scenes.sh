@@ -32,3 +32,8 @@ bench_modes=(bsdf skeleton guided guided-albedo openpgl)
 declare -A bench_mode_options=([guided-albedo]="--sampling guided --roulette albedo"
                                [openpgl]="--sampling openpgl --openpgl-mode mis")
 options_of() { echo "${bench_mode_options[$1]:---sampling $1}"; }
+
+# ref_field KEY FILE: the value after KEY in a reference's record, the
+# ref.txt section 60 writes beside ref.exr ("relmse X mse8 Y mse Z spp N
+# seconds S state T"); section 62 reads its own error from it
+ref_field() { awk -v k="$1" '{for(i=1;i<NF;i++) if($i==k) print $(i+1)}' "$2"; }

@@ -311,10 +311,6 @@ static const char *lit_room(const char *dir, bool window, const char *lights)
     return scene;
 }
 
-/* The sky reaches the room through its window: the outside is the guide's
- * light, the importance point at the floor leads up through the opening,
- * and guided renders the closed form rho L F (F: the opening's form factor
- * from the floor's centre) as bsdf does. */
 /* The openings the precompute found in the cache of scene `loaded`: there
  * must be exactly one; its corners' bounding box into lo, hi. Returns the
  * voxel size, the tolerance of where an opening can lie. */
@@ -337,6 +333,10 @@ static double the_one_opening(SgImportanceCache *cache, const SgScene *loaded, d
     return sg_cache_voxel_size(cache);
 }
 
+/* The sky reaches the room through its window: the outside is the guide's
+ * light, the importance point at the floor leads up through the opening,
+ * and guided renders the closed form rho L F (F: the opening's form factor
+ * from the floor's centre) as bsdf does. */
 Test(render_pipeline, guided_follows_the_sky_through_a_window, .timeout = 240)
 {
     if (!have_programs())

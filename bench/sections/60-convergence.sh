@@ -128,11 +128,11 @@ reference() {
   if [ -e "$dir/ref.exr" ] && [ -e "$dir/ref.txt" ] && [ "$key" = "$old" ]; then
     sed -i 's/ state .*/ state kept/' "$dir/ref.txt"
     # a reference made before the linear MSE was measured: its halves tell
-    if [ -z "$(field mse "$dir/ref.txt")" ] && [ -e "$dir/half-a.exr" ] && [ -e "$dir/half-b.exr" ]; then
+    if [ -z "$(ref_field mse "$dir/ref.txt")" ] && [ -e "$dir/half-a.exr" ] && [ -e "$dir/half-b.exr" ]; then
       local s
       if s=$("$tool" reference "$dir/half-a.exr" "$dir/half-b.exr" -o "$dir/ref.check.exr" --exposure "$exposure" 2>&1); then
-        printf '%s spp %s seconds %s state kept\n' "$s" "$(field spp "$dir/ref.txt")" \
-          "$(field seconds "$dir/ref.txt")" >"$dir/ref.txt"
+        printf '%s spp %s seconds %s state kept\n' "$s" "$(ref_field spp "$dir/ref.txt")" \
+          "$(ref_field seconds "$dir/ref.txt")" >"$dir/ref.txt"
       fi
       rm -f "$dir/ref.check.exr"
     fi
@@ -155,8 +155,6 @@ reference() {
   printf '%s spp %s seconds %s state made\n' "$stats" "$((2 * spp))" "$((t1 - t0))" >"$dir/ref.txt"
   printf '%s\n' "$key" >"$dir/ref.key"
 }
-
-field() { awk -v k="$1" '{for(i=1;i<NF;i++) if($i==k) print $(i+1)}' "$2"; }
 
 declare -A color=([bsdf]="#1f77b4" [skeleton]="#ff7f0e" [guided]="#2ca02c" [guided-albedo]="#8c564b"
                   [openpgl]="#d62728")
@@ -260,7 +258,7 @@ for entry in "${scenes[@]}"; do
   done
   ref_args=()
   for k in relmse mse8 mse spp seconds state; do
-    v=$(field "$k" "$refdir/ref.txt")
+    v=$(ref_field "$k" "$refdir/ref.txt")
     [ -n "$v" ] && ref_args+=("--ref-$k" "$v")
   done
   "$tool" analyze "$name" "$runs" "$seeds" "$tables" --modes "$mode_list" --size "$size" "${ref_args[@]}" \
@@ -272,8 +270,8 @@ for entry in "${scenes[@]}"; do
     notes+=("$name: analyze (preparation counted) failed: $(tail -1 "$prepared/analyze.err")")
   fig="![$name: relMSE and MSE against time]($report_link/$name-convergence.png)"
   if [ $have_gnuplot = 1 ]; then
-    plot "$name" "$dir" "$size" "$runs/levels.txt" "$(field relmse "$refdir/ref.txt")" \
-      "$(field mse "$refdir/ref.txt")" "$report_dir/$name-convergence.png"
+    plot "$name" "$dir" "$size" "$runs/levels.txt" "$(ref_field relmse "$refdir/ref.txt")" \
+      "$(ref_field mse "$refdir/ref.txt")" "$report_dir/$name-convergence.png"
   else
     fig="(no plot: gnuplot is not installed; make bench-deps installs it)"
   fi

@@ -31,7 +31,6 @@ runs=$(mktemp -d)
 trap 'rm -rf "$runs"' EXIT
 notes=() rows=()
 final() { tail -1 "$1" | awk -F, '{print $4, $3, $5}'; }
-field() { awk -v k="$1" '{for(i=1;i<NF;i++) if($i==k) print $(i+1)}' "$2"; }
 mean() { awk '{ s += $1; n++ } END { if (n) printf "%.4g", s / n }'; }
 
 for entry in "${bench_scenes[@]}"; do
@@ -81,7 +80,7 @@ for entry in "${bench_scenes[@]}"; do
   # is in both modes' errors: each less it is the error against the truth
   # (independent noise adds); a reference as noisy as the modes pulls the
   # raw gain toward 1
-  own=$(field relmse "$dir/ref-$setting/ref.txt" 2>/dev/null)
+  own=$(ref_field relmse "$dir/ref-$setting/ref.txt" 2>/dev/null)
   rows+=("$(awk -v n="$name" -v o="$openings" -v a="$rel_s" -v b="$rel_t" -v c="$mse_s" -v d="$mse_t" \
               -v e="$m8_s" -v f="$m8_t" -v r="${own:-}" 'BEGIN{
     net = "-"
