@@ -9,7 +9,7 @@
 #include "output_file.h"
 
 static const char field_magic[8] = {'S', 'G', 'F', 'I', 'E', 'L', 'D', '\x1a'};
-#define FIELD_VERSION 4u /* 2: openpgl's section counts its passes; 3: guided's learned axes; 4: its histograms */
+#define FIELD_VERSION 5u /* 2: openpgl's section counts its passes; 3: guided's learned axes; 4: its histograms; 5: its portal shares */
 /* A field is a few regions' worth of numbers per scene cell: far below this */
 #define FIELD_LIMIT ((size_t)4 << 30)
 

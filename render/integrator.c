@@ -20,6 +20,7 @@ typedef struct PathState {
     Vec3 rr_beta;
     bool specular_bounce; /* the last bounce was drawn by its BSDF alone: emission counts fully */
     float prev_pdf;
+    float prev_portal_share; /* the vertex before's (GuideVertex.portal_share) */
     Vec3 prev_p;
     Vec3 guide_estimate; /* the guide's slot for its roulette (PathGuideOps.survival) */
 } PathState;
@@ -133,7 +134,8 @@ static void add_emission(Path *p, const Hit *h, const Material *m, float cos_o, 
 static void add_escaped(Path *p)
 {
     const Integrator *it = p->it;
-    Vec3 le = light_set_escaped(it->lights, p->ps.prev_p, p->ps.d, p->ps.specular_bounce ? -1.0f : p->ps.prev_pdf);
+    Vec3 le = light_set_escaped(it->lights, p->ps.prev_p, p->ps.d, p->ps.specular_bounce ? -1.0f : p->ps.prev_pdf,
+                                p->ps.prev_portal_share);
     p->radiance = v3_add(p->radiance, v3_mul(p->ps.beta, le));
     if (p->pc->record) {
         Vec3 far = v3_add(p->ps.o, v3_scale(p->ps.d, 1e3f * it->geo->scale));
@@ -181,6 +183,9 @@ typedef struct LightSample {
     Vec3 wi;
     float pdf, cos_x; /* pdf 0: no contribution */
     bool delta;       /* a point, spot or sun without a disk: no MIS weight */
+    /* a sky with portals was sampled: its strategies' densities (blocked too) */
+    bool sky;
+    float pdf_portals, pdf_sky;
 } LightSample;
 
 /* Next-event estimation toward a point, spot, distant or infinite light
@@ -194,8 +199,11 @@ static LightSample sample_light_source(const Integrator *it, const BounceVertex 
     /* the light as seen from the surface point itself: from the offset
      * origin a point light would be nearer by the offset (0.2 % brighter
      * at a scene's size / 65536 from a lamp 1.5 away) */
-    if (!light_source_sample(it->lights, source, v->p, u0, u1, u2, &lp))
+    if (!light_source_sample(it->lights, source, v->p, v->g.portal_share, u0, u1, u2, &lp))
         return ls;
+    ls.sky = lp.pdf_portals > 0.0f || lp.pdf_sky > 0.0f;
+    ls.pdf_portals = lp.pdf_portals;
+    ls.pdf_sky = lp.pdf_sky;
     float cos_x = v3_dot(lp.wi, v->g.bsdf.lobe.n);
     if (!(cos_x > 0.0f || lit_below_horizon))
         return ls;
@@ -291,6 +299,7 @@ static bool take_bounce(const PathGuide *guide, BounceVertex *v, PathState *ps, 
     ps->d = wi;
     ps->o = v->origin;
     ps->prev_pdf = v->g.mis_pdf >= 0.0f ? v->g.mis_pdf : pdf;
+    ps->prev_portal_share = v->g.portal_share;
     ps->prev_p = v->p;
     ps->specular_bounce = false;
     return true;
@@ -365,6 +374,8 @@ static bool scatter(Path *p, const Hit *h, const Material *m, Vec3 wo, Vec3 n, b
     v.g.rms = -1.0f;
     v.g.by_guide = false;
     v.g.mis_pdf = -1.0f;
+    v.g.portal_share = -1.0f;
+    v.g.sky.taken = false;
     /* n is the winding normal or its opposite: the other bin of the pair */
     GuideHit gh = {.p = h->p, .n = n, .m = m, .thread = pc->thread,
                    .normal_bin = it->geo->tris[h->tri].normal_bin ^ (front ? 0u : 1u),
@@ -381,6 +392,10 @@ static bool scatter(Path *p, const Hit *h, const Material *m, Vec3 wo, Vec3 n, b
     LightSample ls = sample_light(it, &v, gops->lit_below_horizon, pc->rng, pc->st);
     if (gops->vertex_end)
         gops->vertex_end(guide, &gh, ls.lit, pc->rng, &v.g);
+    if (pr && ls.sky) /* for the learner of the portal share: before MIS, the whole estimate's spread */
+        v.g.sky = (SkyLightSample){.taken = true, .contribution = luminance(v3_mul(p->ps.beta, ls.c)) * ls.pdf,
+                                   .pdf_portals = ls.pdf_portals, .pdf_sky = ls.pdf_sky,
+                                   .share = v.g.portal_share};
     if (ls.pdf > 0.0f) {
         float w = ls.delta ? 1.0f : sg_power_heuristic(ls.pdf, gops->pdf(&v.g, ls.wi, ls.cos_x));
         Vec3 c = v3_scale(ls.c, w);
@@ -460,6 +475,7 @@ static bool path_resume_split(Path *p)
     finish_records(p->it->guide, p->pending, sp->mark, p->pending_count, p->radiance, p->pc->learn_tile);
     p->pending_count = sp->mark;
     BounceVertex v = sp->v;
+    v.g.sky.taken = false; /* the vertex's light sample was recorded with its first branch */
     p->ps = sp->ps;
     p->depth = sp->depth;
     PendingRecord *pr = NULL;
@@ -482,7 +498,8 @@ Vec3 integrator_trace(const Integrator *it, Vec3 o, Vec3 d, const PathCtx *pc, V
     Path p;
     p.it = it;
     p.pc = pc;
-    p.ps = (PathState){o, d, v3(1, 1, 1), v3(1, 1, 1), true /* the camera ray counts as one */, 0.0f, o, v3(0, 0, 0)};
+    p.ps = (PathState){o, d, v3(1, 1, 1), v3(1, 1, 1), true /* the camera ray counts as one */, 0.0f, -1.0f, o,
+                       v3(0, 0, 0)};
     p.radiance = v3(0, 0, 0);
     p.seen = seen;
     p.depth = 0;

@@ -65,16 +65,26 @@ static float sky_pdf(const LightSource *l, Vec3 w)
     return l->map ? environment_pdf(l->map, w) : 1.0f / (4.0f * SG_PI);
 }
 
+/* The portals' densities at x toward w, summed (a portal is picked
+ * uniformly: over their count, the portal strategy's density). */
+static float portals_pdf_sum(const LightSource *l, Vec3 x, Vec3 w)
+{
+    float portals = 0.0f;
+    for (uint32_t k = 0; k < l->portal_count; k++)
+        portals += portal_pdf(&l->portals[k], x, w);
+    return portals;
+}
+
+static inline float share_or_default(float portal_share) { return portal_share < 0.0f ? PORTAL_SHARE : portal_share; }
+
 /* A sky's NEE density at x toward w: its map's, mixed with its portals'. */
-static float infinite_pdf(const LightSource *l, Vec3 x, Vec3 w)
+static float infinite_pdf(const LightSource *l, Vec3 x, Vec3 w, float portal_share)
 {
     float pdf = sky_pdf(l, w);
     if (!l->portal_count)
         return pdf;
-    float portals = 0.0f;
-    for (uint32_t k = 0; k < l->portal_count; k++)
-        portals += portal_pdf(&l->portals[k], x, w);
-    return (1.0f - PORTAL_SHARE) * pdf + PORTAL_SHARE * portals / (float)l->portal_count;
+    float s = share_or_default(portal_share);
+    return (1.0f - s) * pdf + s * portals_pdf_sum(l, x, w) / (float)l->portal_count;
 }
 
 bool light_source_set_portals(LightSet *ls, uint32_t i, const Vec3 (*corners)[4], uint32_t count)
@@ -170,7 +180,7 @@ static bool sources_init(LightSet *ls, const SgScene *s, const double centre[3],
     return true;
 }
 
-Vec3 light_set_escaped(const LightSet *ls, Vec3 x, Vec3 d, float bsdf_pdf)
+Vec3 light_set_escaped(const LightSet *ls, Vec3 x, Vec3 d, float bsdf_pdf, float portal_share)
 {
     Vec3 sum = v3(0, 0, 0);
     if (!ls->has_escaping)
@@ -184,25 +194,25 @@ Vec3 light_set_escaped(const LightSet *ls, Vec3 x, Vec3 d, float bsdf_pdf)
             le = l->rgb;
         else
             continue;
-        float w = bsdf_pdf < 0.0f ? 1.0f : sg_power_heuristic(bsdf_pdf, light_source_pdf(ls, i, x, d));
+        float w = bsdf_pdf < 0.0f ? 1.0f : sg_power_heuristic(bsdf_pdf, light_source_pdf(ls, i, x, d, portal_share));
         sum = v3_add(sum, v3_scale(le, w));
     }
     return sum;
 }
 
-float light_source_pdf(const LightSet *ls, uint32_t i, Vec3 x, Vec3 d)
+float light_source_pdf(const LightSet *ls, uint32_t i, Vec3 x, Vec3 d, float portal_share)
 {
     const LightSource *l = &ls->sources[i];
     float pick = (float)l->pick_pdf;
     if (l->kind == SG_LIGHT_INFINITE)
-        return pick * infinite_pdf(l, x, d);
+        return pick * infinite_pdf(l, x, d, portal_share);
     if (l->kind == SG_LIGHT_DISTANT && l->sun_sin2 > 0.0f)
         return in_sun_disk(l, d) ? pick / (2.0f * SG_PI * l->sun_one_minus_cos) : 0.0f;
     return 0.0f;
 }
 
-bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u0, float u1, float u2,
-                         LightSourcePoint *out)
+bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float portal_share, float u0, float u1,
+                         float u2, LightSourcePoint *out)
 {
     const LightSource *l = &ls->sources[i];
     float pick = (float)l->pick_pdf;
@@ -243,9 +253,9 @@ bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u0, 
         return true;
     case SG_LIGHT_INFINITE: {
         /* through a window (where it has portals), or from the whole sky */
-        float sky;
-        if (l->portal_count && u0 < PORTAL_SHARE) {
-            float s = u0 / PORTAL_SHARE * (float)l->portal_count;
+        float sky, share = share_or_default(portal_share);
+        if (l->portal_count && u0 < share) {
+            float s = u0 / share * (float)l->portal_count;
             uint32_t k = (uint32_t)s < l->portal_count ? (uint32_t)s : l->portal_count - 1;
             const Portal *p = &l->portals[k];
             Vec3 to = v3_sub(v3_add(p->p0, v3_add(v3_scale(p->e1, u1), v3_scale(p->e2, u2))), origin);
@@ -262,7 +272,14 @@ bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u0, 
         }
         out->le = l->map ? environment_radiance(l->map, out->wi) : l->rgb;
         /* without portals the sample's own density; with them the mixture's */
-        out->pdf = pick * (l->portal_count ? infinite_pdf(l, origin, out->wi) : sky);
+        if (!l->portal_count) {
+            out->pdf = pick * sky;
+            return out->pdf > 0.0f;
+        }
+        float portals = portals_pdf_sum(l, origin, out->wi);
+        out->pdf_portals = portals / (float)l->portal_count;
+        out->pdf_sky = sky_pdf(l, out->wi);
+        out->pdf = pick * ((1.0f - share) * out->pdf_sky + share * portals / (float)l->portal_count);
         return out->pdf > 0.0f;
     }
     }

@@ -30,7 +30,9 @@ typedef struct Portal {
 
 /* Of an infinite light's light samples, the share drawn through its portals
  * (the rest from the sky's own distribution, so that directions no portal
- * covers keep their density). */
+ * covers keep their density), where nothing better is known: the guided
+ * mode learns a share per region (render/guides/mixture_learning.h). Every
+ * call below that takes a `portal_share` reads a negative one as this. */
 #define PORTAL_SHARE 0.8f
 
 /* A point, spot, distant or infinite light as the renderer samples it
@@ -124,22 +126,25 @@ typedef struct LightSourcePoint {
     Vec3 le;    /* radiance arriving; a delta light: the value that stands for it (intensity / r^2, irradiance) */
     float pdf;  /* solid angle, the pick included; a delta light: the pick's probability */
     bool delta;
+    /* a sky with portals: the two strategies' densities of wi (no pick, no
+     * share), which a learned share is chosen from; else both 0 */
+    float pdf_portals, pdf_sky;
 } LightSourcePoint;
 
 /* Light source i (index among the sources) seen from `origin` with three
- * random numbers (u0 chooses a sky's strategy: its portals or its map);
- * false: it sends nothing there. */
-bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float u0, float u1, float u2,
-                         LightSourcePoint *out);
+ * random numbers (u0 chooses a sky's strategy: its portals, with
+ * probability portal_share, or its map); false: it sends nothing there. */
+bool light_source_sample(const LightSet *ls, uint32_t i, Vec3 origin, float portal_share, float u0, float u1,
+                         float u2, LightSourcePoint *out);
 
 /* What a ray leaving the scene along unit d from the vertex at x brings:
  * each escaping light's radiance, weighted by the power heuristic against
  * the pdf the ray was drawn with (bsdf_pdf < 0: a specular or camera ray,
- * weight 1). */
-Vec3 light_set_escaped(const LightSet *ls, Vec3 x, Vec3 d, float bsdf_pdf);
+ * weight 1) and the light samples of that vertex (its portal share). */
+Vec3 light_set_escaped(const LightSet *ls, Vec3 x, Vec3 d, float bsdf_pdf, float portal_share);
 /* The pdf (solid angle, pick included) of next-event estimation at x
  * drawing direction d toward light source i; 0 for delta lights. */
-float light_source_pdf(const LightSet *ls, uint32_t i, Vec3 x, Vec3 d);
+float light_source_pdf(const LightSet *ls, uint32_t i, Vec3 x, Vec3 d, float portal_share);
 /* Gives infinite light i these portals (local coordinates, copied);
  * corners c[4] each, in order round the window. False: out of memory or a
  * degenerate window. */

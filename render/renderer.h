@@ -212,7 +212,7 @@ bool sg_renderer_read_field(SgRenderer *r, const char *path, SgError *err);
 typedef struct SgRenderReport {
     SgRoulette roulette; /* the roulette that ran: learned only where the guide learns what bounces bring */
     char alpha[96];      /* the mixture's weight: the options' number, or how it was learned */
-    char guide[192];     /* the guide's part of the summary line, "" or ", ..." */
+    char guide[320];     /* the guide's part of the summary line, "" or ", ..." */
     uint32_t openings;   /* windows the precompute found, through which the sky is sampled */
 } SgRenderReport;
 void sg_renderer_report(const SgRenderer *r, SgRenderReport *report);

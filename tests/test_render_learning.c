@@ -121,6 +121,73 @@ Test(render_learning, a_small_gain_does_not_pay_for_the_guide)
     sg_mixture_learner_free(l);
 }
 
+/* Sky samples at a region's vertices, drawn with the default share: a
+ * window of 0.05 sr where the portal density is 20 and the sky's own 1/(4 pi)
+ * (a constant sky). `inside`: the vertex is in a room that sees the sky
+ * only through the window (what the sky's own sampling sends elsewhere
+ * meets a wall); else it stands outside, under the whole sky, and the
+ * window leads into the house (a sample through it is blocked). */
+static void feed_sky(SgMixtureLearner *l, uint32_t region, int count, bool inside, uint64_t seed)
+{
+    SgRng rng;
+    sg_rng_seed(&rng, seed, 9);
+    const float share = 0.8f, portal = 20.0f, sky = 1.0f / (4.0f * 3.14159265f), window = 0.05f;
+    for (int i = 0; i < count; i++) {
+        bool through = sg_rng_float(&rng) < share || sg_rng_float(&rng) < sky * window;
+        bool lit = inside ? through : !through;
+        SgMixtureRecord rec = {.region = region, .radiance = -1.0f, .sky = true,
+                               .sky_contribution = lit ? 1.0f : 0.0f, .sky_pdf_portals = through ? portal : 0.0f,
+                               .sky_pdf_sky = sky, .sky_share = share};
+        sg_mixture_record(l, (uint32_t)(i & 1), &rec);
+    }
+}
+
+/* Each region learns how many of its sky samples go through the portals:
+ * nearly all in a room lit through its window, none out in the open;
+ * regions without sky samples keep the default until their coarse region
+ * or the scene has chosen, and the choice survives a field file. */
+Test(render_learning, regions_learn_their_share_of_sky_samples_through_the_portals)
+{
+    SgMixtureLearner *l = unit_learner();
+    const SgMixtureView *view = sg_mixture_view(l);
+    uint32_t room = sg_mixture_region(l, v3(0.1f, 0.1f, 0.1f), v3(0, 1, 0));
+    uint32_t open = sg_mixture_region(l, v3(0.9f, 0.9f, 0.9f), v3(0, 1, 0));
+    uint32_t near_room = sg_mixture_region(l, v3(0.2f, 0.1f, 0.1f), v3(0, 1, 0));
+    cr_assert_eq(sg_portal_shares[SG_PORTAL_SHARE_DEFAULT], 0.8f, "the default is render/lights.h's PORTAL_SHARE");
+    cr_assert_eq(sg_mixture_portal_share(view, room), 0.8f);
+    cr_assert_eq(sg_mixture_portal_share(view, SG_NO_REGION), 0.8f);
+    feed_sky(l, room, 4000, true, 1);
+    feed_sky(l, open, 4000, false, 2);
+    sg_mixture_update(l);
+    cr_assert_eq(sg_mixture_portal_share(view, room), 0.99f, "in the room: %g", sg_mixture_portal_share(view, room));
+    cr_assert_eq(sg_mixture_portal_share(view, open), 0.0f, "outside: %g", sg_mixture_portal_share(view, open));
+    /* a region with no sky samples of its own: its coarse region's (the room's) */
+    cr_assert_eq(sg_mixture_portal_share(view, near_room), 0.99f, "beside the room: %g",
+                 sg_mixture_portal_share(view, near_room));
+    double use[SG_PORTAL_SHARES];
+    cr_assert(sg_mixture_portal_share_use(l, use));
+    cr_assert_float_eq(use[0], 0.5, 1e-12);
+    cr_assert_float_eq(use[SG_PORTAL_SHARES - 1], 0.5, 1e-12);
+
+    /* a field file's bytes give a new learner the same shares */
+    size_t size = sg_mixture_view_size(l);
+    unsigned char *bytes = malloc(size);
+    sg_mixture_view_save(l, bytes);
+    SgMixtureLearner *loaded = unit_learner();
+    cr_assert(sg_mixture_view_restore(loaded, bytes, size));
+    const SgMixtureView *lv = sg_mixture_view(loaded);
+    cr_assert_eq(sg_mixture_portal_share(lv, room), 0.99f);
+    cr_assert_eq(sg_mixture_portal_share(lv, open), 0.0f);
+    /* a share index out of range is refused */
+    uint32_t regions; /* the shares follow the count, the scene's radiance and 33 bytes a region */
+    memcpy(&regions, bytes, sizeof regions);
+    bytes[sizeof(uint32_t) + sizeof(float) + (size_t)regions * (1 + 8 * sizeof(float)) + room] = SG_PORTAL_SHARES;
+    cr_assert_not(sg_mixture_view_restore(loaded, bytes, size));
+    free(bytes);
+    sg_mixture_learner_free(loaded);
+    sg_mixture_learner_free(l);
+}
+
 Test(render_learning, sparse_regions_take_their_coarse_region_s_choice)
 {
     /* before anything is learned: a mixture (so that `far` below keeps to

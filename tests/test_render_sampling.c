@@ -530,25 +530,37 @@ static void environment_case(SgEnvironmentLayout layout, int width, int height, 
     environment_free(&e);
 }
 
+/* A light source's light samples from the origin, with a portal share. */
+typedef struct SourceAt {
+    const LightSet *ls;
+    float portal_share;
+} SourceAt;
+
 static Vec3 source_sample_fn(const void *c, float u0, float u1, float u2)
 {
-    (void)u2;
+    const SourceAt *at = c;
     LightSourcePoint lp;
-    cr_assert(light_source_sample(c, 0, v3(0, 0, 0), u2, u0, u1, &lp));
+    cr_assert(light_source_sample(at->ls, 0, v3(0, 0, 0), at->portal_share, u2, u0, u1, &lp));
     return lp.wi;
 }
-static float source_pdf_fn(const void *c, Vec3 w) { return light_source_pdf(c, 0, v3(0, 0, 0), w); }
+static float source_pdf_fn(const void *c, Vec3 w)
+{
+    const SourceAt *at = c;
+    return light_source_pdf(at->ls, 0, v3(0, 0, 0), w, at->portal_share);
+}
 
 /* A constant sky seen through a portal (a 1 x 0.6 window 2 above, tilted)
- * from the origin: the portal's density mixed with the sky's. */
-static void portal_case(uint64_t seed, int sub)
+ * from the origin: the portal's density mixed with the sky's, with the
+ * default share (< 0) or the one given. */
+static void portal_case(float portal_share, uint64_t seed, int sub)
 {
     LightSource src = {.kind = SG_LIGHT_INFINITE, .rgb = v3(1, 1, 1), .pick_pdf = 1.0};
     LightSet ls = {.source_count = 1, .sources = &src, .has_escaping = true};
     const Vec3 corners[1][4] = {{v3(-0.5f, 2.0f, -0.3f), v3(0.5f, 2.2f, -0.3f), v3(0.5f, 2.2f, 0.3f),
                                  v3(-0.5f, 2.0f, 0.3f)}};
     cr_assert(light_source_set_portals(&ls, 0, corners, 1));
-    assert_chi2("sky through a portal", source_sample_fn, source_pdf_fn, &ls, seed, sub);
+    SourceAt at = {&ls, portal_share};
+    assert_chi2("sky through a portal", source_sample_fn, source_pdf_fn, &at, seed, sub);
     free(src.portals);
 }
 
@@ -559,7 +571,8 @@ static void source_case(SgLightSourceKind kind, float radius, uint64_t seed, int
                        .sun_sin2 = sinf(radius) * sinf(radius),
                        .sun_one_minus_cos = 2.0f * sinf(0.5f * radius) * sinf(0.5f * radius), .pick_pdf = 1.0};
     LightSet ls = {.source_count = 1, .sources = &src, .has_escaping = true};
-    assert_chi2(kind == SG_LIGHT_INFINITE ? "constant sky" : "sun disk", source_sample_fn, source_pdf_fn, &ls, seed,
+    SourceAt at = {&ls, -1.0f};
+    assert_chi2(kind == SG_LIGHT_INFINITE ? "constant sky" : "sun disk", source_sample_fn, source_pdf_fn, &at, seed,
                 sub);
 }
 
@@ -619,7 +632,9 @@ static void histogram_case(uint64_t seed, int sub)
     X(sky_latlong_map, environment_case(SG_ENVIRONMENT_LATLONG, 32, 16, 28, 16)) \
     X(sky_constant, source_case(SG_LIGHT_INFINITE, 0.0f, 29, 4)) \
     X(sun_disk_10_degrees, source_case(SG_LIGHT_DISTANT, 0.17453f, 30, 32)) \
-    X(sky_through_portal, portal_case(31, 32)) \
+    X(sky_through_portal, portal_case(-1.0f, 31, 32)) \
+    X(sky_through_portal_nearly_always, portal_case(0.99f, 34, 32)) \
+    X(sky_through_portal_half_the_time, portal_case(0.5f, 35, 32)) \
     X(learned_histogram, histogram_case(32, 16))
 
 #define CHI2_TEST(name, call) \

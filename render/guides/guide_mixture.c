@@ -127,6 +127,7 @@ static void mixture_vertex_begin(PathGuide *g, const GuideHit *h, SgRng *rng, Gu
         lobe_region = state & SG_MIXTURE_STATE_LOBE;
         v->learn = h->may_learn && !(state & SG_MIXTURE_STATE_SETTLED);
         v->rms = sg_mixture_radiance(view, mv->region);
+        v->portal_share = sg_mixture_portal_share(view, mv->region);
         if ((state & SG_MIXTURE_STATE_AXIS) && mv->mix.learned_histogram) { /* no cache query either */
             uint32_t e = view->histogram_of[mv->region];
             mv->mixture = e != SG_NO_REGION;
@@ -214,10 +215,17 @@ static void mixture_learn(PathGuide *g, int tile, const GuideVertex *v, const Bo
     /* every learning bounce: where the skeleton gave no axis its
      * candidates are the BSDF, and the learned axis needs them all */
     bool lobe = o->bounced || o->cut;
-    if (!lobe && !x->roulette_learns)
+    if (!lobe && !x->roulette_learns && !v->sky.taken)
         return; /* only the learned roulette reads what left a vertex */
     SgMixtureRecord rec = {.region = mv->region, .radiance = o->cut ? -1.0f : o->radiance, .lobe = lobe,
                            .weight = o->weight};
+    if (v->sky.taken) {
+        rec.sky = true;
+        rec.sky_contribution = v->sky.contribution;
+        rec.sky_pdf_portals = v->sky.pdf_portals;
+        rec.sky_pdf_sky = v->sky.pdf_sky;
+        rec.sky_share = v->sky.share < 0.0f ? PORTAL_SHARE : v->sky.share;
+    }
     if (lobe) {
         if (!o->cut) {
             Vec3 n = v->bsdf.lobe.n, d = mv->direction;
@@ -290,8 +298,17 @@ static void mixture_describe(const PathGuide *g, const GuideStats *s, SgRenderRe
     else if (x->alpha_learned)
         snprintf(report->alpha, sizeof report->alpha, "learned (lobe in %.0f%% of bounces, %.0f%% around a learned axis)",
                  100.0 * fmax(0.0, s->guided_fraction), 100.0 * s->learned_axis_fraction);
-    snprintf(report->guide, sizeof report->guide, ", alpha %s, lobe drew %.1f%% of bounces", report->alpha,
-             100.0 * s->lobe_share);
+    int n = snprintf(report->guide, sizeof report->guide, ", alpha %s, lobe drew %.1f%% of bounces", report->alpha,
+                     100.0 * s->lobe_share);
+    /* where a sky has portals: how its light samples were shared between them and its map */
+    double use[SG_PORTAL_SHARES];
+    if (x->learner && !x->frozen && sg_mixture_portal_share_use(x->learner, use) && n > 0 &&
+        (size_t)n < sizeof report->guide) {
+        n += snprintf(report->guide + n, sizeof report->guide - (size_t)n, ", sky samples' portal share");
+        for (int k = 0; k < SG_PORTAL_SHARES && n > 0 && (size_t)n < sizeof report->guide; k++)
+            n += snprintf(report->guide + n, sizeof report->guide - (size_t)n, "%s%g %.0f%%", k ? ", " : " ",
+                          (double)sg_portal_shares[k], 100.0 * use[k]);
+    }
 }
 
 static const PathGuideOps mixture_ops = {

@@ -16,6 +16,11 @@ const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES] = {
     {0.7f, 64.0f, true, true, false},   {0.4f, 4.0f, true, true, false},   {0.4f, 16.0f, true, true, false},
     {0.4f, 64.0f, true, true, false},   {0.7f, 16.0f, true, false, true}, {0.45f, 16.0f, true, false, true},
     {0.2f, 16.0f, true, false, true}};
+/* The portal shares: none (out in the open), even, render/lights.h's
+ * PORTAL_SHARE (the default), and nearly all (deep in a room lit through
+ * its windows; not all, so that sky a window found too small still gets
+ * light samples). */
+const float sg_portal_shares[SG_PORTAL_SHARES] = {0.0f, 0.5f, 0.8f, 0.95f, 0.99f};
 #define SKELETON_CANDIDATES SG_MIXTURE_SKELETON_CANDIDATES
 /* the learned candidates come in families: six around the learned
  * direction (family 0), six toward the learned point (family 1), three
@@ -50,6 +55,8 @@ static const float exponents[EXPONENTS] = {4.0f, 16.0f, 64.0f};
  * record has reached yet can still be drawn. */
 #define HISTOGRAM_OWN_SAMPLES 1024u
 #define HISTOGRAM_FLOOR 0.1f
+/* Sky samples a region needs before it chooses its own portal share. */
+#define SHARE_MIN_SAMPLES 256u
 /* Vertices a region needs before its outgoing radiance is used. */
 #define RADIANCE_MIN_SAMPLES 64u
 /* A coarse region, or the whole scene, with this many guided bounces and
@@ -77,6 +84,8 @@ typedef struct StoredRecord {
     float fit[3];                      /* v d: the axis fit's share (zero: none) */
     float point_fit[4];                /* v (x + t d) and v: the point fit's share */
     float term[SG_MIXTURE_CANDIDATES]; /* v^2 p / p_k */
+    bool sky;                          /* it took a sky sample: sky_term set */
+    float sky_term[SG_PORTAL_SHARES];  /* F^2 / (q_k q0) */
 } StoredRecord;
 
 /* One cache line each: threads rendering neighbouring tiles append to
@@ -104,6 +113,9 @@ typedef struct RegionStats {
     uint64_t axis_samples[FAMILIES];
     double axis_weight[FAMILIES], axis_weighted[FAMILIES];
     double axis_moment[FAMILIES][AXIS_CANDIDATES];
+    /* its sky samples: count, and each portal share's second-moment sum */
+    uint64_t sky_samples;
+    double sky_moment[SG_PORTAL_SHARES];
 } RegionStats;
 
 /* One level of regions (fine or coarse): sums over its regions of the
@@ -178,6 +190,11 @@ struct SgMixtureLearner {
     uint8_t *flags;
     uint32_t *seen;        /* fine regions with records, in the order they came */
     uint32_t seen_count;
+    /* portal shares: each level's own choice (-1: too few sky samples), the
+     * one each fine region uses, and the view's copy */
+    int8_t *share_choice, *coarse_share_choice;
+    int8_t global_share_choice;
+    uint8_t *portal_share, *view_portal_share;
     SgMixtureView view;
 };
 
@@ -243,7 +260,12 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->own_histogram = calloc(l->region_count, 1);
     l->histogram_dirty = calloc(entries, 1);
     l->histogram_changed = malloc(sizeof *l->histogram_changed * entries);
-    if (!l->histogram_sum || !l->histogram || !l->view_histogram || !l->histogram_of || !l->view_histogram_of ||
+    l->share_choice = malloc(l->region_count);
+    l->coarse_share_choice = malloc(l->coarse_count);
+    l->portal_share = malloc(l->region_count);
+    l->view_portal_share = malloc(l->region_count);
+    if (!l->share_choice || !l->coarse_share_choice || !l->portal_share || !l->view_portal_share ||
+        !l->histogram_sum || !l->histogram || !l->view_histogram || !l->histogram_of || !l->view_histogram_of ||
         !l->own_histogram || !l->histogram_dirty || !l->histogram_changed || !l->point || !l->view_point || !l->coarse_point || !l->axis || !l->view_axis || !l->coarse_axis ||
         !l->own_axis || !l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
         !l->coarse_touched || !l->stats || !l->coarse || !l->coarse_of || !l->buffers || !l->view_state ||
@@ -294,6 +316,12 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->view.histogram = l->view_histogram;
     memset(l->coarse_choice, -1, l->coarse_count);
     l->global_choice = -1;
+    memset(l->share_choice, -1, l->region_count);
+    memset(l->coarse_share_choice, -1, l->coarse_count);
+    l->global_share_choice = -1;
+    memset(l->portal_share, SG_PORTAL_SHARE_DEFAULT, l->region_count);
+    memset(l->view_portal_share, SG_PORTAL_SHARE_DEFAULT, l->region_count);
+    l->view.portal_share = l->view_portal_share;
     return l;
 }
 
@@ -335,6 +363,10 @@ void sg_mixture_learner_free(SgMixtureLearner *l)
     free(l->own_histogram);
     free(l->histogram_dirty);
     free(l->histogram_changed);
+    free(l->share_choice);
+    free(l->coarse_share_choice);
+    free(l->portal_share);
+    free(l->view_portal_share);
     free(l);
 }
 
@@ -382,6 +414,18 @@ static void refresh_state(SgMixtureLearner *l, uint32_t region)
     uint8_t st = (uint8_t)(candidate | (settled ? STATE_SETTLED : 0) | lobe);
     if (st != l->state[region]) {
         l->state[region] = st;
+        mark_changed(l, region);
+    }
+    if (!l->global.sky_samples)
+        return; /* no sky with portals: every region keeps the default */
+    int s = l->share_choice[region];
+    if (s < 0)
+        s = l->coarse_share_choice[l->coarse_of[region]];
+    if (s < 0)
+        s = l->global_share_choice;
+    uint8_t share = (uint8_t)(s < 0 ? SG_PORTAL_SHARE_DEFAULT : s);
+    if (share != l->portal_share[region]) {
+        l->portal_share[region] = share;
         mark_changed(l, region);
     }
 }
@@ -434,6 +478,18 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
     st->generation = l->view.generation;
     memset(st->fit, 0, sizeof st->fit);
     memset(st->point_fit, 0, sizeof st->point_fit);
+    st->sky = rec->sky;
+    if (rec->sky) {
+        float f = rec->sky_contribution, q0 = rec->sky_share * rec->sky_pdf_portals +
+                                              (1.0f - rec->sky_share) * rec->sky_pdf_sky;
+        for (int k = 0; k < SG_PORTAL_SHARES; k++) {
+            float qk = sg_portal_shares[k] * rec->sky_pdf_portals + (1.0f - sg_portal_shares[k]) * rec->sky_pdf_sky;
+            /* a share that could never have drawn a direction that brought light: infinite */
+            st->sky_term[k] = !(f > 0.0f) || !isfinite(f) || !(q0 > 0.0f) ? 0.0f
+                              : qk > 0.0f                                  ? f / qk * (f / q0)
+                                                                           : INFINITY;
+        }
+    }
     if (!rec->lobe)
         return;
     const float *axis = &l->view_axis[3 * (size_t)rec->region];
@@ -505,6 +561,11 @@ static bool fallback_settled(const RegionStats *st)
 
 static void add_record(RegionStats *st, const StoredRecord *rec)
 {
+    if (rec->sky) {
+        st->sky_samples++;
+        for (int k = 0; k < SG_PORTAL_SHARES; k++)
+            st->sky_moment[k] += rec->sky_term[k];
+    }
     if (rec->radiance >= 0.0f) {
         st->radiance_sum2 += (double)rec->radiance * rec->radiance;
         st->radiance_samples++;
@@ -597,6 +658,19 @@ static int choose(RegionStats *st, Totals *t, int candidates)
     return k;
 }
 
+/* The portal share whose sky samples' second moment is least (the
+ * default where they tie), or -1 with too few sky samples. */
+static int best_share(const RegionStats *st)
+{
+    if (st->sky_samples < SHARE_MIN_SAMPLES)
+        return -1;
+    int best = SG_PORTAL_SHARE_DEFAULT;
+    for (int k = 0; k < SG_PORTAL_SHARES; k++)
+        if (st->sky_moment[k] < st->sky_moment[best])
+            best = k;
+    return best;
+}
+
 static float rms_radiance(const RegionStats *st)
 {
     return st->radiance_samples >= RADIANCE_MIN_SAMPLES
@@ -654,6 +728,7 @@ static void publish(SgMixtureLearner *l)
         memcpy(l->view_axis, l->axis, 3 * sizeof *l->axis * l->region_count);
         memcpy(l->view_point, l->point, 4 * sizeof *l->point * l->region_count);
         memcpy(l->view_histogram_of, l->histogram_of, sizeof *l->histogram_of * l->region_count);
+        memcpy(l->view_portal_share, l->portal_share, l->region_count);
     } else
         for (uint32_t i = 0; i < l->changed_count; i++) {
             uint32_t r = l->changed[i];
@@ -662,6 +737,7 @@ static void publish(SgMixtureLearner *l)
             memcpy(&l->view_axis[3 * (size_t)r], &l->axis[3 * (size_t)r], 3 * sizeof *l->axis);
             memcpy(&l->view_point[4 * (size_t)r], &l->point[4 * (size_t)r], 4 * sizeof *l->point);
             l->view_histogram_of[r] = l->histogram_of[r];
+            l->view_portal_share[r] = l->portal_share[r];
         }
     for (uint32_t i = 0; i < l->histogram_changed_count; i++) {
         size_t e = l->histogram_changed[i];
@@ -827,16 +903,21 @@ void sg_mixture_learn(SgMixtureLearner *l)
     }
     /* the whole scene has no axis of its own */
     int8_t g = (int8_t)choose(&l->global, &l->global_totals, SKELETON_CANDIDATES);
-    if (g != l->global_choice) {
+    int8_t gs = (int8_t)best_share(&l->global);
+    if (g != l->global_choice || gs != l->global_share_choice) {
+        bool mixture = g != l->global_choice, share = gs != l->global_share_choice;
         l->global_choice = g; /* rare: every region that follows it looks again */
+        l->global_share_choice = gs;
         for (uint32_t i = 0; i < l->region_count; i++)
-            if (l->choice[i] < 0 && l->coarse_choice[l->coarse_of[i]] < 0)
+            if ((mixture && l->choice[i] < 0 && l->coarse_choice[l->coarse_of[i]] < 0) ||
+                (share && l->share_choice[i] < 0 && l->coarse_share_choice[l->coarse_of[i]] < 0))
                 refresh_state(l, i);
     }
     for (uint32_t i = 0; i < fine; i++) {
         l->is_touched[l->touched[i]] = 0;
         fit_fine_axis(l, l->touched[i]);
         l->choice[l->touched[i]] = (int8_t)choose(&l->stats[l->touched[i]], &l->fine_totals, SG_MIXTURE_CANDIDATES);
+        l->share_choice[l->touched[i]] = (int8_t)best_share(&l->stats[l->touched[i]]);
         refresh_state(l, l->touched[i]);
         refresh_radiance(l, l->touched[i]);
     }
@@ -848,6 +929,9 @@ void sg_mixture_learn(SgMixtureLearner *l)
         bool new_histogram = refitted && fit_histogram(l, (size_t)l->region_count + c);
         int8_t k = (int8_t)choose(&l->coarse[c], &l->coarse_totals, SG_MIXTURE_CANDIDATES);
         bool rechosen = k != l->coarse_choice[c];
+        int8_t share = (int8_t)best_share(&l->coarse[c]);
+        bool share_rechosen = share != l->coarse_share_choice[c];
+        l->coarse_share_choice[c] = share;
         /* its radiance goes to its sparse fine regions each time its
          * samples double: the estimate settles, the copies cost */
         RegionStats *cs = &l->coarse[c];
@@ -855,7 +939,7 @@ void sg_mixture_learn(SgMixtureLearner *l)
                                 cs->radiance_samples >= 2 * cs->radiance_published;
         if (answers_radiance)
             cs->radiance_published = cs->radiance_samples;
-        if (!rechosen && !answers_radiance && !refitted)
+        if (!rechosen && !share_rechosen && !answers_radiance && !refitted)
             continue;
         l->coarse_choice[c] = k;
         /* the fine regions it answers for: its cells, same normal bin */
@@ -874,7 +958,7 @@ void sg_mixture_learn(SgMixtureLearner *l)
                         forget_family(&l->stats[f], HISTOGRAM_FAMILY, l->generation);
                         mark_changed(l, f);
                     }
-                    if (rechosen && l->choice[f] < 0)
+                    if ((rechosen && l->choice[f] < 0) || (share_rechosen && l->share_choice[f] < 0))
                         refresh_state(l, f);
                     if (answers_radiance && !(l->flags[f] & REGION_OWN_RADIANCE))
                         refresh_radiance(l, f);
@@ -886,6 +970,22 @@ void sg_mixture_learn(SgMixtureLearner *l)
 uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region)
 {
     return region < l->region_count ? l->stats[region].samples : 0;
+}
+
+bool sg_mixture_portal_share_use(const SgMixtureLearner *l, double fractions[SG_PORTAL_SHARES])
+{
+    double all = 0.0;
+    for (int k = 0; k < SG_PORTAL_SHARES; k++)
+        fractions[k] = 0.0;
+    for (uint32_t s = 0; s < l->seen_count; s++) {
+        uint32_t i = l->seen[s];
+        double n = (double)l->stats[i].sky_samples;
+        fractions[l->portal_share[i]] += n;
+        all += n;
+    }
+    for (int k = 0; k < SG_PORTAL_SHARES && all > 0.0; k++)
+        fractions[k] /= all;
+    return all > 0.0;
 }
 
 
@@ -933,11 +1033,12 @@ bool sg_mixture_region_point(const SgMixtureLearner *l, uint32_t region, Vec3 *p
 }
 
 /* region count, the scene's radiance, then per region its state byte,
- * radiance, axis and point; then the histograms in use: their count, each
- * entry's index and distribution, and per region the entry it uses */
+ * radiance, axis and point, then per region its portal share; then the
+ * histograms in use: their count, each entry's index and distribution, and
+ * per region the entry it uses */
 static size_t fixed_view_size(const SgMixtureLearner *l)
 {
-    return sizeof(uint32_t) + sizeof(float) + (size_t)l->region_count * (1 + 8 * sizeof(float));
+    return sizeof(uint32_t) + sizeof(float) + (size_t)l->region_count * (2 + 8 * sizeof(float));
 }
 
 #define HISTOGRAM_BYTES (sizeof(uint32_t) + SG_MIXTURE_BINS * sizeof(float))
@@ -976,6 +1077,7 @@ void sg_mixture_view_save(const SgMixtureLearner *l, void *out)
     memcpy(o + 8 + l->region_count, l->view_radiance, sizeof(float) * l->region_count);
     memcpy(o + 8 + l->region_count * (size_t)5, l->view_axis, 3 * sizeof(float) * l->region_count);
     memcpy(o + 8 + l->region_count * (size_t)17, l->view_point, 4 * sizeof(float) * l->region_count);
+    memcpy(o + 8 + l->region_count * (size_t)33, l->view_portal_share, l->region_count);
     o += fixed_view_size(l);
     uint32_t entries = l->region_count + l->coarse_count;
     uint8_t *used = calloc(entries, 1);
@@ -1014,6 +1116,10 @@ bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size)
             return false;
         memcpy(&l->view_histogram[(size_t)e * SG_MIXTURE_BINS], h + sizeof e, SG_MIXTURE_BINS * sizeof(float));
     }
+    const unsigned char *share = i + 8 + l->region_count * (size_t)33;
+    for (uint32_t r = 0; r < l->region_count; r++)
+        if (share[r] >= SG_PORTAL_SHARES)
+            return false;
     for (uint32_t r = 0; r < l->region_count; r++) {
         uint32_t e;
         memcpy(&e, of + sizeof e * r, sizeof e);
@@ -1026,6 +1132,7 @@ bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size)
     memcpy(l->view_radiance, i + 8 + l->region_count, sizeof(float) * l->region_count);
     memcpy(l->view_axis, i + 8 + l->region_count * (size_t)5, 3 * sizeof(float) * l->region_count);
     memcpy(l->view_point, i + 8 + l->region_count * (size_t)17, 4 * sizeof(float) * l->region_count);
+    memcpy(l->view_portal_share, share, l->region_count);
     return true;
 }
 

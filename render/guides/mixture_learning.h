@@ -116,6 +116,23 @@ extern const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES];
  * than starting from the BSDF alone; the Cornell box pays ~2% for it). */
 #define SG_MIXTURE_INITIAL 2
 
+/* A sky seen through portals (windows) is sampled by next-event
+ * estimation through them with some probability, the share, and from its
+ * own distribution otherwise (render/lights.h). Which share is best depends
+ * on the place: deep in a room lit through its window every light sample
+ * that misses the window is wasted, out in the open the portals are, and
+ * beside a window whose view holds the sun the sky's own sampling finds
+ * the sun where a point uniform on the window does not. Each region learns
+ * its share from its vertices' sky samples: one drawn with density q0 and
+ * bringing F (before its density) adds F^2 / (q_k q0) to candidate k's sum,
+ * an unbiased estimate of the second moment that share's estimator would
+ * have, q_k = share_k p_portals + (1 - share_k) p_sky; the least wins.
+ * Candidate SG_PORTAL_SHARE_DEFAULT is PORTAL_SHARE, used where nothing is
+ * known yet. */
+#define SG_PORTAL_SHARES 5
+#define SG_PORTAL_SHARE_DEFAULT 2
+extern const float sg_portal_shares[SG_PORTAL_SHARES];
+
 /* One diffuse or glossy vertex of a learning path as the learner sees it:
  * what left it, and, where the bounce was guided, how it was drawn. */
 typedef struct SgMixtureRecord {
@@ -136,6 +153,10 @@ typedef struct SgMixtureRecord {
     float pdf;       /* density of the mixture that drew it */
     float estimate;  /* v: the bounce's one-sample estimate (luminance) */
     float weight;    /* w: its weight in the pixel, the squared throughput before it */
+    /* its light sample of a sky with portals, if it took one (contribution:
+     * F, the throughput in it; the share it was drawn with) */
+    bool sky;
+    float sky_contribution, sky_pdf_portals, sky_pdf_sky, sky_share;
 } SgMixtureRecord;
 
 typedef struct SgMixtureLearner SgMixtureLearner;
@@ -184,6 +205,8 @@ typedef struct SgMixtureView {
      * see global_radiance (sg_mixture_radiance) */
     const float *radiance;
     float global_radiance; /* the whole scene's, < 0 unknown */
+    /* per region: its portal share, as an index into sg_portal_shares */
+    const uint8_t *portal_share;
 } SgMixtureView;
 
 const SgMixtureView *sg_mixture_view(const SgMixtureLearner *l);
@@ -240,6 +263,11 @@ static inline float sg_mixture_radiance(const SgMixtureView *v, uint32_t region)
     float m = region != SG_NO_REGION ? v->radiance[region] : -1.0f;
     return m >= 0.0f ? m : v->global_radiance;
 }
+/* The share of a sky's light samples a region draws through its portals. */
+static inline float sg_mixture_portal_share(const SgMixtureView *v, uint32_t region)
+{
+    return sg_portal_shares[region != SG_NO_REGION ? v->portal_share[region] : SG_PORTAL_SHARE_DEFAULT];
+}
 /* Does the region still learn? One with enough samples is settled: its
  * choice stays, and paths no longer pay for the cache query there when it
  * is the BSDF alone. */
@@ -273,6 +301,9 @@ bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size);
 
 /* A region's sample count, for tests and reports. */
 uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region);
+/* Of the sky samples seen so far, the share of those whose region now uses
+ * each portal share (fractions[SG_PORTAL_SHARES]); false: none seen. */
+bool sg_mixture_portal_share_use(const SgMixtureLearner *l, double fractions[SG_PORTAL_SHARES]);
 /* Share of the bounces seen so far that fall in regions whose choice now
  * uses the lobe (alpha < 1), and of those whose lobe is the learned axis. */
 double sg_mixture_guided_fraction(const SgMixtureLearner *l);

@@ -70,6 +70,17 @@ typedef struct GuideHit {
     bool may_learn;       /* the path learns and can keep one more record */
 } GuideHit;
 
+/* A vertex's light sample of a sky with portals, as a learner of the
+ * portal share needs it: what the sample brought to the pixel (luminance,
+ * the path's throughput and the pick's probability included, no strategy
+ * density: 0 where the shadow ray was blocked) and the two strategies'
+ * densities of its direction, with the share it was drawn with. */
+typedef struct SkyLightSample {
+    bool taken;
+    float contribution;
+    float pdf_portals, pdf_sky, share;
+} SkyLightSample;
+
 /* The bounce's distribution at a vertex: the BSDF's part is the
  * integrator's, the rest the guide's (`state`, its own layout). Plain data:
  * the integrator copies it where the path splits and where it keeps a
@@ -82,6 +93,10 @@ typedef struct GuideVertex {
     float rms;         /* the root mean square of what a bounce from here
                         * brings back per unit throughput (the learned
                         * roulette's input); < 0 unknown */
+    float portal_share; /* of a sky's light samples here, the share drawn
+                         * through its portals; < 0: PORTAL_SHARE */
+    /* set by the integrator where the vertex learns */
+    SkyLightSample sky;
     /* set by sample */
     bool by_guide;     /* the guide, not the BSDF's sampler, drew the direction */
     float mis_pdf;     /* >= 0: the density the bounce's MIS against the lights
