@@ -166,8 +166,9 @@ Test(render_learning, regions_learn_their_share_of_sky_samples_through_the_porta
                  sg_mixture_portal_share(view, near_room));
     double use[SG_PORTAL_SHARES];
     cr_assert(sg_mixture_portal_share_use(l, use));
-    cr_assert_float_eq(use[0], 0.5, 1e-12);
-    cr_assert_float_eq(use[SG_PORTAL_SHARES - 1], 0.5, 1e-12);
+    /* of the samples that brought light: the room's 80% through the window, the open's 20% beside it */
+    cr_assert_float_eq(use[0] + use[SG_PORTAL_SHARES - 1], 1.0, 1e-12);
+    cr_assert(use[SG_PORTAL_SHARES - 1] > 0.75 && use[SG_PORTAL_SHARES - 1] < 0.85, "%g", use[SG_PORTAL_SHARES - 1]);
 
     /* a field file's bytes give a new learner the same shares */
     size_t size = sg_mixture_view_size(l);

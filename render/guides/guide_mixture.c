@@ -304,7 +304,7 @@ static void mixture_describe(const PathGuide *g, const GuideStats *s, SgRenderRe
     double use[SG_PORTAL_SHARES];
     if (x->learner && !x->frozen && sg_mixture_portal_share_use(x->learner, use) && n > 0 &&
         (size_t)n < sizeof report->guide) {
-        n += snprintf(report->guide + n, sizeof report->guide - (size_t)n, ", sky samples' portal share");
+        n += snprintf(report->guide + n, sizeof report->guide - (size_t)n, ", lit sky samples' portal share");
         for (int k = 0; k < SG_PORTAL_SHARES && n > 0 && (size_t)n < sizeof report->guide; k++)
             n += snprintf(report->guide + n, sizeof report->guide - (size_t)n, "%s%g %.0f%%", k ? ", " : " ",
                           (double)sg_portal_shares[k], 100.0 * use[k]);

@@ -113,8 +113,9 @@ typedef struct RegionStats {
     uint64_t axis_samples[FAMILIES];
     double axis_weight[FAMILIES], axis_weighted[FAMILIES];
     double axis_moment[FAMILIES][AXIS_CANDIDATES];
-    /* its sky samples: count, and each portal share's second-moment sum */
-    uint64_t sky_samples;
+    /* its sky samples: count, those that brought light, and each portal
+     * share's second-moment sum */
+    uint64_t sky_samples, sky_lit;
     double sky_moment[SG_PORTAL_SHARES];
 } RegionStats;
 
@@ -563,6 +564,7 @@ static void add_record(RegionStats *st, const StoredRecord *rec)
 {
     if (rec->sky) {
         st->sky_samples++;
+        st->sky_lit += rec->sky_term[SG_PORTAL_SHARE_DEFAULT] > 0.0f;
         for (int k = 0; k < SG_PORTAL_SHARES; k++)
             st->sky_moment[k] += rec->sky_term[k];
     }
@@ -979,7 +981,7 @@ bool sg_mixture_portal_share_use(const SgMixtureLearner *l, double fractions[SG_
         fractions[k] = 0.0;
     for (uint32_t s = 0; s < l->seen_count; s++) {
         uint32_t i = l->seen[s];
-        double n = (double)l->stats[i].sky_samples;
+        double n = (double)l->stats[i].sky_lit;
         fractions[l->portal_share[i]] += n;
         all += n;
     }

@@ -301,8 +301,10 @@ bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size);
 
 /* A region's sample count, for tests and reports. */
 uint64_t sg_mixture_region_samples(const SgMixtureLearner *l, uint32_t region);
-/* Of the sky samples seen so far, the share of those whose region now uses
- * each portal share (fractions[SG_PORTAL_SHARES]); false: none seen. */
+/* Of the sky samples seen so far that brought light, the share of those
+ * whose region now uses each portal share (fractions[SG_PORTAL_SHARES]);
+ * false: none seen. (Where none brought light the share changes nothing,
+ * and the region keeps the default.) */
 bool sg_mixture_portal_share_use(const SgMixtureLearner *l, double fractions[SG_PORTAL_SHARES]);
 /* Share of the bounces seen so far that fall in regions whose choice now
  * uses the lobe (alpha < 1), and of those whose lobe is the learned axis. */
