@@ -150,7 +150,7 @@ typedef struct SgCamera {
 
 typedef struct SgRenderSettings {
     int spp;          /* default samples per pixel (0: not given) */
-    int max_depth;    /* maximum path length in bounces */
+    int max_depth;    /* maximum path length in segments from the camera (1: what it sees) */
     double exposure;  /* PNG exposure in stops */
 } SgRenderSettings;
 

@@ -593,6 +593,34 @@ Test(pbrt_camera, portrait_fov_and_plain_lookat_warns_mirror)
     sg_scene_free(s);
 }
 
+/* pbrt-v4's maxdepth counts the bounces after the camera ray (its
+ * PathIntegrator stops at `depth++ == maxDepth`, before the light sample),
+ * our max_depth the segments from the camera: maxdepth 1 (direct light) is
+ * our 2. Measured on tests/data/pbrt-lights/room-window.pbrt: pbrt-v4 at
+ * maxdepth 1 gives the image mean 0.0845 0.0566 0.0732, ours 0.0845 0.0566
+ * 0.0732 at --max-depth 2 and 0.0604 0.0373 0.0521 at 1. */
+Test(pbrt_integrator, maxdepth_counts_bounces_ours_segments)
+{
+    static const struct {
+        const char *integrator;
+        int max_depth;
+    } cases[] = {
+        {"", 6}, /* no Integrator: pbrt's volpath, maxdepth 5 */
+        {"Integrator \"path\"\n", 6},
+        {"Integrator \"volpath\" \"integer maxdepth\" [ 1 ]\n", 2},
+        {"Integrator \"path\" \"integer maxdepth\" [ 0 ]\n", 1},
+        {"Integrator \"path\" \"integer maxdepth\" [ 12 ]\n", 13},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
+        char text[1024];
+        snprintf(text, sizeof text, "%sCamera \"perspective\"\nWorldBegin\n" TRIANGLE, cases[i].integrator);
+        SgScene *s = load_ok(text);
+        cr_expect_eq(s->render.max_depth, cases[i].max_depth, "case %zu (%.40s...): max_depth %d, want %d", i,
+                     cases[i].integrator, s->render.max_depth, cases[i].max_depth);
+        sg_scene_free(s);
+    }
+}
+
 Test(pbrt_camera, transform_statement_equals_lookat)
 {
     /* The world-to-camera matrix of LookAt (with Scale -1 1 1), written out. */

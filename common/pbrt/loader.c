@@ -132,11 +132,13 @@ static bool statement(Parser *p, const Token *t)
             if (v >= 1 && v <= (1 << 24))
                 p->core.scene->render.spp = (int)v;
         }
+        /* pbrt-v4's maxdepth counts bounces after the camera ray (0: only
+         * what the camera sees); ours counts segments, one more */
         if (pbrt_token_is(t, "Integrator")) {
             if (!pbrt_param_float(p, "maxdepth", 5, &v))
                 return false;
-            if (v >= 1 && v <= 1024)
-                p->core.scene->render.max_depth = (int)v;
+            if (v >= 0 && v <= 1024)
+                p->core.scene->render.max_depth = (int)v + 1;
         }
         return true;
     }
@@ -316,7 +318,7 @@ SgScene *sg_pbrt_scene_load(const char *path, SgError *err)
     snprintf(p.base_dir, sizeof p.base_dir, "%.*s", slash ? (int)(slash - path + 1) : 0, path);
     p.film_width = 1280; /* pbrt's defaults */
     p.film_height = 720;
-    s->render.max_depth = 5;
+    s->render.max_depth = 5 + 1; /* pbrt's default maxdepth, 5 bounces */
     sg_transform_identity(&p.state.ctm);
     PbrtMaterial fallback; /* pbrt's default: diffuse 0.5 */
     memset(&fallback, 0, sizeof fallback);
