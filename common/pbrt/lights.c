@@ -1,7 +1,8 @@
 /* pbrt scene files, LightSource: point, spot, distant and infinite lights
  * with pbrt-v4's parameters ("I"/"L", "scale", "power", "illuminance",
  * "from"/"to", "coneangle"/"conedeltaangle", "filename", "portal"), placed
- * by the current transform. An RGB colour counts as pbrt-v4 counts it: its
+ * by the current transform ("portal" excepted: its points are in world
+ * space, as pbrt-v4 reads them). An RGB colour counts as pbrt-v4 counts it: its
  * values are the radiance (or intensity) before "scale" and "power". */
 #include <math.h>
 #include <stdio.h>
@@ -121,7 +122,10 @@ static bool infinite_light(Parser *p, const Token *statement, SgLightSource *l, 
                 q[a] = p->numbers[portal->first + 3 * k + a];
             if (!(isfinite(q[0]) && isfinite(q[1]) && isfinite(q[2])))
                 return pbrt_fail_at(p, statement, "LightSource \"infinite\": \"portal\" is not finite");
-            sg_transform_point(&p->state.ctm, q, l->portal[k]);
+            /* in world space, whatever the current transform: pbrt-v4
+             * takes the points through its camera transform alone (its
+             * lights.cpp, RenderFromWorld), not the light's */
+            memcpy(l->portal[k], q, sizeof q);
         }
         l->has_portal = true;
     }
