@@ -376,6 +376,11 @@ const PathGuideKind guide_mixture_kind = {
              .lobe_exponent = 16.0f,
              .learns = true,
              .learned_roulette = true,
-             .training_passes = 128},
+             /* the peer's training budget: as many samples a pixel
+              * as Open PGL's (Cycles' schedule), so that the race
+              * compares guides trained alike (on Sponza 128 passes left
+              * guided 1.39x less efficient per sample, the bathroom
+              * 1.15x: docs/render.md, "Training as long as the peer") */
+             .training_passes = SG_OPENPGL_TRAINING_PASSES},
     .create = mixture_create,
 };
