@@ -28,7 +28,8 @@
 # (--spp is the whole render's: shard K renders passes K, K+N, ...;
 # --sampling bsdf or openpgl need no cache: render --describe says; the
 # modes that learn, guided and openpgl, train once and every shard renders
-# with the same frozen field, so N shards are as good as one process).
+# with the same frozen field, so N shards are as good as one process;
+# --training-passes N goes to that training alone).
 #
 # Options:
 #   --name NAME          output name (default: the scene file's name)
@@ -91,10 +92,17 @@ run_step() {
       local cache=() field=()
       [ "$needs_cache" = 1 ] && cache=(--cache "$dir/importance.cache")
       [ "$learns" = 1 ] && field=(--field "$dir/$name.field")
+      local shard_options=() i
+      for ((i = 0; i < ${#render_options[@]}; i++)); do
+        case ${render_options[$i]} in
+          --training-passes) i=$((i + 1)) ;; # the training's, not the render's
+          *) shard_options+=("${render_options[$i]}") ;;
+        esac
+      done
       # on a node: the cores Slurm gave the task; here: every core
       local threads=(--threads "${SLURM_CPUS_PER_TASK:-$cpus}")
       [ -n "${SG_FARM_LOCAL:-}" ] && threads=()
-      exec "$bin/render" "$scene" "${cache[@]}" "${field[@]}" "${render_options[@]}" --shard "$k/$shards" \
+      exec "$bin/render" "$scene" "${cache[@]}" "${field[@]}" "${shard_options[@]}" --shard "$k/$shards" \
         "${threads[@]}" -o "$dir/shards/$name-$k.exr" --quiet
       ;;
     merge)

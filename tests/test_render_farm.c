@@ -138,7 +138,10 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
     char cmd[16384], err[4096];
 
     /* 1. four shards of a 32 spp render, merged */
-    int status = slurm_render(err, "--shards 4 --out %s/farm --wait -- --spp 32 --size 48x36 --seed 7 >/dev/null", tmp);
+    /* --training-passes goes to the precompute job's training alone (a
+     * shard given it with its --field would refuse to start) */
+    int status = slurm_render(
+        err, "--shards 4 --out %s/farm --wait -- --spp 32 --size 48x36 --seed 7 --training-passes 128 >/dev/null", tmp);
     cr_assert_eq(status, 0, "slurm-render failed (%d): %s", status, err);
     char dir[4200];
     snprintf(dir, sizeof dir, "%s/farm", tmp);
@@ -168,7 +171,7 @@ Test(render_farm, four_shards_through_slurm_merge_exactly_and_survive_a_cancelle
      * suites: the three other shards, the rerun and the check render all
      * scale with it */
     const int long_spp = getenv("SG_SANITIZED") ? 400 : 1200;
-    cr_assert_eq(slurm_render(err, "--shards 4 --out %s/farm2 -- --spp %d --size 48x36 --seed 3 >/dev/null", tmp,
+    cr_assert_eq(slurm_render(err, "--shards 4 --out %s/farm2 -- --spp %d --size 48x36 --seed 3 --training-passes 128 >/dev/null", tmp,
                               long_spp), 0,
                  "%s", err);
     char job[64] = "";
