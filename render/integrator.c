@@ -521,3 +521,15 @@ Vec3 integrator_trace(const Integrator *it, Vec3 o, Vec3 d, const PathCtx *pc, V
     pc->st->branches += (uint64_t)(p.branches - 1);
     return p.radiance;
 }
+
+Vec3 integrator_seen(const Integrator *it, Vec3 o, Vec3 d, PathStats *st)
+{
+    Hit h = intersect(it->geo, o, d, INFINITY);
+    st->rays++;
+    st->views++;
+    if (!h.found) /* as add_escaped sees it from the camera: the camera ray counts as a specular bounce */
+        return it->lights->has_escaping ? light_set_escaped(it->lights, o, d, -1.0f, -1.0f) : v3(0, 0, 0);
+    const Material *m = &it->materials[it->geo->tris[h.tri].material];
+    /* as add_emission at the first hit: front faces only, MIS weight 1 */
+    return m->emissive && v3_dot(d, it->geo->tris[h.tri].normal) < 0.0f ? m->emission : v3(0, 0, 0);
+}

@@ -33,6 +33,7 @@ typedef struct PathStats {
     uint64_t branches;     /* made by splitting, beyond the paths themselves */
     uint64_t bounces;      /* diffuse and glossy bounces drawn */
     uint64_t lobe_bounces; /* of which the guide drew the direction */
+    uint64_t views;        /* extra camera rays for the light seen directly (render/seen_light.h) */
 } PathStats;
 
 /* What one camera path needs besides the integrator. */
@@ -50,5 +51,9 @@ typedef struct PathCtx {
 /* The radiance one camera path from o along d brings back; `seen` gets the
  * emission the camera ray itself hit (which the roulette does not act on). */
 Vec3 integrator_trace(const Integrator *it, Vec3 o, Vec3 d, const PathCtx *pc, Vec3 *seen);
+
+/* What a camera ray from o along d sees directly, integrator_trace's `seen`
+ * alone: one ray, nothing shaded (counted in st->rays and st->views). */
+Vec3 integrator_seen(const Integrator *it, Vec3 o, Vec3 d, PathStats *st);
 
 #endif

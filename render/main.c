@@ -25,7 +25,7 @@ static const char *usage_head =
     "              [--max-depth N] [--exponent P] [--alpha A] [--roulette learned|albedo]\n"
     "              [--size WxH] [--shard K/N] [--texture-cache MB] [--quiet]\n"
     "              [--field FIELD | --field-out FIELD [--training-passes N]] [--openpgl-mode ris|mis]\n"
-    "              [--no-openings]\n"
+    "              [--no-openings] [--edge-rays N]\n"
     "       render --describe [MODE]\n"
     "\n"
     "Path traces SCENE (.json or pbrt-v4 .pbrt; Embree 3) with next-event estimation and MIS.\n"
@@ -58,6 +58,10 @@ static const char *usage_tail =
     "                    older one-sample mixture, diffuse lobes only)\n"
     "  --no-openings     a sky is sampled over its whole sphere, not through the windows the\n"
     "                    precompute found in the cache (a hand-drawn portal still counts)\n"
+    "  --edge-rays N     where the light the camera sees directly varies within a pixel (a\n"
+    "                    light's or the sky's silhouette), a sample takes up to N more camera\n"
+    "                    rays that look for it alone, as many as pay for themselves (0-16,\n"
+    "                    default 16; 0: none)\n"
     "  --size WxH        image size (default: the scene's image size, else 320x240)\n"
     "  --shard K/N       render only shard K (0 <= K < N) of the render split into N: its\n"
     "                    passes K, K+N, K+2N... of --spp in all (with --time: for that long);\n"
@@ -143,7 +147,8 @@ typedef struct Args {
     long threads, max_depth, width, height;
     long shard, shard_count;
     double exposure, exponent, alpha;
-    bool has_exposure, has_exponent, has_alpha, quiet, no_openings;
+    bool has_exposure, has_exponent, has_alpha, quiet, no_openings, has_edge_rays;
+    long edge_rays;
     double texture_cache_mb;
 } Args;
 
@@ -264,6 +269,11 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
             a->quiet = true;
         } else if (!strcmp(s, "--no-openings")) {
             a->no_openings = true;
+        } else if (!strcmp(s, "--edge-rays")) {
+            NEED_VALUE();
+            if (!sg_parse_long(v, 0, 16, &a->edge_rays))
+                return sg_fail(err, "--edge-rays: '%s' is not an integer in [0, 16]", v);
+            a->has_edge_rays = true;
         } else if (s[0] == '-' && s[1]) {
             return sg_fail(err, "%s: unknown option (see --help)", s);
         } else if (!a->scene) {
@@ -392,6 +402,8 @@ int main(int argc, char **argv)
     o.roulette = a.roulette;
     o.openpgl_mode = a.openpgl_mode;
     o.no_openings = a.no_openings;
+    if (a.has_edge_rays)
+        o.edge_rays = (int)a.edge_rays;
     o.shard = (int)a.shard;
     o.shard_count = (int)a.shard_count;
     o.texture_cache_mb = a.texture_cache_mb;
@@ -511,8 +523,9 @@ int main(int argc, char **argv)
     snprintf(training_s, sizeof training_s, "%d", sg_renderer_training_passes(r));
     snprintf(training_sec_s, sizeof training_sec_s, "%.3f", sg_renderer_training_seconds(r));
     double branches = sg_renderer_branches_per_path(r);
-    char roulette[80], branches_s[32];
+    char roulette[80], branches_s[32], edge_rays_s[32];
     snprintf(branches_s, sizeof branches_s, "%.3f", branches);
+    snprintf(edge_rays_s, sizeof edge_rays_s, "%.4f", sg_renderer_edge_rays_per_sample(r));
     if (report.roulette == SG_ROULETTE_LEARNED) /* it also splits paths */
         snprintf(roulette, sizeof roulette, "%s (%.2f branches split off a path)", sg_roulette_name(report.roulette),
                  branches);
@@ -528,6 +541,7 @@ int main(int argc, char **argv)
         {"sg:alpha", report.alpha},
         {"sg:roulette", sg_roulette_name(report.roulette)},
         {"sg:branches_per_path", branches_s},
+        {"sg:edge_rays_per_sample", edge_rays_s},
         {SG_ATTR_NONFINITE_SAMPLES, nonfinite_s},
         {SG_ATTR_GUIDE_SHARE, guide_share_s},
         {"sg:training_passes", training_s},
@@ -573,12 +587,16 @@ int main(int argc, char **argv)
         if (report.openings)
             snprintf(openings, sizeof openings, ", sky sampled through %u opening%s", report.openings,
                      report.openings == 1 ? "" : "s");
+        char edges[80] = "";
+        double edge_rays = sg_renderer_edge_rays_per_sample(r);
+        if (edge_rays > 0.0)
+            snprintf(edges, sizeof edges, ", %.3g edge rays a sample", edge_rays);
         fprintf(stderr,
-                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s, roulette %s, seed "
+                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s%s, roulette %s, seed "
                 "%s, %s NaN/inf samples%s\n",
                 o.width, o.height, sg_renderer_spp(r), render_seconds, paths / render_seconds * 1e-6,
-                (double)sg_renderer_rays(r) / render_seconds * 1e-6, mode->name, report.guide, openings, roulette,
-                seed_s, nonfinite_s, shard_line);
+                (double)sg_renderer_rays(r) / render_seconds * 1e-6, mode->name, report.guide, openings, edges,
+                roulette, seed_s, nonfinite_s, shard_line);
     }
     status = 0;
 

@@ -44,3 +44,13 @@ void pixel_sampler_start(const PixelSampler *ps, size_t pix, SgRng *rng, float *
     sg_rng_seed(rng, ps->pass_key, pix);
     pixel_jitter(ps->jitter_key, pix, ps->pass, jx, jy);
 }
+
+void pixel_sampler_view(const PixelSampler *ps, size_t pix, int j, int per_pass, float *jx, float *jy)
+{
+    pixel_jitter(ps->jitter_key ^ 0x3c6ef372fe94f82bULL, pix, ps->pass * (uint64_t)per_pass + (uint64_t)j, jx, jy);
+}
+
+void pixel_sampler_survey(const PixelSampler *ps, size_t pix, int j, float *jx, float *jy)
+{
+    pixel_jitter(ps->jitter_key ^ 0xa54ff53a5f1d36f1ULL, pix, (uint64_t)j, jx, jy);
+}

@@ -24,6 +24,7 @@
 #include "pixel_noise.h"
 #include "pixel_sampler.h"
 #include "roulette.h"
+#include "seen_light.h"
 #include "textures.h"
 #include "threads.h"
 #include "vecmath.h"
@@ -52,6 +53,9 @@ struct SgRenderer {
      * there, made before each pass (NULL: the albedo roulette runs). */
     PixelNoise *noise;
     int noise_spp;        /* the passes in its sums (training's included) */
+    SeenLight *seen;      /* extra camera rays where the light seen directly varies (NULL: none) */
+    bool surveyed;        /* seen's survey is done (before the first pass) */
+    int seen_passes;      /* the passes in seen's sums (training's included) */
     int tiles_x, tiles_y;
     uint64_t scene_hash;  /* what the scene was (its text and geometry), for field files */
     int training_passes;  /* a learned mode's training */
@@ -66,6 +70,8 @@ struct SgRenderer {
     _Atomic uint64_t backface_hits;
     _Atomic uint64_t branches;
     _Atomic uint64_t bounces, lobe_bounces;
+    _Atomic uint64_t views;                /* extra camera rays (in rays too) */
+    uint64_t path_rays, path_samples;     /* all passes', training's too: a sample's cost in rays */
 };
 
 void sg_render_options_default(SgRenderOptions *o, const SgScene *scene)
@@ -79,6 +85,7 @@ void sg_render_options_default(SgRenderOptions *o, const SgScene *scene)
     o->alpha = SG_ALPHA_LEARNED;
     o->roulette = SG_ROULETTE_LEARNED;
     o->shard_count = 1;
+    o->edge_rays = SEEN_RAYS_MAX;
 }
 
 const char *sg_roulette_name(SgRoulette r) { return r == SG_ROULETTE_ALBEDO ? "albedo" : "learned"; }
@@ -132,13 +139,15 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
                        SG_SHARDS_MAX), NULL;
     if (o->roulette != SG_ROULETTE_LEARNED && o->roulette != SG_ROULETTE_ALBEDO)
         return sg_fail(err, "%s: unknown roulette %d", path, (int)o->roulette), NULL;
+    if (o->edge_rays < 0 || o->edge_rays > SEEN_RAYS_MAX)
+        return sg_fail(err, "%s: edge rays must be in [0, %d]", path, SEEN_RAYS_MAX), NULL;
 
     /* sum (double) + last pass + the caller's image (float) per pixel, and
      * the renderer's and Embree's copies of the triangles (~150 bytes each):
      * refuse up front what the machine cannot hold rather than be killed */
     char what[96];
     snprintf(what, sizeof what, "a %dx%d image", o->width, o->height);
-    if (!sg_memory_check(48.0 * o->width * o->height + 150.0 * s->triangle_count, path, what, err))
+    if (!sg_memory_check((48.0 + (o->edge_rays ? 40.0 : 0.0)) * o->width * o->height + 150.0 * s->triangle_count, path, what, err))
         return NULL;
     SgRenderer *r = calloc(1, sizeof *r);
     if (!r)
@@ -160,7 +169,8 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
     }
     r->material_count = s->material_count;
     r->materials = calloc(s->material_count, sizeof *r->materials);
-    if (!film_init(&r->film, o->width, o->height) || !r->materials) {
+    if (!film_init(&r->film, o->width, o->height) || !r->materials ||
+        (o->edge_rays && !(r->seen = seen_light_create(o->width, o->height, o->edge_rays)))) {
         sg_renderer_free(r);
         return sg_fail(err, "%s: out of memory", path), NULL;
     }
@@ -235,6 +245,7 @@ void sg_renderer_free(SgRenderer *r)
     texture_set_free(r->textures);
     light_set_free(&r->lights);
     pixel_noise_free(r->noise);
+    seen_light_free(r->seen);
     film_free(&r->film);
     free(r);
 }
@@ -245,7 +256,30 @@ typedef struct PassCtx {
     PixelSampler sampler; /* the pass in the whole render (shards: render/renderer.h) */
     bool first_pass;
     GuidePass plan;       /* what the guide said of this pass */
+    double sample_rays;   /* a sample's cost in rays, from the passes before */
 } PassCtx;
+
+/* The sample's light seen directly, `seen`, made the mean of its own view
+ * and of the extra camera rays its pixel takes (render/seen_light.h); the
+ * views and the rest of the sample go to the pixel's sums. */
+static Vec3 look_again(SgRenderer *r, const PassCtx *pc, int x, int y, size_t pix, Vec3 L, Vec3 seen, PathStats *st)
+{
+    SeenLight *sl = r->seen;
+    int k = seen_light_rays(sl, pix, pc->sample_rays);
+    Vec3 views = seen;
+    seen_light_add_view(sl, pix, luminance(seen));
+    for (int j = 0; j < k; j++) {
+        float jx, jy;
+        pixel_sampler_view(&pc->sampler, pix, j, SEEN_RAYS_MAX, &jx, &jy);
+        Vec3 v = integrator_seen(&r->integrator, r->camera.pos, camera_ray(&r->camera, x, y, jx, jy), st);
+        seen_light_add_view(sl, pix, luminance(v));
+        views = v3_add(views, v);
+    }
+    if (k)
+        L = v3_add(v3_sub(L, seen), v3_scale(views, 1.0f / (float)(k + 1)));
+    seen_light_add_sample(sl, pix, luminance(L));
+    return L;
+}
 
 static void render_tile(PassCtx *pc, uint64_t index, int thread)
 {
@@ -269,12 +303,16 @@ static void render_tile(PassCtx *pc, uint64_t index, int thread)
                             .pixel_deviation = r->noise ? pixel_noise_deviation(r->noise, pix) : 0.0f};
             Vec3 seen = v3(0, 0, 0);
             Vec3 L = integrator_trace(&r->integrator, r->camera.pos, dir, &path, &seen);
+            /* what the roulette acts on: the light past the camera ray's own hit, not the edge rays' views */
+            Vec3 rest = v3_sub(L, seen);
+            if (r->seen)
+                L = look_again(r, pc, x, y, pix, L, seen, &st);
             if (!film_add(&r->film, pix, &L)) {
                 nonfinite++;
-                seen = L;
+                rest = v3(0, 0, 0);
             }
             if (r->noise)
-                pixel_noise_add(r->noise, pix, luminance(v3_sub(L, seen)));
+                pixel_noise_add(r->noise, pix, luminance(rest));
         }
     atomic_fetch_add(&r->rays, st.rays);
     if (st.backface)
@@ -284,6 +322,8 @@ static void render_tile(PassCtx *pc, uint64_t index, int thread)
     atomic_fetch_add(&r->bounces, st.bounces);
     if (st.lobe_bounces)
         atomic_fetch_add(&r->lobe_bounces, st.lobe_bounces);
+    if (st.views)
+        atomic_fetch_add(&r->views, st.views);
     if (nonfinite)
         atomic_fetch_add(&r->nonfinite, nonfinite);
 }
@@ -304,12 +344,56 @@ static void pass_job(void *vctx, uint64_t index, int thread)
     render_tile(pc, index, thread);
 }
 
+/* Before the first pass: SEEN_SURVEY rays per pixel look for the light
+ * seen directly, so that its silhouettes are known from the first pass on
+ * (render/seen_light.h). One job per image row. */
+typedef struct SurveyCtx {
+    SgRenderer *r;
+    PixelSampler sampler;
+    _Atomic uint64_t rays;
+} SurveyCtx;
+
+static void survey_row(void *vctx, uint64_t row, int thread)
+{
+    (void)thread;
+    SurveyCtx *sc = vctx;
+    SgRenderer *r = sc->r;
+    PathStats st = {0};
+    int y = (int)row;
+    for (int x = 0; x < r->opt.width; x++) {
+        size_t pix = (size_t)y * r->opt.width + x;
+        for (int j = 0; j < SEEN_SURVEY; j++) {
+            float jx, jy;
+            pixel_sampler_survey(&sc->sampler, pix, j, &jx, &jy);
+            Vec3 v = integrator_seen(&r->integrator, r->camera.pos, camera_ray(&r->camera, x, y, jx, jy), &st);
+            seen_light_add_view(r->seen, pix, luminance(v));
+        }
+    }
+    atomic_fetch_add(&sc->rays, st.rays);
+}
+
+static void survey_views(SgRenderer *r)
+{
+    SurveyCtx sc = {.r = r};
+    pixel_sampler_init(&sc.sampler, r->opt.seed, 0);
+    sg_thread_pool_run(r->pool, (uint64_t)r->opt.height, survey_row, &sc);
+    atomic_fetch_add(&r->rays, atomic_load(&sc.rays));
+    atomic_fetch_add(&r->views, atomic_load(&sc.rays));
+    r->surveyed = true;
+}
+
 void sg_renderer_pass(SgRenderer *r)
 {
+    if (r->seen && !r->surveyed)
+        survey_views(r);
+    if (r->seen && (r->seen_passes < 8 || !(r->seen_passes & (r->seen_passes - 1)) || r->seen_passes % 16 == 0))
+        seen_light_estimate(r->seen, r->seen_passes);
     roulette_prepare_pass(r->noise, r->noise_spp, r->pool);
     /* the whole render's pass this one is (this one, unsharded) */
     uint64_t pass = sg_shard_pass(r->opt.shard, r->opt.shard_count, (uint64_t)r->spp);
-    PassCtx pc = {.r = r, .tiles_x = r->tiles_x, .first_pass = r->spp == 0};
+    PassCtx pc = {.r = r, .tiles_x = r->tiles_x, .first_pass = r->spp == 0,
+                  .sample_rays = r->path_samples ? (double)r->path_rays / (double)r->path_samples : 1.0};
+    uint64_t rays_before = atomic_load(&r->rays), views_before = atomic_load(&r->views);
     pixel_sampler_init(&pc.sampler, r->training ? r->opt.seed ^ TRAINING_SEED_SALT : r->opt.seed, pass);
     const PathGuideOps *gops = r->guide->ops;
     pc.plan.training = r->training;
@@ -318,6 +402,9 @@ void sg_renderer_pass(SgRenderer *r)
     sg_thread_pool_run(r->pool, (uint64_t)r->tiles_x * r->tiles_y + pc.plan.side_job, pass_job, &pc);
     if (gops->pass_end)
         gops->pass_end(r->guide, r->spp);
+    r->path_rays += (atomic_load(&r->rays) - rays_before) - (atomic_load(&r->views) - views_before);
+    r->path_samples += (uint64_t)r->opt.width * r->opt.height;
+    r->seen_passes++;
     r->spp++;
     if (r->noise)
         r->noise_spp++;
@@ -343,6 +430,12 @@ size_t sg_renderer_texture_cache(const SgRenderer *r, size_t *images)
 }
 
 uint64_t sg_renderer_rays(const SgRenderer *r) { return atomic_load(&((SgRenderer *)r)->rays); }
+
+double sg_renderer_edge_rays_per_sample(const SgRenderer *r)
+{
+    double samples = (double)r->opt.width * r->opt.height * r->spp;
+    return samples > 0.0 ? (double)atomic_load(&((SgRenderer *)r)->views) / samples : 0.0;
+}
 
 double sg_renderer_branches_per_path(const SgRenderer *r)
 {
@@ -423,6 +516,13 @@ void sg_renderer_freeze(SgRenderer *r)
     atomic_store(&r->branches, 0);
     atomic_store(&r->bounces, 0);
     atomic_store(&r->lobe_bounces, 0);
+    atomic_store(&r->views, 0);
+    /* the edge rays start afresh, as in a render from the field's file */
+    if (r->seen)
+        seen_light_clear(r->seen);
+    r->surveyed = false;
+    r->seen_passes = 0;
+    r->path_rays = r->path_samples = 0;
     /* the roulette starts from all it knows of the pixels */
     if (r->noise && r->noise_spp > 1)
         pixel_noise_estimate(r->noise, r->noise_spp, r->pool);

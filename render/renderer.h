@@ -137,11 +137,15 @@ typedef struct SgRenderOptions {
     /* a sky is sampled over its whole sphere, not through the openings the
      * precompute found (render/openings.h); a hand-drawn portal still counts */
     bool no_openings;
+    /* at a pixel where the light the camera sees directly varies (a light's
+     * or the sky's silhouette), the most extra camera rays a sample takes
+     * to look for it (render/seen_light.h); default SEEN_RAYS_MAX (16), 0: none */
+    int edge_rays;
 } SgRenderOptions;
 
 /* Defaults: image size and depth from the scene (320x240, 8 when not
  * given), bsdf sampling, seed 0, every core, lobe exponent 16, alpha
- * learned, learned roulette, shard 0 of 1. */
+ * learned, learned roulette, shard 0 of 1, 16 edge rays. */
 void sg_render_options_default(SgRenderOptions *o, const SgScene *scene);
 
 typedef struct SgRenderer SgRenderer;
@@ -155,6 +159,9 @@ void sg_renderer_free(SgRenderer *r);
 /* One more sample in every pixel. */
 void sg_renderer_pass(SgRenderer *r);
 int sg_renderer_spp(const SgRenderer *r);
+/* Extra camera rays a sample took, on average, where the light seen
+ * directly varies (SgRenderOptions.edge_rays; since the last freeze). */
+double sg_renderer_edge_rays_per_sample(const SgRenderer *r);
 /* Mean radiance per pixel, linear RGB, width * height * 3 floats. */
 void sg_renderer_image(const SgRenderer *r, float *rgb);
 /* The samples of the last pass alone (for variance estimates in tests). */

@@ -41,7 +41,8 @@ Test(render_cli, help_and_usage_errors)
     const char *dir = sg_test_tmpdir();
     const char *scene = tiny_scene(dir);
     const char *bad[] = {"--spp 4 --time 1", "--spp zero", "--sampling fancy", "--sampling guided",
-                         "--bogus", "--reference x.exr", "--threads -2", "--roulette sometimes"};
+                         "--bogus", "--reference x.exr", "--threads -2", "--roulette sometimes",
+                         "--edge-rays 17", "--edge-rays -1", "--edge-rays many"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         snprintf(cmd, sizeof cmd, "%s %s %s -o %s/bad.exr", render_bin(), scene, bad[i], dir);
         cr_assert_eq(sg_test_run(cmd, err, sizeof err), 2, "'%s' accepted (or not as a usage error, 2)", bad[i]);
@@ -93,7 +94,7 @@ Test(render_cli, writes_exr_png_metadata_and_error_curve)
     snprintf(path, sizeof path, "%s/a.png", dir);
     cr_assert(sg_test_exists(path));
     /* metadata: read it back with OpenImageIO's iinfo */
-    snprintf(cmd, sizeof cmd, "iinfo -v %s/a.exr | grep -E '^ +(spp|seconds|sampling|seed):' > %s/meta.txt",
+    snprintf(cmd, sizeof cmd, "iinfo -v %s/a.exr | grep -E '^ +(spp|seconds|sampling|seed|sg:edge_rays_per_sample):' > %s/meta.txt",
              dir, dir);
     cr_assert_eq(system(cmd), 0);
     snprintf(path, sizeof path, "%s/meta.txt", dir);
@@ -102,7 +103,8 @@ Test(render_cli, writes_exr_png_metadata_and_error_curve)
     cr_assert_gt(fread(meta, 1, sizeof meta - 1, f), 0);
     fclose(f);
     cr_assert(strstr(meta, "spp: \"4\"") && strstr(meta, "sampling: \"bsdf\"") &&
-              strstr(meta, "seed: \"4\"") && strstr(meta, "seconds:"), "%s", meta);
+              strstr(meta, "seed: \"4\"") && strstr(meta, "seconds:") && strstr(meta, "sg:edge_rays_per_sample:"),
+              "%s", meta);
     /* the curve: header + one row per pass, error falling overall */
     snprintf(path, sizeof path, "%s/a.csv", dir);
     f = fopen(path, "r");

@@ -11,6 +11,7 @@
 
 #include "../render/guides/openpgl_field.h"
 #include "../render/renderer.h"
+#include "../render/seen_light.h"
 #include "support_files.h"
 #include "support_importance.h"
 #include "support_render.h"
@@ -113,6 +114,87 @@ Test(render_field, guided_with_albedo_roulette_round_trips, .timeout = 120)
     field_round_trip(SG_SAMPLING_GUIDED, 4, false);
 }
 Test(render_field, openpgl_round_trips_bit_for_bit, .timeout = 120) { field_round_trip(SG_SAMPLING_OPENPGL, 6, false); }
+
+/* A room whose back wall holds a light with an edge through a column of
+ * pixels: those pixels take extra camera rays (render/seen_light.h), chosen
+ * from the render's own survey and samples, never from the training's: the
+ * renderer that trained the field and one that reads it back render the
+ * same image, bit for bit. */
+static SgScene *room_with_a_lights_edge_in_view(void)
+{
+    SgScene *s = sgt_scene_new();
+    const float grey[3] = {0.5f, 0.5f, 0.5f}, black[3] = {0, 0, 0}, glow[3] = {4, 4, 4};
+    uint32_t wall = sgt_add_material(s, SG_MATERIAL_DIFFUSE, grey, NULL);
+    uint32_t lamp = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, glow);
+    const double lo[3] = {-2, -2, -2}, hi[3] = {2, 2, 2};
+    sgt_add_box_inside(s, lo, hi, wall);
+    /* just off the back wall, facing the camera; its left edge through pixel column 7.5 of 16 */
+    const double q[4][3] = {{-0.03, -1, -1.99}, {1, -1, -1.99}, {1, 1, -1.99}, {-0.03, 1, -1.99}};
+    sgt_add_quad(s, q, lamp);
+    const double pos[3] = {0, 0, 1}, at[3] = {0, 0, -2}, up[3] = {0, 1, 0};
+    sgt_set_camera(s, pos, at, up, 60, 16, 12);
+    sgt_finish(s);
+    return s;
+}
+
+Test(render_field, a_lights_edge_in_view_renders_the_same_from_a_field_read_back, .timeout = 120)
+{
+    SgScene *s = room_with_a_lights_edge_in_view();
+    SgRenderOptions o = field_options(s, SG_SAMPLING_GUIDED, 6);
+    const char *dir = sg_test_tmpdir();
+    char f1[4200];
+    snprintf(f1, sizeof f1, "%s/edge.field", dir);
+    SgError err = {0};
+    SgRenderer *a = renderer(s, &o);
+    cr_assert(sg_renderer_train(a, &err), "%s", err.message);
+    cr_assert(sg_renderer_write_field(a, f1, &err), "%s", err.message);
+    sg_renderer_freeze(a);
+    float *ia = render_passes(a, &o, 12);
+    double rays = sg_renderer_edge_rays_per_sample(a);
+    SgRenderer *b = renderer(s, &o);
+    cr_assert(sg_renderer_read_field(b, f1, &err), "%s", err.message);
+    float *ib = render_passes(b, &o, 12);
+    cr_log_info("light's edge from a field: %.3f extra camera rays a sample", rays);
+    cr_assert(rays > (double)SEEN_SURVEY / 12.0, "the edge took no extra rays (%g a sample)", rays);
+    cr_assert_float_eq(sg_renderer_edge_rays_per_sample(b), rays, 1e-12, "the two renders took other edge rays");
+    cr_assert_eq(memcmp(ia, ib, sizeof *ia * 3 * (size_t)o.width * o.height), 0,
+                 "a field read back renders another image where a light's edge is in view");
+    free(ia);
+    free(ib);
+    sg_renderer_free(a);
+    sg_renderer_free(b);
+    sgt_scene_free(s);
+}
+
+/* The edge rays change what the camera sees directly, never the paths:
+ * they draw no random number of the path's, and the learned roulette's
+ * pixel noise is the light past the camera ray's own hit. So guided with
+ * its learned roulette and splitting traces the same paths with and
+ * without them (the same branches, the same rays less the edge rays). */
+Test(render_field, the_edge_rays_leave_the_paths_as_they_were, .timeout = 120)
+{
+    SgScene *s = room_with_a_lights_edge_in_view();
+    double branches[2], path_rays[2], edge[2];
+    for (int with = 0; with < 2; with++) {
+        SgRenderOptions o = field_options(s, SG_SAMPLING_GUIDED, 4);
+        o.edge_rays = with ? SEEN_RAYS_MAX : 0;
+        SgRenderer *r = renderer(s, &o);
+        const int passes = 40; /* splitting from pass 16 */
+        free(render_passes(r, &o, passes));
+        double samples = (double)o.width * o.height * passes;
+        branches[with] = sg_renderer_branches_per_path(r);
+        edge[with] = sg_renderer_edge_rays_per_sample(r);
+        path_rays[with] = (double)sg_renderer_rays(r) - edge[with] * samples;
+        sg_renderer_free(r);
+    }
+    cr_log_info("guided, learned roulette: %.4f / %.4f branches a path, %.0f / %.0f path rays, %.3f edge rays a "
+                "sample", branches[0], branches[1], path_rays[0], path_rays[1], edge[1]);
+    cr_assert(edge[1] > 0.0 && edge[0] == 0.0);
+    cr_assert(branches[0] > 0.0, "no path split: the test shows nothing");
+    cr_assert_float_eq(branches[1], branches[0], 1e-12, "the edge rays changed the roulette's splitting");
+    cr_assert_float_eq(path_rays[1], path_rays[0], 0.5, "the edge rays changed the paths");
+    sgt_scene_free(s);
+}
 
 /* A frozen guide learns nothing more: its field after rendering is the
  * field it was given. */

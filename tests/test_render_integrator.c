@@ -11,6 +11,7 @@
 #include "scene_builder.h"
 #include "../render/guides/openpgl_field.h"
 #include "../render/renderer.h"
+#include "../render/seen_light.h"
 #include "support_render.h"
 
 typedef struct Stats {
@@ -661,6 +662,7 @@ Test(render_integrator, a_lights_edge_converges_faster_than_independent_jitter)
     sg_render_options_default(&o, s);
     o.max_depth = 1;
     o.seed = 3;
+    o.edge_rays = 0; /* the passes' own rays alone (render/seen_light.h: the test below) */
     SgError err = {0};
     SgRenderer *r = sg_renderer_create(s, &o, &err);
     cr_assert_not_null(r, "%s", err.message);
@@ -685,6 +687,83 @@ Test(render_integrator, a_lights_edge_converges_faster_than_independent_jitter)
                 passes, independent);
     cr_assert_lt(worst, independent / 3, "the edge's pixels are off by up to %.4f", worst);
     sgt_scene_free(s);
+}
+
+/* The edge above over `passes` passes with up to `edge_rays` extra camera
+ * rays a sample: column 3's values (8 of them) to `col`, extra rays a
+ * sample to *per_sample; every other pixel must be exact. */
+static void render_edge_column(int edge_rays, uint64_t seed, int passes, double col[8], double *per_sample)
+{
+    SgScene *s = sgt_scene_new();
+    const float black[3] = {0, 0, 0}, glow[3] = {1, 1, 1};
+    uint32_t lm = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, glow);
+    const int w = 8;
+    const double fov = 40.0, t = tan(fov * M_PI / 360.0);
+    const double edge = (2.0 * 3.5 / w - 1.0) * t;
+    const double q[4][3] = {{edge, -10, -1}, {10, -10, -1}, {10, 10, -1}, {edge, 10, -1}};
+    sgt_add_quad(s, q, lm);
+    const double pos[3] = {0, 0, 0}, at[3] = {0, 0, -1}, up[3] = {0, 1, 0};
+    sgt_set_camera(s, pos, at, up, fov, w, w);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.max_depth = 1;
+    o.seed = seed;
+    o.edge_rays = edge_rays;
+    SgError err = {0};
+    SgRenderer *r = sg_renderer_create(s, &o, &err);
+    cr_assert_not_null(r, "%s", err.message);
+    for (int p = 0; p < passes; p++)
+        sg_renderer_pass(r);
+    float img[3 * 8 * 8];
+    sg_renderer_image(r, img);
+    *per_sample = sg_renderer_edge_rays_per_sample(r);
+    sg_renderer_free(r);
+    for (int y = 0; y < w; y++)
+        for (int x = 0; x < w; x++) {
+            double v = img[3 * (y * w + x)];
+            if (x == 3)
+                col[y] = v;
+            else
+                cr_assert_float_eq(v, x < 3 ? 0.0 : 1.0, 1e-6, "pixel (%d, %d) is %g", x, y, v);
+        }
+    sgt_scene_free(s);
+}
+
+/* The edge's pixels see a light over half their area and nothing else
+ * varies in the image: the survey finds them, and each of their samples
+ * takes extra camera rays (the most until the image's noise is known, then
+ * as many as that noise makes worth it), the other pixels none
+ * (render/seen_light.h). Their
+ * error falls well below what the sample's own stratified ray leaves, and
+ * over 16 seeds their mean is 0.5 within its standard error (a view
+ * weighted wrong, k views for k + 1, say, would be off by 3%). */
+Test(render_integrator, a_lights_edge_takes_extra_camera_rays)
+{
+    const int passes = 32, seeds = 16;
+    double sq[2] = {0, 0}, sum = 0.0, sum2 = 0.0;
+    for (int with = 0; with < 2; with++)
+        for (int k = 0; k < seeds; k++) {
+            double col[8], per_sample;
+            render_edge_column(with ? 16 : 0, (uint64_t)k + 1, passes, col, &per_sample);
+            /* the survey's 16 rays a pixel, then up to 16 a sample in column 3 alone */
+            double most = with ? (double)SEEN_SURVEY / passes + 16.0 * 8.0 / 64.0 : 0.0;
+            cr_assert(per_sample <= most + 1e-9 && per_sample >= 0.5 * most, "extra rays a sample %g (most %g)",
+                      per_sample, most);
+            for (int y = 0; y < 8; y++) {
+                sq[with] += (col[y] - 0.5) * (col[y] - 0.5);
+                if (with) {
+                    sum += col[y];
+                    sum2 += col[y] * col[y];
+                }
+            }
+        }
+    double n = 8.0 * seeds, rms_own = sqrt(sq[0] / n), rms_extra = sqrt(sq[1] / n);
+    double mean = sum / n, se = sqrt((sum2 / n - mean * mean) / (n - 1.0));
+    cr_log_info("light's edge after %d passes: rms error %.5f with its own rays, %.5f with extra rays; mean %.5f +- "
+                "%.5f", passes, rms_own, rms_extra, mean, se);
+    cr_assert_lt(rms_extra, rms_own / 3, "extra rays: rms %.5f against %.5f", rms_extra, rms_own);
+    cr_assert(fabs(mean - 0.5) < 4.0 * se + 1e-6, "the edge's mean is %.5f +- %.5f, not 0.5", mean, se);
 }
 
 /* A two-room scene: the light is in room A, the camera looks at a wall of
