@@ -51,8 +51,11 @@ for sc in data/corridor/corridor.json data/cornell-box/cornell-box.json; do
     for _ in $(seq "$rounds"); do
       for who in old new; do
         r=$bin/render; [ $who = old ] && r=$then
+        # this build without its edge rays (docs/render.md, "Edge rays"):
+        # the baseline has none, and the same work is what is compared
+        no_edges=(); [ "$r" = "$bin/render" ] && no_edges=(--edge-rays 0)
         line=$("$r" "$sc" --cache "$out/$name/importance.cache" --sampling $mode --spp 64 --seed 7 \
-                 -o "$out/$who.exr" 2>&1) || { echo "| $name | $mode: $who failed: ${line##*$'\n'} | | | | | | |"; continue 3; }
+                 "${no_edges[@]}" -o "$out/$who.exr" 2>&1) || { echo "| $name | $mode: $who failed: ${line##*$'\n'} | | | | | | |"; continue 3; }
         us=$(awk -v x="$(field Msamples/s "$line")" 'BEGIN{print 1/x}')
         if [ $who = old ]; then best_old=$(awk -v a=$best_old -v b="$us" 'BEGIN{print (b<a)?b:a}')
         else best_new=$(awk -v a=$best_new -v b="$us" 'BEGIN{print (b<a)?b:a}'); fi
