@@ -1,0 +1,110 @@
+#!/usr/bin/env bash
+# The render farm: a learned mode rendered in 16 shards from one stored
+# field (`render --field F --shard K/16`, then `bin/merge`), as
+# scripts/slurm-render.sh renders it, against one process with the same
+# field, the same seed and the same samples in all. Each learned mode's
+# field and the reference are section 60's; bsdf, which learns nothing,
+# beside them. The shards differ from one process only where a shard
+# estimates something from its own passes: guided's learned roulette (each
+# pixel's noise) and, in every mode, how many edge rays a silhouette in
+# view takes. Target (issue 29): relMSE within 10% of one process.
+# Scenes: SG_SHARD_SCENES (default: the corridor, no light in view, and the
+# Cornell box, its light in view); settings follow section 60's.
+set -uo pipefail
+bin=${SG_BIN:-bin}
+tool=${SG_BENCH_BIN:-build/release/bench}/convergence
+source bench/scenes.sh
+
+if [ "${SG_QUICK:-0}" = 1 ]; then
+  setting=quick pixels=9600 spp=32 seeds=1
+elif [ "${SG_LONG:-0}" = 1 ]; then
+  setting=long pixels=921600 spp=256 seeds=2
+else
+  setting=default pixels=76800 spp=128 seeds=2
+fi
+pixels=${SG_CONV_PIXELS:-$pixels}
+shards=16
+# more than this ratio of one process's relMSE misses the target
+WITHIN=1.10
+modes=(bsdf guided guided-albedo openpgl)
+
+note() { [ -t 2 ] && printf '\r\033[Kshards: %s' "$*" >&2; return 0; }
+for p in render merge; do
+  [ -x "$bin/$p" ] || { echo "(needs $bin/$p: run make)"; exit 0; }
+done
+[ -x "$tool" ] || { echo "(needs $tool: run make bench)"; exit 0; }
+
+runs=$(mktemp -d)
+trap 'rm -rf "$runs"' EXIT
+rows=() notes=() missed=0
+for entry in "${bench_scenes[@]}"; do
+  IFS='|' read -r name scene _ <<<"$entry"
+  [[ " ${SG_SHARD_SCENES:-corridor cornell-box} " == *" $name "* ]] || continue
+  dir=bench/out/$name ref=bench/out/$name/ref-$setting/ref.exr
+  read -r size exposure < <("$tool" size "$scene" "$pixels") || { notes+=("$name: cannot read the scene"); continue; }
+  if [ ! -e "$ref" ] || [ ! -e "$dir/importance.cache" ]; then
+    notes+=("$name: no reference or cache from section 60: skipped"); continue
+  fi
+  for mode in "${modes[@]}"; do
+    field=()
+    if [ "$mode" != bsdf ]; then
+      [ -e "$dir/fields-$size/$mode.field" ] || { notes+=("$name: no $mode field from section 60: skipped"); continue; }
+      field=(--field "$dir/fields-$size/$mode.field")
+    fi
+    for seed in $(seq "$seeds"); do
+      common=("$scene" --cache "$dir/importance.cache" "${field[@]}" --size "$size" --spp "$spp"
+              --seed "$seed" --quiet)
+      note "$name: $mode, seed $seed, one process"
+      # shellcheck disable=SC2046
+      if ! "$bin/render" "${common[@]}" $(options_of "$mode") -o "$runs/one.exr" 2>"$runs/err"; then
+        rows+=("| $name | $mode | $seed | | | | | | not measured ($(tail -1 "$runs/err")) |"); continue
+      fi
+      rm -f "$runs"/shard-*.exr
+      failed=
+      for k in $(seq 0 $((shards - 1))); do
+        note "$name: $mode, seed $seed, shard $((k + 1))/$shards"
+        # shellcheck disable=SC2046
+        "$bin/render" "${common[@]}" $(options_of "$mode") --shard "$k/$shards" \
+          -o "$runs/shard-$k.exr" 2>"$runs/err" || { failed=$(tail -1 "$runs/err"); break; }
+      done
+      [ -z "$failed" ] && { "$bin/merge" "$runs"/shard-*.exr -o "$runs/merged.exr" --quiet 2>"$runs/err" ||
+                            failed=$(tail -1 "$runs/err"); }
+      if [ -n "$failed" ]; then
+        rows+=("| $name | $mode | $seed | | | | | | not measured ($failed) |"); continue
+      fi
+      one=$("$tool" error "$runs/one.exr" "$ref" --exposure "$exposure")
+      merged=$("$tool" error "$runs/merged.exr" "$ref" --exposure "$exposure")
+      row=$(awk -v n="$name" -v m="$mode" -v s="$seed" -v w=$WITHIN -v a="$one" -v b="$merged" 'BEGIN{
+        split(a, x, " "); split(b, y, " ")   # relmse R mse8 E mse M
+        r = y[2] / x[2]; e = y[4] / x[4]; q = y[6] / x[6]
+        printf "| %s | %s | %s | %.4g | %.4g | %+.2f%% | %+.2f%% | %+.2f%% | %s |", n, m, s, x[2], y[2],
+               100 * (r - 1), 100 * (e - 1), 100 * (q - 1), (r <= w) ? "ok" : "MISSED" }')
+      [[ $row == *"| MISSED |" ]] && missed=$((missed + 1))
+      rows+=("$row")
+    done
+  done
+done
+note "done"; [ -t 2 ] && printf '\n' >&2
+
+echo "Each learned mode from section 60's stored field (bsdf learns nothing), $spp spp in all, at section"
+echo "60's size: one \`render --field F --spp $spp\` against $shards \`render --field F --spp $spp --shard K/$shards\` merged by"
+echo "\`bin/merge\`; the same seed, so both render the same passes; errors against section 60's reference"
+echo "(\`convergence error\`). Change: merged over one process, less 1. Target: relMSE within"
+echo "$(awk -v w=$WITHIN 'BEGIN{printf "%d", 100 * (w - 1) + 0.5}')% of one process."
+echo
+echo "| scene | mode | seed | relMSE one process | relMSE $shards shards | relMSE change | mse8 change | MSE change | target |"
+echo "|---|---|---|---|---|---|---|---|---|"
+for row in "${rows[@]}"; do echo "$row"; done
+echo
+if [ ${#rows[@]} -eq 0 ]; then
+  echo "Nothing measured."
+elif [ $missed -gt 0 ]; then
+  echo "**$missed row(s) MISSED the target.**"
+else
+  echo "Every row within the target."
+fi
+if [ ${#notes[@]} -gt 0 ]; then
+  echo
+  for n in "${notes[@]}"; do echo "- $n"; done
+fi
+exit 0
