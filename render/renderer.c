@@ -344,39 +344,79 @@ static void pass_job(void *vctx, uint64_t index, int thread)
     render_tile(pc, index, thread);
 }
 
-/* Before the first pass: SEEN_SURVEY rays per pixel look for the light
- * seen directly, so that its silhouettes are known from the first pass on
- * (render/seen_light.h). One job per image row. */
+/* Before the first pass the survey looks for the light seen directly, so
+ * that its silhouettes are known from the first pass on
+ * (render/seen_light.h), in two steps, one job per image row each: one ray
+ * a pixel, then the other SEEN_SURVEY - 1 only where that first view
+ * differs within the pixel's 3x3 neighbourhood. A silhouette crossing a
+ * pixel also crosses between its neighbours' first views; where nothing
+ * differs (no light in view, the inside of a lamp or of a flat sky) the
+ * other rays would find nothing, and the survey's time is on the render's
+ * clock. A sliver that every neighbour's first ray misses is left to the
+ * pixel's own samples, as it was before the survey existed. */
 typedef struct SurveyCtx {
     SgRenderer *r;
     PixelSampler sampler;
+    const float *first; /* per pixel: the first view's luminance (seen->survey_first) */
     _Atomic uint64_t rays;
 } SurveyCtx;
 
-static void survey_row(void *vctx, uint64_t row, int thread)
+static float survey_view(SurveyCtx *sc, int x, int y, int j, PathStats *st)
+{
+    SgRenderer *r = sc->r;
+    size_t pix = (size_t)y * r->opt.width + x;
+    float jx, jy;
+    pixel_sampler_survey(&sc->sampler, pix, j, &jx, &jy);
+    float v = luminance(integrator_seen(&r->integrator, r->camera.pos, camera_ray(&r->camera, x, y, jx, jy), st));
+    seen_light_add_view(r->seen, pix, v);
+    return v;
+}
+
+static void survey_first_row(void *vctx, uint64_t row, int thread)
 {
     (void)thread;
     SurveyCtx *sc = vctx;
-    SgRenderer *r = sc->r;
+    PathStats st = {0};
+    int y = (int)row, w = sc->r->opt.width;
+    for (int x = 0; x < w; x++)
+        sc->r->seen->survey_first[(size_t)y * w + x] = survey_view(sc, x, y, 0, &st);
+    atomic_fetch_add(&sc->rays, st.rays);
+}
+
+/* Whether pixel (x, y)'s first view differs from a neighbour's (exactly:
+ * a lamp of one radiance against the dark is two values; a NaN differs). */
+static bool survey_differs(const SurveyCtx *sc, int x, int y)
+{
+    int w = sc->r->opt.width, h = sc->r->opt.height;
+    float v = sc->first[(size_t)y * w + x];
+    for (int dy = -1; dy <= 1; dy++)
+        for (int dx = -1; dx <= 1; dx++) {
+            int nx = x + dx, ny = y + dy;
+            if (nx >= 0 && nx < w && ny >= 0 && ny < h && !(sc->first[(size_t)ny * w + nx] == v))
+                return true;
+        }
+    return false;
+}
+
+static void survey_rest_row(void *vctx, uint64_t row, int thread)
+{
+    (void)thread;
+    SurveyCtx *sc = vctx;
     PathStats st = {0};
     int y = (int)row;
-    for (int x = 0; x < r->opt.width; x++) {
-        size_t pix = (size_t)y * r->opt.width + x;
-        for (int j = 0; j < SEEN_SURVEY; j++) {
-            float jx, jy;
-            pixel_sampler_survey(&sc->sampler, pix, j, &jx, &jy);
-            Vec3 v = integrator_seen(&r->integrator, r->camera.pos, camera_ray(&r->camera, x, y, jx, jy), &st);
-            seen_light_add_view(r->seen, pix, luminance(v));
-        }
-    }
+    for (int x = 0; x < sc->r->opt.width; x++)
+        if (survey_differs(sc, x, y))
+            for (int j = 1; j < SEEN_SURVEY; j++)
+                survey_view(sc, x, y, j, &st);
     atomic_fetch_add(&sc->rays, st.rays);
 }
 
 static void survey_views(SgRenderer *r)
 {
-    SurveyCtx sc = {.r = r};
+    SurveyCtx sc = {.r = r, .first = r->seen->survey_first};
     pixel_sampler_init(&sc.sampler, r->opt.seed, 0);
-    sg_thread_pool_run(r->pool, (uint64_t)r->opt.height, survey_row, &sc);
+    sg_thread_pool_run(r->pool, (uint64_t)r->opt.height, survey_first_row, &sc);
+    sg_thread_pool_run(r->pool, (uint64_t)r->opt.height, survey_rest_row, &sc);
     atomic_fetch_add(&r->rays, atomic_load(&sc.rays));
     atomic_fetch_add(&r->views, atomic_load(&sc.rays));
     r->surveyed = true;

@@ -19,7 +19,9 @@ SeenLight *seen_light_create(int width, int height, int rays_max)
     sl->view_sq = calloc(pixels, sizeof *sl->view_sq);
     sl->sample_sum = calloc(pixels, sizeof *sl->sample_sum);
     sl->sample_sq = calloc(pixels, sizeof *sl->sample_sq);
-    if (!sl->views || !sl->samples || !sl->view_sum || !sl->view_sq || !sl->sample_sum || !sl->sample_sq) {
+    sl->survey_first = calloc(pixels, sizeof *sl->survey_first);
+    if (!sl->views || !sl->samples || !sl->view_sum || !sl->view_sq || !sl->sample_sum || !sl->sample_sq ||
+        !sl->survey_first) {
         seen_light_free(sl);
         return NULL;
     }
@@ -36,6 +38,7 @@ void seen_light_free(SeenLight *sl)
     free(sl->view_sq);
     free(sl->sample_sum);
     free(sl->sample_sq);
+    free(sl->survey_first);
     free(sl);
 }
 

@@ -9,9 +9,11 @@
  * the pixel, so the pixel's estimate stays unbiased. Every sampling mode
  * gets them alike.
  *
- * Which pixels: before the first pass, SEEN_SURVEY camera rays per pixel
- * look (on an R2 pattern of their own, the same for every shard of a
- * render), so that a silhouette is known from the first pass on: a pass
+ * Which pixels: before the first pass, a survey looks (on an R2 pattern
+ * of its own, the same for every shard of a render): one camera ray a
+ * pixel, then SEEN_SURVEY - 1 more where that first view differs within
+ * the pixel's 3x3 neighbourhood (render/renderer.c, survey_views), so that
+ * a silhouette is known from the first pass on: a pass
  * whose sample saw it through its one ray would weigh in the pixel's mean
  * as much as one that took many (on a straight edge, the passes' own
  * stratified rays are good enough that those first passes would be most of
@@ -45,6 +47,7 @@ typedef struct SeenLight {
     uint32_t *samples;              /* per pixel: samples */
     double *view_sum, *view_sq;     /* per pixel: the views' luminance, and its squares */
     double *sample_sum, *sample_sq; /* per pixel: the samples' luminance (views averaged), and its squares */
+    float *survey_first;            /* per pixel: the survey's first view (render/renderer.c) */
 } SeenLight;
 
 /* NULL when out of memory; rays_max in [0, SEEN_RAYS_MAX]. */

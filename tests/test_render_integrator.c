@@ -717,8 +717,11 @@ Test(render_integrator, a_lights_edge_takes_extra_camera_rays)
         for (int k = 0; k < seeds; k++) {
             double col[8], per_sample;
             render_edge_column(with ? 16 : 0, (uint64_t)k + 1, passes, col, &per_sample);
-            /* the survey's 16 rays a pixel, then up to 16 a sample in column 3 alone */
-            double most = with ? (double)SEEN_SURVEY / passes + 16.0 * 8.0 / 64.0 : 0.0;
+            /* the survey's first ray a pixel and the rest in columns 2 to 4 (the
+             * first views differ there: dark, either, lit), then up to 16 a
+             * sample in column 3 alone */
+            double survey = (64.0 + (SEEN_SURVEY - 1) * 24.0) / 64.0;
+            double most = with ? survey / passes + 16.0 * 8.0 / 64.0 : 0.0;
             cr_assert(per_sample <= most + 1e-9 && per_sample >= 0.5 * most, "extra rays a sample %g (most %g)",
                       per_sample, most);
             for (int y = 0; y < 8; y++) {
@@ -735,6 +738,45 @@ Test(render_integrator, a_lights_edge_takes_extra_camera_rays)
                 "%.5f", passes, rms_own, rms_extra, mean, se);
     cr_assert_lt(rms_extra, rms_own / 3, "extra rays: rms %.5f against %.5f", rms_extra, rms_own);
     cr_assert(fabs(mean - 0.5) < 4.0 * se + 1e-6, "the edge's mean is %.5f +- %.5f, not 0.5", mean, se);
+}
+
+/* The survey takes its other rays only where the first views differ
+ * within a pixel's 3x3 neighbourhood: with the light's edge through
+ * column 3, columns 3 and some of 2 and 4 (whose neighbours in column 3
+ * saw either side), 8 to 24 pixels of 64; the edge's 8 pixels then take
+ * 16 rays a sample each in the first pass (the image's noise not known
+ * yet). A light that fills the view differs nowhere: one ray a pixel and
+ * nothing more. */
+Test(render_integrator, the_survey_looks_again_only_where_first_views_differ)
+{
+    double col[8], per_sample;
+    render_edge_column(16, 5, 1, col, &per_sample);
+    double extra = 16.0 * 8.0, least = (64.0 + (SEEN_SURVEY - 1) * 8.0 + extra) / 64.0,
+           most = (64.0 + (SEEN_SURVEY - 1) * 24.0 + extra) / 64.0;
+    cr_log_info("the edge: %.4f extra rays a sample in the first pass (%.4f to %.4f; every pixel surveyed: %.4f)",
+                per_sample, least, most, (64.0 * SEEN_SURVEY + extra) / 64.0);
+    cr_assert(per_sample >= least - 1e-12 && per_sample <= most + 1e-12, "%.4f extra rays a sample", per_sample);
+
+    SgScene *s = sgt_scene_new();
+    const float black[3] = {0, 0, 0}, glow[3] = {1, 1, 1};
+    uint32_t lm = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, glow);
+    const double q[4][3] = {{-10, -10, -1}, {10, -10, -1}, {10, 10, -1}, {-10, 10, -1}};
+    sgt_add_quad(s, q, lm);
+    const double pos[3] = {0, 0, 0}, at[3] = {0, 0, -1}, up[3] = {0, 1, 0};
+    sgt_set_camera(s, pos, at, up, 40.0, 8, 8);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.max_depth = 1;
+    o.edge_rays = 16;
+    SgError err = {0};
+    SgRenderer *r = sg_renderer_create(s, &o, &err);
+    cr_assert_not_null(r, "%s", err.message);
+    sg_renderer_pass(r);
+    cr_assert_float_eq(sg_renderer_edge_rays_per_sample(r), 1.0, 1e-12, "a light filling the view: %g rays a sample",
+                       sg_renderer_edge_rays_per_sample(r));
+    sg_renderer_free(r);
+    sgt_scene_free(s);
 }
 
 /* A two-room scene: the light is in room A, the camera looks at a wall of
