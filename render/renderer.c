@@ -147,7 +147,7 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
      * refuse up front what the machine cannot hold rather than be killed */
     char what[96];
     snprintf(what, sizeof what, "a %dx%d image", o->width, o->height);
-    if (!sg_memory_check((48.0 + (o->edge_rays ? 40.0 : 0.0)) * o->width * o->height + 150.0 * s->triangle_count, path, what, err))
+    if (!sg_memory_check((48.0 + (o->edge_rays ? 44.0 : 0.0)) * o->width * o->height + 150.0 * s->triangle_count, path, what, err))
         return NULL;
     SgRenderer *r = calloc(1, sizeof *r);
     if (!r)
@@ -357,7 +357,7 @@ static void pass_job(void *vctx, uint64_t index, int thread)
 typedef struct SurveyCtx {
     SgRenderer *r;
     PixelSampler sampler;
-    const float *first; /* per pixel: the first view's luminance (seen->survey_first) */
+    float *first; /* per pixel: the first view's luminance (seen->survey_first) */
     _Atomic uint64_t rays;
 } SurveyCtx;
 
@@ -379,7 +379,7 @@ static void survey_first_row(void *vctx, uint64_t row, int thread)
     PathStats st = {0};
     int y = (int)row, w = sc->r->opt.width;
     for (int x = 0; x < w; x++)
-        sc->r->seen->survey_first[(size_t)y * w + x] = survey_view(sc, x, y, 0, &st);
+        sc->first[(size_t)y * w + x] = survey_view(sc, x, y, 0, &st);
     atomic_fetch_add(&sc->rays, st.rays);
 }
 
