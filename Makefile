@@ -268,6 +268,7 @@ test-programs: $(PROGRAMS) $(TEST_BIN)
 
 check-tests: $(PROGRAMS) $(TEST_BIN)
 	@echo "== tests in $(BUILD)"
+	@$(if $(OPENPGL_CPPFLAGS),true,echo "tests: Open PGL is not built here (make openpgl builds it): its tests skip")
 	@SG_BIN=$(abspath $(BIN)) bash tests/run-tests.sh $(TEST_BIN)
 
 # make demo: the corridor through the four steps, then one picture that
