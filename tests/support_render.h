@@ -42,6 +42,14 @@ bool sgt_fixed_point_guide(void *ctx, const double p[3], uint32_t light, double 
 typedef struct SgtSampleMean {
     double mean, std_error;
 } SgtSampleMean;
+/* The renderer's statistics (sg_renderer_stats), as a value. */
+static inline SgRenderStats sgt_stats(const SgRenderer *r)
+{
+    SgRenderStats st;
+    sg_renderer_stats(r, &st);
+    return st;
+}
+
 SgtSampleMean sgt_passes_mean(SgRenderer *r, int passes, size_t pixels);
 
 /* s's default options for `mode`, on 2 threads with seed 7 (the tests' usual). */

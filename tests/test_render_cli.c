@@ -12,6 +12,7 @@
 #include "image_io.h"
 #include "scene.h"
 #include "support_files.h"
+#include "support_render.h"
 
 static const char *render_bin(void)
 {
@@ -174,8 +175,8 @@ Test(render_cli, cornell_box_renders_without_nan)
         sum += img[i];
     }
     cr_assert_gt(sum, 0.0);
-    cr_assert_eq(sg_renderer_nonfinite(r), 0);
-    cr_assert_lt(sg_renderer_backface_fraction(r), 0.5);
+    cr_assert_eq(sgt_stats(r).nonfinite, 0);
+    cr_assert_lt(sgt_stats(r).backface_fraction, 0.5);
     free(img);
     sg_renderer_free(r);
     sg_scene_free(s);

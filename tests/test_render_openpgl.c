@@ -34,8 +34,8 @@ static Estimate estimate(const SgScene *s, const SgRenderOptions *o, int spp)
     cr_assert_not_null(r, "%s", err.message);
     SgtSampleMean m = sgt_passes_mean(r, spp, (size_t)o->width * o->height);
     Estimate e = {.mean = m.mean, .std_error = m.std_error};
-    e.lobe_share = sg_renderer_lobe_share(r);
-    e.nonfinite = sg_renderer_nonfinite(r);
+    e.lobe_share = sgt_stats(r).lobe_share;
+    e.nonfinite = sgt_stats(r).nonfinite;
     sg_renderer_free(r);
     return e;
 }
@@ -225,7 +225,7 @@ Test(render_openpgl, training_updates_on_cycles_schedule, .timeout = 300)
     cr_assert(sg_renderer_train(r, &err), "%s", err.message);
     SgRenderReport report;
     sg_renderer_report(r, &report);
-    int passes = sg_renderer_training_passes(r);
+    int passes = sgt_stats(r).training_passes;
     sg_renderer_free(r);
     sgt_scene_free(s);
     cr_assert_eq(passes, 9, "every training pass's paths reach the field: %d", passes);

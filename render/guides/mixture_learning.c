@@ -1,5 +1,6 @@
 #include "mixture_learning.h"
 
+#include "../lights.h" /* PORTAL_SHARE */
 #include "../sampling.h"
 
 #include <math.h>
@@ -16,11 +17,11 @@ const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES] = {
     {0.7f, 64.0f, true, true, false},   {0.4f, 4.0f, true, true, false},   {0.4f, 16.0f, true, true, false},
     {0.4f, 64.0f, true, true, false},   {0.7f, 16.0f, true, false, true}, {0.45f, 16.0f, true, false, true},
     {0.2f, 16.0f, true, false, true}};
-/* The portal shares: none (out in the open), even, render/lights.h's
- * PORTAL_SHARE (the default), and nearly all (deep in a room lit through
+/* The portal shares: none (out in the open), even, PORTAL_SHARE (the
+ * default, render/lights.h), and nearly all (deep in a room lit through
  * its windows; not all, so that sky a window found too small still gets
  * light samples). */
-const float sg_portal_shares[SG_PORTAL_SHARES] = {0.0f, 0.5f, 0.8f, 0.95f, 0.99f};
+const float sg_portal_shares[SG_PORTAL_SHARES] = {0.0f, 0.5f, PORTAL_SHARE, 0.95f, 0.99f};
 #define SKELETON_CANDIDATES SG_MIXTURE_SKELETON_CANDIDATES
 /* the learned candidates come in families: six around the learned
  * direction (family 0), six toward the learned point (family 1), three
