@@ -19,13 +19,13 @@ extern "C" {
 #endif
 
 /* The sampling modes, one line each: its name in the enum, on the command
- * line, and the guide that implements it (render/guides/guide_FILE.c,
- * which holds everything else about the mode: SgSamplingMode below). A new
- * mode is one file there and one line here. */
-#define SG_SAMPLING_MODES(X)            \
-    X(BSDF, bsdf, bsdf)                 \
-    X(SKELETON, skeleton, skeleton_rule) \
-    X(GUIDED, guided, mixture)          \
+ * line, and the guide that implements it (render/guides/guide_FILE.c, FILE
+ * the mode's name; it holds everything else about the mode: SgSamplingMode
+ * below). A new mode is one file there and one line here. */
+#define SG_SAMPLING_MODES(X)        \
+    X(BSDF, bsdf, bsdf)             \
+    X(SKELETON, skeleton, skeleton) \
+    X(GUIDED, guided, guided)       \
     X(OPENPGL, openpgl, openpgl)
 
 typedef enum SgSampling {
