@@ -403,6 +403,7 @@ void sg_renderer_stats(const SgRenderer *r, SgRenderStats *stats)
     uint64_t bounces = atomic_load(&m->bounces);
     stats->lobe_share = bounces ? (double)atomic_load(&m->lobe_bounces) / (double)bounces : 0.0;
     stats->training_passes = gs.training_passes;
+    stats->training_updates = gs.training_updates;
     stats->training_seconds = gs.training_seconds;
     stats->branches_per_path = per_sample(r, atomic_load(&m->branches));
     stats->edge_rays_per_sample = per_sample(r, atomic_load(&m->views));

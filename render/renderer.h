@@ -191,6 +191,7 @@ typedef struct SgRenderStats {
      * SG_OPENPGL_TRAINING_PASSES) and the seconds its updates took; 0 in
      * other modes */
     int training_passes;
+    int training_updates;        /* openpgl: the field's updates from those passes */
     double training_seconds;
     double branches_per_path;    /* branches the learned roulette split off, per camera path */
     /* extra camera rays a sample took, on average, where the light seen
