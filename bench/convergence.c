@@ -94,7 +94,7 @@ static int compare(const char *a, const char *b, double exposure, const char *re
     double relmse, mse8, mse;
     if (reference) { /* the mean goes into the first half's buffer */
         sg_reference_from_halves(rgb[0], rgb[1], n, (float)exp2(exposure), rgb[0], &relmse, &mse8, &mse);
-        SgImageAttribute attrs[] = {{"sg:reference", "mean of two independent bsdf halves"}};
+        SgImageAttribute attrs[] = {{SG_ATTR_REFERENCE, "mean of two independent bsdf halves"}};
         if (!sg_image_write_exr(reference, w, h, rgb[0], attrs, 1, err))
             goto done;
     } else {

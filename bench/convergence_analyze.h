@@ -104,10 +104,10 @@ static bool sg_analyze_load_mode(const char *dir, const char *mode, int seeds, S
         /* what the guide did, from the image (absent or 0 passes: no field) */
         snprintf(path, sizeof path, "%s/%s-%d.exr", dir, mode, s);
         bool ok = true;
-        double passes = sg_attr_number(path, "sg:training_passes", &ok);
-        double tsec = sg_attr_number(path, "sg:training_seconds", &ok);
+        double passes = sg_attr_number(path, SG_ATTR_TRAINING_PASSES, &ok);
+        double tsec = sg_attr_number(path, SG_ATTR_TRAINING_SECONDS, &ok);
         double run = sg_attr_number(path, "seconds", &ok);
-        double share = sg_attr_number(path, "sg:guide_share", &ok);
+        double share = sg_attr_number(path, SG_ATTR_GUIDE_SHARE, &ok);
         if (ok && passes > 0 && run > 0) {
             const SgCurve *c = &curves[n];
             double phase = c->seconds[c->count - 1];

@@ -18,6 +18,7 @@
 #include "color.h"
 #include "error.h"
 #include "error_metrics.h"
+#include "shard_format.h" /* SG_ERROR_LOG_HEADER */
 
 /* relMSE (on the exposed image), 8-bit MSE (the PNG's bytes) and the plain
  * MSE of the linear radiance (the CSV's mse column, unexposed). */
@@ -156,9 +157,9 @@ bool sg_curve_read_csv(const char *path, SgCurve *c, SgError *err)
     if (!f)
         return sg_fail(err, "%s: cannot open: %s", path, strerror(errno));
     char line[512];
-    if (!fgets(line, sizeof line, f) || strncmp(line, "seconds,spp,mse,relmse,mse8", 27) != 0) {
+    if (!fgets(line, sizeof line, f) || strncmp(line, SG_ERROR_LOG_HEADER, strlen(SG_ERROR_LOG_HEADER)) != 0) {
         fclose(f);
-        return sg_fail(err, "%s: not an error log (header seconds,spp,mse,relmse,mse8 missing)", path);
+        return sg_fail(err, "%s: not an error log (header " SG_ERROR_LOG_HEADER " missing)", path);
     }
     size_t capacity = 0, row = 1;
     SgCurve grow = {0};

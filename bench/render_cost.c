@@ -71,7 +71,9 @@ int main(int argc, char **argv)
     double samples = (double)o.width * o.height * spp;
     const char *names[2] = {"bsdf", "guided-albedo"};
     for (int k = 0; k < 2; k++) {
-        double rays = (double)sg_renderer_rays(r[k]);
+        SgRenderStats stats;
+        sg_renderer_stats(r[k], &stats);
+        double rays = (double)stats.rays;
         printf("%s %.4f %.4f %.2f\n", names[k], seconds[k] / samples * 1e6, seconds[k] / rays * 1e6, rays / samples);
     }
     status = 0;

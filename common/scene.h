@@ -148,6 +148,10 @@ typedef struct SgCamera {
     int width, height;
 } SgCamera;
 
+/* The maximum path length where a scene gives none (a scene file's
+ * render.max_depth; the renderer's for a scene made in code). */
+#define SG_MAX_DEPTH_DEFAULT 8
+
 typedef struct SgRenderSettings {
     int spp;          /* default samples per pixel (0: not given) */
     int max_depth;    /* maximum path length in segments from the camera (1: what it sees) */

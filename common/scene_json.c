@@ -675,7 +675,7 @@ static bool load_settings(Builder *b, const cJSON *root, SgError *err)
 {
     SgScene *s = b->scene;
     const char *path = b->json_path;
-    s->render.max_depth = 8;
+    s->render.max_depth = SG_MAX_DEPTH_DEFAULT;
     const cJSON *render = cJSON_GetObjectItemCaseSensitive(root, "render");
     if (render) {
         if (!cJSON_IsObject(render))

@@ -1,7 +1,8 @@
 /* The render farm's shard format, shared by the side that writes shards
  * (render --shard K/N) and the side that reads them (bin/merge): which
  * passes of the whole render shard K of N holds, how many shards there may
- * be, and the EXR attributes that make an image a shard (docs/merge.md). */
+ * be, and the EXR attributes that make an image a shard (docs/merge.md);
+ * and the names of everything else bin/render writes beside its pixels. */
 #ifndef SG_SHARD_FORMAT_H
 #define SG_SHARD_FORMAT_H
 
@@ -50,6 +51,26 @@ int sg_shard_pass_count(int shard, int shard_count, int total_passes);
 #define SG_ATTR_NONFINITE_SAMPLES "sg:nonfinite_samples"
 #define SG_ATTR_GUIDE_SHARE "sg:guide_share"
 #define SG_ATTR_EXPOSURE "sg:exposure"
+
+/* ---- the rest of bin/render's EXR attributes ----------------------------- */
+#define SG_ATTR_MAX_DEPTH "sg:max_depth"
+#define SG_ATTR_LOBE_EXPONENT "sg:lobe_exponent"
+#define SG_ATTR_ALPHA "sg:alpha"
+#define SG_ATTR_ROULETTE "sg:roulette"
+#define SG_ATTR_BRANCHES_PER_PATH "sg:branches_per_path"
+#define SG_ATTR_EDGE_RAYS_PER_SAMPLE "sg:edge_rays_per_sample"
+#define SG_ATTR_TRAINING_PASSES "sg:training_passes"
+#define SG_ATTR_TRAINING_SECONDS "sg:training_seconds"
+#define SG_ATTR_CLAMPING "sg:clamping"
+#define SG_ATTR_SCENE "sg:scene"
+#define SG_ATTR_CACHE "sg:cache"
+#define SG_ATTR_FIELD "sg:field"
+#define SG_ATTR_TRAINING "sg:training"
+/* the benchmarks' reference images say how they were made */
+#define SG_ATTR_REFERENCE "sg:reference"
+
+/* render --reference --log: the error curve's CSV header, one row a pass */
+#define SG_ERROR_LOG_HEADER "seconds,spp,mse,relmse,mse8"
 
 #ifdef __cplusplus
 }

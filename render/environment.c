@@ -6,7 +6,6 @@
 
 #include "color.h"
 #include "image_io.h"
-#include "lights.h"
 #include "sampling.h"
 
 /* ---- the two layouts --------------------------------------------------------- */
@@ -248,13 +247,12 @@ Vec3 environment_sample(const Environment *e, float u1, float u2, float *pdf)
 {
     /* the row, then the texel within it, then a point uniform in the texel:
      * the probability u1 had left over places the point */
-    int y = (int)pick_cdf(e->row_cdf, (uint32_t)e->height, u1);
-    double lo = y ? e->row_cdf[y - 1] : 0.0, span = e->row_cdf[y] - lo;
-    float fy = span > 0.0 ? (float)((u1 - lo) / span) : 0.5f;
-    const double *cdf = e->col_cdf + (size_t)y * e->width;
-    int x = (int)pick_cdf(cdf, (uint32_t)e->width, u2);
-    double lx = x ? cdf[x - 1] : 0.0, sx = cdf[x] - lx;
-    float fx = sx > 0.0 ? (float)((u2 - lx) / sx) : 0.5f;
+    SgPiecewise2D texels = {e->row_cdf, e->col_cdf, (uint32_t)e->width, (uint32_t)e->height};
+    uint32_t ux, uy;
+    double within_x, within_y;
+    sg_piecewise2d_sample(&texels, u1, u2, &ux, &uy, &within_x, &within_y);
+    int x = (int)ux, y = (int)uy;
+    float fx = (float)within_x, fy = (float)within_y;
     float u = (x + fminf(fmaxf(fx, 0.0f), 0.99999f)) / e->width;
     float v = (y + fminf(fmaxf(fy, 0.0f), 0.99999f)) / e->height;
     Vec3 l = environment_square_to_sphere(e->layout, u, v);

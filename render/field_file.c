@@ -4,9 +4,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "guides/path_guide.h"
 #include "hash.h"
 #include "input_file.h"
 #include "output_file.h"
+#include "pixel_noise.h"
 
 static const char field_magic[8] = {'S', 'G', 'F', 'I', 'E', 'L', 'D', '\x1a'};
 #define FIELD_VERSION 5u /* 2: openpgl's section counts its passes; 3: guided's learned axes; 4: its histograms; 5: its portal shares */
@@ -215,4 +217,58 @@ bool field_identity_check(const char *path, const FieldIdentity *got, const Fiel
     if (strcmp(got->recipe, want->recipe))
         return sg_fail(err, "%s: a field learned for %s; this render is %s", path, got->recipe, want->recipe);
     return true;
+}
+
+bool field_file_save(const char *path, const FieldIdentity *id, const PathGuide *guide, const PixelNoise *noise,
+                     int noise_spp, SgError *err)
+{
+    FieldFile f = {0};
+    f.id = *id;
+    FieldSection *g = field_file_add_section(&f, "guide");
+    bool ok = guide->ops->field_store(guide, &g->bytes);
+    if (ok && noise) { /* the learned roulette's knowledge of the pixels */
+        FieldSection *n = field_file_add_section(&f, "pixel-noise");
+        size_t pixels = (size_t)noise->width * noise->height;
+        int32_t spp = noise_spp;
+        ok = field_bytes_put(&n->bytes, &spp, sizeof spp) &&
+             field_bytes_put(&n->bytes, noise->sum, pixels * sizeof *noise->sum) &&
+             field_bytes_put(&n->bytes, noise->sum_sq, pixels * sizeof *noise->sum_sq);
+    }
+    if (!ok) {
+        field_file_free(&f);
+        return sg_fail(err, "%s: out of memory for the field", path);
+    }
+    ok = field_file_write(path, &f, err);
+    field_file_free(&f);
+    return ok;
+}
+
+bool field_file_load(const char *path, const FieldIdentity *want, PathGuide *guide, PixelNoise *noise,
+                     int *noise_spp, SgError *err)
+{
+    FieldFile f;
+    if (!field_file_read(path, &f, err))
+        return false;
+    bool ok = field_identity_check(path, &f.id, want, err);
+    FieldSection *g = field_file_section(&f, "guide");
+    FieldSection *n = field_file_section(&f, "pixel-noise");
+    size_t pixels = noise ? (size_t)noise->width * noise->height : 0;
+    size_t noise_size = sizeof(int32_t) + 2 * pixels * sizeof(double);
+    if (ok && (!g || (noise != NULL) != (n != NULL) || (n && n->bytes.size != noise_size)))
+        ok = sg_fail(err, "%s: corrupt: its sections are not those of a --sampling %s field", path, f.id.mode);
+    if (ok) {
+        FieldReader in = {g->bytes.data, g->bytes.size, 0};
+        SgError e = {0};
+        if (!guide->ops->field_load(guide, &in, &e) || in.at != in.size)
+            ok = sg_fail(err, "%s: %s", path, e.message[0] ? e.message : "its guide's part is corrupt");
+    }
+    if (ok && n) {
+        int32_t spp;
+        memcpy(&spp, n->bytes.data, sizeof spp);
+        memcpy(noise->sum, n->bytes.data + sizeof spp, pixels * sizeof(double));
+        memcpy(noise->sum_sq, n->bytes.data + sizeof spp + pixels * sizeof(double), pixels * sizeof(double));
+        *noise_spp = spp > 0 ? spp : 0;
+    }
+    field_file_free(&f);
+    return ok;
 }

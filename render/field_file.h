@@ -74,4 +74,19 @@ FieldSection *field_file_section(FieldFile *f, const char *name);
 FieldSection *field_file_add_section(FieldFile *f, const char *name);
 void field_file_free(FieldFile *f);
 
+/* ---- a renderer's field --------------------------------------------------
+ * Its sections: "guide", what the guide stores (PathGuideOps.field_store),
+ * and with the learned roulette "pixel-noise", the pixels' sums
+ * (PixelNoise) after their pass count noise_spp. */
+struct PathGuide;
+struct PixelNoise;
+
+/* Writes the field of `guide` and `noise` (NULL: none), made for `id`. */
+bool field_file_save(const char *path, const FieldIdentity *id, const struct PathGuide *guide,
+                     const struct PixelNoise *noise, int noise_spp, SgError *err);
+/* Reads a field made for `want` into `guide` and `noise` (NULL: the render
+ * has none, and the file must have none), its pass count into *noise_spp. */
+bool field_file_load(const char *path, const FieldIdentity *want, struct PathGuide *guide, struct PixelNoise *noise,
+                     int *noise_spp, SgError *err);
+
 #endif

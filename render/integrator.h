@@ -33,7 +33,7 @@ typedef struct PathStats {
     uint64_t branches;     /* made by splitting, beyond the paths themselves */
     uint64_t bounces;      /* diffuse and glossy bounces drawn */
     uint64_t lobe_bounces; /* of which the guide drew the direction */
-    uint64_t views;        /* extra camera rays for the light seen directly (render/seen_light.h) */
+    uint64_t views;        /* extra camera rays for the light seen directly (render/edge_rays.h) */
 } PathStats;
 
 /* What one camera path needs besides the integrator. */

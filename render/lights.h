@@ -11,6 +11,7 @@
 #include "environment.h"
 #include "error.h"
 #include "material.h"
+#include "sampling.h"
 #include "scene.h"
 #include "vecmath.h"
 
@@ -77,20 +78,6 @@ bool light_set_init(LightSet *ls, const SgScene *s, const Vec3 *vertices, const 
 double light_set_power(const LightSet *ls);
 void light_set_free(LightSet *ls);
 
-/* The index i with cdf[i - 1] <= u < cdf[i] (binary search). */
-static inline uint32_t pick_cdf(const double *cdf, uint32_t n, double u)
-{
-    uint32_t lo = 0, hi = n - 1;
-    while (lo < hi) {
-        uint32_t mid = (lo + hi) / 2;
-        if (u < cdf[mid])
-            hi = mid;
-        else
-            lo = mid + 1;
-    }
-    return lo;
-}
-
 /* The light next-event estimation draws with random number ul: an area
  * light below ls->count, a light source from there; false: no light has
  * power. */
@@ -99,7 +86,7 @@ static inline bool light_set_pick(const LightSet *ls, float ul, uint32_t *light)
     uint32_t n = ls->count + ls->source_count;
     if (!n || !(ls->cdf[n - 1] > 0.0))
         return false;
-    *light = pick_cdf(ls->cdf, n, ul * ls->cdf[n - 1]);
+    *light = sg_piecewise_pick(ls->cdf, n, ul * ls->cdf[n - 1]);
     return true;
 }
 
@@ -109,7 +96,7 @@ static inline void light_set_sample_area(const LightSet *ls, uint32_t l, const V
                                          const uint32_t *indices, float ut, float ua, float ub, uint32_t *tri, Vec3 *y)
 {
     const LightTable *lt = &ls->lights[l];
-    uint32_t k = lt->first + pick_cdf(ls->tri_cdf + lt->first, lt->count, ut);
+    uint32_t k = lt->first + sg_piecewise_pick(ls->tri_cdf + lt->first, lt->count, ut);
     uint32_t t = ls->tris[k];
     const uint32_t *id = indices + 3 * t;
     float su = sqrtf(ua);

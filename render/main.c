@@ -2,6 +2,7 @@
 #include <errno.h>
 #include <inttypes.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,6 +18,9 @@
 #include "progress.h"
 #include "renderer.h"
 #include "scene.h"
+
+#define SG_STRING_(x) #x
+#define SG_STRING(x) SG_STRING_(x)
 
 static const char *usage_head =
     "usage: render SCENE [--cache importance.cache] [--sampling MODE]\n"
@@ -40,11 +44,11 @@ static const char *usage_tail =
     "  -o FILE.exr       linear float RGB with spp, seconds, sampling, seed as metadata\n"
     "  --png FILE.png    8-bit sRGB image of the render times 2^exposure\n"
     "  --exposure STOPS  PNG exposure (default: the scene's render.exposure, else 0)\n"
-    "  --reference REF --log CSV  after every pass append seconds,spp,mse,relmse,mse8 against\n"
+    "  --reference REF --log CSV  after every pass append " SG_ERROR_LOG_HEADER " against\n"
     "                    REF (measuring time is not counted; relmse: mean (x-r)^2/(r^2+0.01)\n"
     "                    on the image times 2^exposure; mse8: the paper's MSE of the 8-bit\n"
     "                    PNG values at --exposure)\n"
-    "  --max-depth N     maximum path length (default: the scene's render.max_depth, else 8)\n"
+    "  --max-depth N     maximum path length (default: the scene's render.max_depth, else " SG_STRING(SG_MAX_DEPTH_DEFAULT) ")\n"
     "  --exponent P      cosine-power exponent of the lobe (default: the mode's, above)\n"
     "  --alpha A         guided: probability of BSDF sampling in the mixture, (0, 1]; default:\n"
     "                    learned per region of the scene while rendering (docs/render.md)\n"
@@ -138,151 +142,166 @@ static void mode_names(char *buf, size_t size)
 typedef struct Args {
     const char *scene, *cache, *output, *png, *reference, *log, *field, *field_out;
     long training_passes;
+    bool has_sampling;
     SgSampling sampling; /* sg_sampling_default, unless --sampling says */
     SgRoulette roulette;
     SgOpenPglMode openpgl_mode;
-    long spp;
-    double time;
+    long spp;            /* -1: not given */
+    double time;         /* -1: not given */
     uint64_t seed;
     long threads, max_depth, width, height;
     long shard, shard_count;
-    double exposure, exponent, alpha;
-    bool has_exposure, has_exponent, has_alpha, quiet, no_openings, has_edge_rays;
-    long edge_rays;
+    double exposure, exponent, alpha; /* NAN: not given */
+    bool quiet, no_openings;
+    long edge_rays;      /* -1: not given */
     double texture_cache_mb;
 } Args;
 
-static bool parse_args(int argc, char **argv, Args *a, SgError *err)
+/* ---- options -------------------------------------------------------------
+ * Each parser takes option s with its value v (NULL: none follows) if it is
+ * one of its own: it returns the arguments it took (1 or 2), 0 where s is
+ * not its own, -1 on a bad value (err says). */
+
+static int needs_value(const char *s, SgError *err)
 {
-    memset(a, 0, sizeof *a);
-    bool has_sampling = false;
-    a->roulette = SG_ROULETTE_LEARNED;
-    a->spp = -1;
-    a->time = -1;
-    a->threads = 0;
-    a->shard_count = 1;
-    for (int i = 1; i < argc; i++) {
-        const char *s = argv[i];
-        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-#define NEED_VALUE()                                                 \
-    do {                                                             \
-        if (!v)                                                      \
-            return sg_fail(err, "%s: needs a value (see --help)", s); \
-        i++;                                                         \
-    } while (0)
-        if (!strcmp(s, "--cache")) { NEED_VALUE(); a->cache = v; }
-        else if (!strcmp(s, "--sampling")) {
-            NEED_VALUE();
-            if (!sg_sampling_parse(v, &a->sampling)) {
-                char names[256];
-                mode_names(names, sizeof names);
-                return sg_fail(err, "--sampling: '%s' is not %s", v, names);
-            }
-            has_sampling = true;
-        } else if (!strcmp(s, "--roulette")) {
-            NEED_VALUE();
-            if (!sg_roulette_parse(v, &a->roulette))
-                return sg_fail(err, "--roulette: '%s' is not learned or albedo", v);
-        } else if (!strcmp(s, "--openpgl-mode")) {
-            NEED_VALUE();
-            if (strcmp(v, "ris") && strcmp(v, "mis"))
-                return sg_fail(err, "--openpgl-mode: '%s' is not ris or mis", v);
-            a->openpgl_mode = strcmp(v, "mis") ? SG_OPENPGL_RIS : SG_OPENPGL_MIS;
-        }
-        else if (!strcmp(s, "-o") || !strcmp(s, "--output")) { NEED_VALUE(); a->output = v; }
-        else if (!strcmp(s, "--png")) { NEED_VALUE(); a->png = v; }
-        else if (!strcmp(s, "--reference")) { NEED_VALUE(); a->reference = v; }
-        else if (!strcmp(s, "--log")) { NEED_VALUE(); a->log = v; }
-        else if (!strcmp(s, "--spp")) {
-            NEED_VALUE();
-            if (!sg_parse_long(v, 1, 1L << 30, &a->spp))
-                return sg_fail(err, "--spp: '%s' is not a positive integer", v);
-        } else if (!strcmp(s, "--time")) {
-            NEED_VALUE();
-            if (!sg_parse_double(v, 1e-6, 1e9, &a->time))
-                return sg_fail(err, "--time: '%s' is not a positive number of seconds", v);
-        } else if (!strcmp(s, "--seed")) {
-            NEED_VALUE();
-            char *end;
-            errno = 0;
-            unsigned long long x = strtoull(v, &end, 10);
-            if (errno || end == v || *end || v[0] == '-')
-                return sg_fail(err, "--seed: '%s' is not a non-negative integer", v);
-            a->seed = x;
-        } else if (!strcmp(s, "--threads")) {
-            NEED_VALUE();
-            if (!sg_parse_long(v, 1, 4096, &a->threads))
-                return sg_fail(err, "--threads: '%s' is not a positive integer", v);
-        } else if (!strcmp(s, "--max-depth")) {
-            NEED_VALUE();
-            if (!sg_parse_long(v, 1, 100000, &a->max_depth))
-                return sg_fail(err, "--max-depth: '%s' is not a positive integer", v);
-        } else if (!strcmp(s, "--exposure")) {
-            NEED_VALUE();
-            if (!sg_parse_double(v, -100, 100, &a->exposure))
-                return sg_fail(err, "--exposure: '%s' is not a number of stops", v);
-            a->has_exposure = true;
-        } else if (!strcmp(s, "--exponent")) {
-            NEED_VALUE();
-            if (!sg_parse_double(v, 0, 1e5, &a->exponent))
-                return sg_fail(err, "--exponent: '%s' is not in [0, 1e5]", v);
-            a->has_exponent = true;
-        } else if (!strcmp(s, "--alpha")) {
-            NEED_VALUE();
-            if (!sg_parse_double(v, 0, 1, &a->alpha) || a->alpha <= 0)
-                return sg_fail(err, "--alpha: '%s' is not in (0, 1]", v);
-            a->has_alpha = true;
-        } else if (!strcmp(s, "--size")) {
-            NEED_VALUE();
-            char *end;
-            long w = strtol(v, &end, 10);
-            long h = *end == 'x' ? strtol(end + 1, &end, 10) : 0;
-            if (*end || w <= 0 || h <= 0 || w > 65536 || h > 65536)
-                return sg_fail(err, "--size: '%s' is not WxH", v);
-            a->width = w;
-            a->height = h;
-        } else if (!strcmp(s, "--shard")) {
-            NEED_VALUE();
-            char *end;
-            errno = 0;
-            long k = strtol(v, &end, 10);
-            long n = *end == '/' && end > v ? strtol(end + 1, &end, 10) : 0;
-            if (errno || *end || v[0] == '-' || !sg_shard_valid(k, n))
-                return sg_fail(err, "--shard: '%s' is not K/N with 0 <= K < N <= %d", v, SG_SHARDS_MAX);
-            a->shard = k;
-            a->shard_count = n;
-        } else if (!strcmp(s, "--texture-cache")) {
-            NEED_VALUE();
-            if (!sg_parse_double(v, 1, 1048576, &a->texture_cache_mb))
-                return sg_fail(err, "--texture-cache: '%s' is not a size in MB in [1, 1048576]", v);
-        } else if (!strcmp(s, "--field")) {
-            NEED_VALUE();
-            a->field = v;
-        } else if (!strcmp(s, "--field-out")) {
-            NEED_VALUE();
-            a->field_out = v;
-        } else if (!strcmp(s, "--training-passes")) {
-            NEED_VALUE();
-            if (!sg_parse_long(v, 1, 1L << 20, &a->training_passes))
-                return sg_fail(err, "--training-passes: '%s' is not a positive integer", v);
-        } else if (!strcmp(s, "--quiet")) {
-            a->quiet = true;
-        } else if (!strcmp(s, "--no-openings")) {
-            a->no_openings = true;
-        } else if (!strcmp(s, "--edge-rays")) {
-            NEED_VALUE();
-            if (!sg_parse_long(v, 0, 16, &a->edge_rays))
-                return sg_fail(err, "--edge-rays: '%s' is not an integer in [0, 16]", v);
-            a->has_edge_rays = true;
-        } else if (s[0] == '-' && s[1]) {
-            return sg_fail(err, "%s: unknown option (see --help)", s);
-        } else if (!a->scene) {
-            a->scene = s;
+    sg_fail(err, "%s: needs a value (see --help)", s);
+    return -1;
+}
+
+static int parse_flag(const char *s, Args *a)
+{
+    bool *flag = !strcmp(s, "--quiet") ? &a->quiet : !strcmp(s, "--no-openings") ? &a->no_openings : NULL;
+    if (!flag)
+        return 0;
+    *flag = true;
+    return 1;
+}
+
+static int parse_path(const char *s, const char *v, Args *a, SgError *err)
+{
+    const char **path = !strcmp(s, "--cache")                        ? &a->cache
+                        : !strcmp(s, "-o") || !strcmp(s, "--output") ? &a->output
+                        : !strcmp(s, "--png")                        ? &a->png
+                        : !strcmp(s, "--reference")                  ? &a->reference
+                        : !strcmp(s, "--log")                        ? &a->log
+                        : !strcmp(s, "--field")                      ? &a->field
+                        : !strcmp(s, "--field-out")                  ? &a->field_out
+                                                                     : NULL;
+    if (!path)
+        return 0;
+    if (!v)
+        return needs_value(s, err);
+    *path = v;
+    return 2;
+}
+
+/* The options that are a number in a range, and what else they must be. */
+typedef struct NumberOption {
+    const char *name;
+    size_t at;           /* offsetof(Args, ...): a long, or a double where `real` */
+    bool real;
+    double min, max;
+    bool above_min;      /* the range is open at min */
+    const char *is_not;  /* "--spp: '%s' is not ..." */
+} NumberOption;
+
+static const NumberOption number_options[] = {
+    {"--spp", offsetof(Args, spp), false, 1, 1L << 30, false, "a positive integer"},
+    {"--time", offsetof(Args, time), true, 1e-6, 1e9, false, "a positive number of seconds"},
+    {"--threads", offsetof(Args, threads), false, 1, 4096, false, "a positive integer"},
+    {"--max-depth", offsetof(Args, max_depth), false, 1, 100000, false, "a positive integer"},
+    {"--exposure", offsetof(Args, exposure), true, -100, 100, false, "a number of stops"},
+    {"--exponent", offsetof(Args, exponent), true, 0, 1e5, false, "in [0, 1e5]"},
+    {"--alpha", offsetof(Args, alpha), true, 0, 1, true, "in (0, 1]"},
+    {"--texture-cache", offsetof(Args, texture_cache_mb), true, 1, 1048576, false, "a size in MB in [1, 1048576]"},
+    {"--training-passes", offsetof(Args, training_passes), false, 1, 1L << 20, false, "a positive integer"},
+    {"--edge-rays", offsetof(Args, edge_rays), false, 0, 16, false, "an integer in [0, 16]"},
+};
+
+static int parse_number(const char *s, const char *v, Args *a, SgError *err)
+{
+    for (size_t k = 0; k < sizeof number_options / sizeof number_options[0]; k++) {
+        const NumberOption *n = &number_options[k];
+        if (strcmp(s, n->name))
+            continue;
+        if (!v)
+            return needs_value(s, err);
+        bool ok;
+        if (n->real) {
+            double *x = (double *)((char *)a + n->at);
+            ok = sg_parse_double(v, n->min, n->max, x) && !(n->above_min && *x <= n->min);
         } else {
-            return sg_fail(err, "%s: only one scene file, please", s);
+            ok = sg_parse_long(v, (long)n->min, (long)n->max, (long *)((char *)a + n->at));
         }
-#undef NEED_VALUE
+        if (!ok)
+            sg_fail(err, "%s: '%s' is not %s", s, v, n->is_not);
+        return ok ? 2 : -1;
     }
+    return 0;
+}
+
+/* --sampling, --roulette, --openpgl-mode: a name of a few. */
+static int parse_choice(const char *s, const char *v, Args *a, SgError *err)
+{
+    bool sampling = !strcmp(s, "--sampling"), roulette = !strcmp(s, "--roulette");
+    if (!sampling && !roulette && strcmp(s, "--openpgl-mode"))
+        return 0;
+    if (!v)
+        return needs_value(s, err);
+    if (sampling) {
+        if (!sg_sampling_parse(v, &a->sampling)) {
+            char names[256];
+            mode_names(names, sizeof names);
+            return sg_fail(err, "--sampling: '%s' is not %s", v, names), -1;
+        }
+        a->has_sampling = true;
+    } else if (roulette) {
+        if (!sg_roulette_parse(v, &a->roulette))
+            return sg_fail(err, "--roulette: '%s' is not learned or albedo", v), -1;
+    } else {
+        if (strcmp(v, "ris") && strcmp(v, "mis"))
+            return sg_fail(err, "--openpgl-mode: '%s' is not ris or mis", v), -1;
+        a->openpgl_mode = strcmp(v, "mis") ? SG_OPENPGL_RIS : SG_OPENPGL_MIS;
+    }
+    return 2;
+}
+
+/* --seed N, --size WxH, --shard K/N: numbers of their own shape. */
+static int parse_shaped(const char *s, const char *v, Args *a, SgError *err)
+{
+    bool seed = !strcmp(s, "--seed"), size = !strcmp(s, "--size");
+    if (!seed && !size && strcmp(s, "--shard"))
+        return 0;
+    if (!v)
+        return needs_value(s, err);
+    char *end;
+    errno = 0;
+    if (seed) {
+        unsigned long long x = strtoull(v, &end, 10);
+        if (errno || end == v || *end || v[0] == '-')
+            return sg_fail(err, "--seed: '%s' is not a non-negative integer", v), -1;
+        a->seed = x;
+    } else if (size) {
+        long w = strtol(v, &end, 10);
+        long h = *end == 'x' ? strtol(end + 1, &end, 10) : 0;
+        if (*end || w <= 0 || h <= 0 || w > 65536 || h > 65536)
+            return sg_fail(err, "--size: '%s' is not WxH", v), -1;
+        a->width = w;
+        a->height = h;
+    } else {
+        long k = strtol(v, &end, 10);
+        long n = *end == '/' && end > v ? strtol(end + 1, &end, 10) : 0;
+        if (errno || *end || v[0] == '-' || !sg_shard_valid(k, n))
+            return sg_fail(err, "--shard: '%s' is not K/N with 0 <= K < N <= %d", v, SG_SHARDS_MAX), -1;
+        a->shard = k;
+        a->shard_count = n;
+    }
+    return 2;
+}
+
+/* What the options must be together. */
+static bool check_args(Args *a, SgError *err)
+{
     if (!a->scene)
         return sg_fail(err, "no scene file given (see --help)");
     if (!a->output)
@@ -297,7 +316,7 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
         return sg_fail(err, "--field-out trains for --training-passes: no --spp, --time, --reference or --shard");
     if (a->training_passes && a->field)
         return sg_fail(err, "--training-passes: the field's training is done (it is for --field-out)");
-    if (!has_sampling)
+    if (!a->has_sampling)
         a->sampling = sg_sampling_default(a->cache != NULL);
     const SgSamplingMode *mode = sg_sampling_mode(a->sampling);
     if (mode->uses_cache && !a->cache)
@@ -307,19 +326,226 @@ static bool parse_args(int argc, char **argv, Args *a, SgError *err)
     return true;
 }
 
-typedef struct ErrorLog {
-    SgOutputFile out;
-    float *reference;
-    float *image;
-    size_t values;
-} ErrorLog;
+static bool parse_args(int argc, char **argv, Args *a, SgError *err)
+{
+    *a = (Args){.roulette = SG_ROULETTE_LEARNED, .spp = -1, .time = -1, .shard_count = 1, .exposure = NAN,
+                .exponent = NAN, .alpha = NAN, .edge_rays = -1};
+    for (int i = 1; i < argc; i++) {
+        const char *s = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int took = parse_flag(s, a);
+        if (!took)
+            took = parse_path(s, v, a, err);
+        if (!took)
+            took = parse_number(s, v, a, err);
+        if (!took)
+            took = parse_choice(s, v, a, err);
+        if (!took)
+            took = parse_shaped(s, v, a, err);
+        if (took < 0)
+            return false;
+        if (took > 0)
+            i += took - 1;
+        else if (s[0] == '-' && s[1])
+            return sg_fail(err, "%s: unknown option (see --help)", s);
+        else if (!a->scene)
+            a->scene = s;
+        else
+            return sg_fail(err, "%s: only one scene file, please", s);
+    }
+    return check_args(a, err);
+}
 
-static void format_u64(char *buf, size_t size, uint64_t v) { snprintf(buf, size, "%" PRIu64, v); }
+/* The render options: the scene's, then the mode's, then the command line's. */
+static void render_options(const Args *a, const SgScene *scene, const SgSamplingMode *mode, SgRenderOptions *o)
+{
+    sg_render_options_default(o, scene);
+    if (a->width) {
+        o->width = (int)a->width;
+        o->height = (int)a->height;
+    }
+    if (a->max_depth)
+        o->max_depth = (int)a->max_depth;
+    o->seed = a->seed;
+    o->threads = (int)a->threads;
+    if (!isnan(a->exponent))
+        o->lobe_exponent = (float)a->exponent;
+    else if (mode->lobe_exponent > 0.0f)
+        o->lobe_exponent = mode->lobe_exponent;
+    if (!isnan(a->alpha))
+        o->alpha = (float)a->alpha;
+    o->sampling = a->sampling;
+    o->roulette = a->roulette;
+    o->openpgl_mode = a->openpgl_mode;
+    o->no_openings = a->no_openings;
+    if (a->edge_rays >= 0)
+        o->edge_rays = (int)a->edge_rays;
+    o->shard = (int)a->shard;
+    o->shard_count = (int)a->shard_count;
+    o->texture_cache_mb = a->texture_cache_mb;
+    o->training_passes = (int)a->training_passes;
+}
+
+/* ---- the run -------------------------------------------------------------- */
+
+/* What one run holds, from the scene to the image; freed by run_close. */
+typedef struct Run {
+    Args a;
+    const SgSamplingMode *mode;
+    SgScene *scene;
+    SgImportanceFile importance;
+    SgRenderOptions o;
+    SgRenderer *r;
+    int spp_target;  /* this shard's passes (without --time) */
+    double exposure; /* the PNG's, and relmse's and mse8's */
+    float *image;    /* width * height * 3 */
+    size_t values;
+    float *reference; /* --reference: the image the error log measures against */
+    SgOutputFile log;
+    bool log_open;
+    double seconds;  /* the passes' time, measuring the error not counted */
+} Run;
+
+static bool open_cache(Run *run, SgError *err)
+{
+    const Args *a = &run->a;
+    if (!a->cache || !run->mode->uses_cache)
+        return true;
+    SgImportanceFile *f = &run->importance;
+    if (!sg_importance_file_open(f, a->cache, run->scene, a->scene, &run->o.importance, err))
+        return false;
+    if (f->dropped)
+        fprintf(stderr, "render: %u of %u lights cannot reach the camera: the guide does not follow them%s\n",
+                f->dropped, run->scene->light_count,
+                f->dropped == run->scene->light_count ? " (so it samples the BSDF only)" : "");
+    return true;
+}
+
+static bool open_error_log(Run *run, SgError *err)
+{
+    const Args *a = &run->a;
+    int rw, rh;
+    if (!sg_image_read(a->reference, &rw, &rh, &run->reference, err))
+        return false;
+    if (rw != run->o.width || rh != run->o.height)
+        return sg_fail(err, "%s: is %dx%d, the render is %dx%d", a->reference, rw, rh, run->o.width, run->o.height);
+    if (!sg_output_open(&run->log, a->log, err))
+        return false;
+    run->log_open = true;
+    fprintf(run->log.file, SG_ERROR_LOG_HEADER "\n");
+    return true;
+}
+
+/* The scene, the cache, the renderer, the image and the error log. */
+static bool run_open(Run *run, SgError *err)
+{
+    const Args *a = &run->a;
+    if (!(run->scene = sg_scene_load(a->scene, err)))
+        return false;
+    if (!a->quiet)
+        sg_scene_print_warnings(run->scene, "render", stderr);
+    if (!run->scene->has_camera)
+        return sg_fail(err, "%s: no camera in the scene", a->scene);
+    SgRenderOptions *o = &run->o;
+    render_options(a, run->scene, run->mode, o);
+    if (!open_cache(run, err))
+        return false;
+    int spp_total = a->spp > 0 ? (int)a->spp : run->scene->render.spp > 0 ? run->scene->render.spp : 16;
+    run->spp_target = sg_shard_pass_count(o->shard, o->shard_count, spp_total);
+    if (run->spp_target < 1 && a->time <= 0)
+        return sg_fail(err, "%s: %d spp leave shard %d of %d no pass: ask for at least %d", a->scene, spp_total,
+                       o->shard, o->shard_count, o->shard_count);
+    run->exposure = !isnan(a->exposure) ? a->exposure : run->scene->render.exposure;
+    /* OpenImageIO for the PNG now, not after the passes: a render that
+     * cannot write its image says so before it spends its time (the EXR
+     * needs no library loaded) */
+    if (a->png && !sg_image_io_ready(err))
+        return false;
+    if (!(run->r = sg_renderer_create(run->scene, o, err)))
+        return false;
+    run->values = (size_t)o->width * o->height * 3;
+    if (!(run->image = malloc(run->values * sizeof *run->image)))
+        return sg_fail(err, "%s: out of memory for the image", a->scene);
+    return !a->reference || open_error_log(run, err);
+}
+
+static void run_close(Run *run)
+{
+    if (run->log_open)
+        sg_output_abort(&run->log);
+    free(run->reference);
+    free(run->image);
+    sg_renderer_free(run->r);
+    sg_importance_file_close(&run->importance);
+    if (run->scene)
+        sg_scene_free(run->scene);
+}
+
+/* --field-out: the training alone, its passes the image. */
+static bool run_training(Run *run, SgError *err)
+{
+    int passes = sg_renderer_train_begin(run->r, err);
+    if (passes < 0)
+        return false;
+    SgProgress progress;
+    sg_progress_begin(&progress, "render: training", (uint64_t)passes);
+    for (int p = 0; p < passes; p++) {
+        double t0 = sg_seconds();
+        sg_renderer_pass(run->r);
+        run->seconds += sg_seconds() - t0;
+        sg_progress_update(&progress, (uint64_t)p + 1);
+    }
+    sg_renderer_train_end(run->r);
+    sg_progress_end(&progress);
+    return sg_renderer_write_field(run->r, run->a.field_out, err);
+}
+
+/* After a pass: the camera inside a solid said, the error logged. */
+static void after_pass(Run *run, int spp)
+{
+    if (spp == 1) {
+        SgRenderStats stats;
+        sg_renderer_stats(run->r, &stats);
+        if (stats.backface_fraction > 0.9)
+            fprintf(stderr, "render: %s: the camera seems to be inside a solid (%.0f%% of its rays hit back faces)\n",
+                    run->a.scene, 100.0 * stats.backface_fraction);
+    }
+    if (run->log_open) {
+        double mse, relmse, mse8;
+        sg_renderer_image(run->r, run->image);
+        sg_image_errors(run->image, run->reference, run->values, (float)exp2(run->exposure), &relmse, &mse8, &mse);
+        fprintf(run->log.file, "%.6f,%d,%.9g,%.9g,%.9g\n", run->seconds, spp, mse, relmse, mse8);
+    }
+}
+
+/* The passes, to --spp or for --time (with --field: frozen from it). */
+static bool run_passes(Run *run, SgError *err)
+{
+    const Args *a = &run->a;
+    if (a->field && !sg_renderer_read_field(run->r, a->field, err))
+        return false;
+    SgProgress progress;
+    sg_progress_begin(&progress, "render", a->time > 0 ? 0 : (uint64_t)run->spp_target);
+    for (;;) {
+        double t0 = sg_seconds();
+        sg_renderer_pass(run->r);
+        run->seconds += sg_seconds() - t0;
+        int spp = sg_renderer_spp(run->r);
+        after_pass(run, spp);
+        sg_progress_update(&progress, (uint64_t)spp);
+        if (a->time > 0 ? run->seconds >= a->time : spp >= run->spp_target)
+            break;
+    }
+    sg_progress_end(&progress);
+    return true;
+}
+
+/* ---- the outputs ---------------------------------------------------------- */
 
 /* What bin/merge checks that shards agree on, as 16 hex digits each: the
  * scene (the text the loader read and the geometry it loaded), the cache
- * (its checksum, "none" where the mode reads none) and the recipe (every
- * option that shapes the image besides the shard, the spp and the time). */
+ * (its checksum, "none" where the mode reads none) and the recipe (the
+ * options' summary, sg_render_options_summary, and what else shapes the
+ * image besides the shard, the spp and the time). */
 typedef struct ShardIdentity {
     char scene[17], cache[17], recipe[17];
 } ShardIdentity;
@@ -333,17 +559,141 @@ static void shard_identity(const SgScene *scene, const SgRenderOptions *o, const
         snprintf(id->cache, sizeof id->cache, "%016" PRIx64, sg_cache_checksum(cache));
     else
         snprintf(id->cache, sizeof id->cache, "none");
-    char recipe[4500]; /* the options and a field's path */
-    int n = snprintf(recipe, sizeof recipe, "size %dx%d sampling %s seed %" PRIu64 " depth %d exponent %.9g alpha %.9g "
-                     "roulette %s shards %d%s%s%s%s%s", o->width, o->height, sg_sampling_name(o->sampling), o->seed,
-                     o->max_depth, o->lobe_exponent, o->alpha, sg_roulette_name(o->roulette), o->shard_count,
-                     field ? " field " : "", field ? field : "",
-                     o->sampling == SG_SAMPLING_OPENPGL ? " openpgl-mode " : "",
-                     o->sampling == SG_SAMPLING_OPENPGL ? sg_openpgl_mode_name(o->openpgl_mode) : "",
-                     o->no_openings ? " no-openings" : "");
+    char summary[256], recipe[4500]; /* the options and a field's path */
+    sg_render_options_summary(o, summary, sizeof summary);
+    int n = snprintf(recipe, sizeof recipe, "%s, sampling %s, seed %" PRIu64 ", shards %d%s%s", summary,
+                     sg_sampling_name(o->sampling), o->seed, o->shard_count, field ? ", field " : "",
+                     field ? field : "");
     if (n < 0 || (size_t)n >= sizeof recipe)
         n = (int)strlen(recipe);
     snprintf(id->recipe, sizeof id->recipe, "%016" PRIx64, sg_hash_bytes(SG_HASH_INIT, recipe, (size_t)n));
+}
+
+/* The EXR's attributes, as text, and the strings they point into. */
+typedef struct Attributes {
+    char spp[32], seconds[32], seed[32], nonfinite[32], depth[32], exponent[32], guide_share[32], training[32],
+        training_seconds[32], branches[32], edge_rays[32], shard[32], shard_count[32], exposure[32];
+    ShardIdentity id;
+    SgImageAttribute list[25];
+    int count;
+} Attributes;
+
+static void add_attribute(Attributes *at, const char *name, const char *value)
+{
+    at->list[at->count++] = (SgImageAttribute){name, value};
+}
+
+static void make_attributes(const Run *run, const SgRenderStats *st, const SgRenderReport *report, Attributes *at)
+{
+    const Args *a = &run->a;
+    const SgRenderOptions *o = &run->o;
+    shard_identity(run->scene, o, run->importance.cache, a->field, &at->id);
+    snprintf(at->spp, sizeof at->spp, "%d", st->spp);
+    snprintf(at->seconds, sizeof at->seconds, "%.3f", run->seconds);
+    snprintf(at->seed, sizeof at->seed, "%" PRIu64, a->seed);
+    snprintf(at->nonfinite, sizeof at->nonfinite, "%" PRIu64, st->nonfinite);
+    snprintf(at->depth, sizeof at->depth, "%d", o->max_depth);
+    snprintf(at->exponent, sizeof at->exponent, "%g", o->lobe_exponent);
+    /* what the guide did: the share of bounces it drew, a learned field's training */
+    snprintf(at->guide_share, sizeof at->guide_share, "%.4f", st->lobe_share);
+    snprintf(at->training, sizeof at->training, "%d", st->training_passes);
+    snprintf(at->training_seconds, sizeof at->training_seconds, "%.3f", st->training_seconds);
+    snprintf(at->branches, sizeof at->branches, "%.3f", st->branches_per_path);
+    snprintf(at->edge_rays, sizeof at->edge_rays, "%.4f", st->edge_rays_per_sample);
+    snprintf(at->shard, sizeof at->shard, "%d", o->shard);
+    snprintf(at->shard_count, sizeof at->shard_count, "%d", o->shard_count);
+    snprintf(at->exposure, sizeof at->exposure, "%.9g", run->exposure);
+    at->count = 0;
+    add_attribute(at, SG_ATTR_SPP, at->spp);
+    add_attribute(at, SG_ATTR_SECONDS, at->seconds);
+    add_attribute(at, SG_ATTR_SAMPLING, run->mode->name);
+    add_attribute(at, SG_ATTR_SEED, at->seed);
+    add_attribute(at, SG_ATTR_MAX_DEPTH, at->depth);
+    add_attribute(at, SG_ATTR_LOBE_EXPONENT, at->exponent);
+    add_attribute(at, SG_ATTR_ALPHA, report->alpha);
+    add_attribute(at, SG_ATTR_ROULETTE, sg_roulette_name(report->roulette));
+    add_attribute(at, SG_ATTR_BRANCHES_PER_PATH, at->branches);
+    add_attribute(at, SG_ATTR_EDGE_RAYS_PER_SAMPLE, at->edge_rays);
+    add_attribute(at, SG_ATTR_NONFINITE_SAMPLES, at->nonfinite);
+    add_attribute(at, SG_ATTR_GUIDE_SHARE, at->guide_share);
+    add_attribute(at, SG_ATTR_TRAINING_PASSES, at->training);
+    add_attribute(at, SG_ATTR_TRAINING_SECONDS, at->training_seconds);
+    add_attribute(at, SG_ATTR_CLAMPING, "none");
+    add_attribute(at, SG_ATTR_SCENE, a->scene);
+    add_attribute(at, SG_ATTR_CACHE, run->importance.cache ? a->cache : "");
+    add_attribute(at, SG_ATTR_FIELD, a->field ? a->field : a->field_out ? a->field_out : "");
+    add_attribute(at, SG_ATTR_TRAINING, a->field_out ? "yes" : "no");
+    add_attribute(at, SG_ATTR_EXPOSURE, at->exposure);
+    /* for bin/merge */
+    add_attribute(at, SG_ATTR_SHARDS, at->shard);
+    add_attribute(at, SG_ATTR_SHARD_COUNT, at->shard_count);
+    add_attribute(at, SG_ATTR_SCENE_HASH, at->id.scene);
+    add_attribute(at, SG_ATTR_CACHE_HASH, at->id.cache);
+    add_attribute(at, SG_ATTR_RECIPE, at->id.recipe);
+}
+
+/* The summary line (and the textures' line) on stderr. */
+static void print_summary(const Run *run, const SgRenderStats *st, const SgRenderReport *report, const char *seed,
+                          const char *nonfinite)
+{
+    const SgRenderOptions *o = &run->o;
+    char shard_line[64] = "";
+    if (o->shard_count > 1)
+        snprintf(shard_line, sizeof shard_line, ", shard %d of %d", o->shard, o->shard_count);
+    if (st->texture_image_bytes)
+        fprintf(stderr, "render: textures: %.1f MB cached of %.1f MB of images\n", st->texture_cache_bytes / 1048576.0,
+                st->texture_image_bytes / 1048576.0);
+    double paths = (double)o->width * o->height * st->spp;
+    char openings[64] = "";
+    if (report->openings)
+        snprintf(openings, sizeof openings, ", sky sampled through %u opening%s", report->openings,
+                 report->openings == 1 ? "" : "s");
+    char edges[80] = "";
+    if (st->edge_rays_per_sample > 0.0)
+        snprintf(edges, sizeof edges, ", %.3g edge rays a sample", st->edge_rays_per_sample);
+    char roulette[80];
+    if (report->roulette == SG_ROULETTE_LEARNED) /* it also splits paths */
+        snprintf(roulette, sizeof roulette, "%s (%.2f branches split off a path)", sg_roulette_name(report->roulette),
+                 st->branches_per_path);
+    else
+        snprintf(roulette, sizeof roulette, "%s", sg_roulette_name(report->roulette));
+    fprintf(stderr,
+            "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s%s, roulette %s, seed "
+            "%s, %s NaN/inf samples%s\n",
+            o->width, o->height, st->spp, run->seconds, paths / run->seconds * 1e-6,
+            (double)st->rays / run->seconds * 1e-6, run->mode->name, report->guide, openings, edges, roulette, seed,
+            nonfinite, shard_line);
+}
+
+/* The PNG, the error log and the EXR, then the summary. */
+static bool run_outputs(Run *run, SgError *err)
+{
+    const Args *a = &run->a;
+    const SgRenderOptions *o = &run->o;
+    SgRenderStats stats;
+    sg_renderer_stats(run->r, &stats);
+    SgRenderReport report;
+    sg_renderer_report(run->r, &report);
+    sg_renderer_image(run->r, run->image);
+    Attributes at;
+    make_attributes(run, &stats, &report, &at);
+    /* The EXR last: it is make's target, so a run cut short before it
+     * (a PNG or the curve written, then killed) is still run again. */
+    if (a->png && !sg_image_write_png(a->png, o->width, o->height, run->image, run->exposure, err))
+        return false;
+    if (run->log_open) {
+        run->log_open = false;
+        if (!sg_output_commit(&run->log, err))
+            return false;
+    }
+    if (!sg_image_write_exr(a->output, o->width, o->height, run->image, at.list, at.count, err)) {
+        if (a->field_out) /* no output of a failed run */
+            remove(a->field_out);
+        return false;
+    }
+    if (!a->quiet)
+        print_summary(run, &stats, &report, at.seed, at.nonfinite);
+    return true;
 }
 
 int main(int argc, char **argv)
@@ -356,260 +706,20 @@ int main(int argc, char **argv)
     if (argc > 1 && !strcmp(argv[1], "--describe"))
         return describe(argc, argv);
     SgError err = {0};
-    Args a;
-    if (!parse_args(argc, argv, &a, &err)) {
+    Run run = {0};
+    if (!parse_args(argc, argv, &run.a, &err)) {
         sg_error_print("render", &err);
         return 2; /* a usage error, as in every program */
     }
-    const SgSamplingMode *mode = sg_sampling_mode(a.sampling);
-    if (mode->available && !mode->available(&err)) { /* said before the scene is read */
-        fprintf(stderr, "render: --sampling %s: %s\n", mode->name, err.message);
+    run.mode = sg_sampling_mode(run.a.sampling);
+    if (run.mode->available && !run.mode->available(&err)) { /* said before the scene is read */
+        fprintf(stderr, "render: --sampling %s: %s\n", run.mode->name, err.message);
         return 1;
     }
-    int status = 1;
-    SgScene *scene = NULL;
-    SgImportanceFile importance = {0};
-    SgRenderer *r = NULL;
-    float *image = NULL;
-    ErrorLog log = {0};
-    bool log_open = false;
-
-    scene = sg_scene_load(a.scene, &err);
-    if (!scene)
-        goto done;
-    if (!a.quiet)
-        sg_scene_print_warnings(scene, "render", stderr);
-    if (!scene->has_camera) {
-        sg_fail(&err, "%s: no camera in the scene", a.scene);
-        goto done;
-    }
-
-    SgRenderOptions o;
-    sg_render_options_default(&o, scene);
-    if (a.width) {
-        o.width = (int)a.width;
-        o.height = (int)a.height;
-    }
-    if (a.max_depth)
-        o.max_depth = (int)a.max_depth;
-    o.seed = a.seed;
-    o.threads = (int)a.threads;
-    if (a.has_exponent)
-        o.lobe_exponent = (float)a.exponent;
-    if (a.has_alpha)
-        o.alpha = (float)a.alpha;
-    o.sampling = a.sampling;
-    o.roulette = a.roulette;
-    o.openpgl_mode = a.openpgl_mode;
-    o.no_openings = a.no_openings;
-    if (a.has_edge_rays)
-        o.edge_rays = (int)a.edge_rays;
-    o.shard = (int)a.shard;
-    o.shard_count = (int)a.shard_count;
-    o.texture_cache_mb = a.texture_cache_mb;
-    o.training_passes = (int)a.training_passes;
-    if (!a.has_exponent && mode->lobe_exponent > 0.0f)
-        o.lobe_exponent = mode->lobe_exponent;
-
-    if (a.cache && mode->uses_cache) {
-        if (!sg_importance_file_open(&importance, a.cache, scene, a.scene, &o.importance, &err))
-            goto done;
-        if (importance.dropped)
-            fprintf(stderr, "render: %u of %u lights cannot reach the camera: the guide does not follow them%s\n",
-                    importance.dropped, scene->light_count,
-                    importance.dropped == scene->light_count ? " (so it samples the BSDF only)" : "");
-    }
-
-    int spp_total = a.spp > 0 ? (int)a.spp : scene->render.spp > 0 ? scene->render.spp : 16;
-    int spp_target = sg_shard_pass_count(o.shard, o.shard_count, spp_total);
-    if (spp_target < 1 && a.time <= 0) {
-        sg_fail(&err, "%s: %d spp leave shard %d of %d no pass: ask for at least %d", a.scene, spp_total, o.shard,
-                o.shard_count, o.shard_count);
-        goto done;
-    }
-    double exposure = a.has_exposure ? a.exposure : scene->render.exposure;
-    /* OpenImageIO for the PNG now, not after the passes: a render that
-     * cannot write its image says so before it spends its time (the EXR
-     * needs no library loaded) */
-    if (a.png && !sg_image_io_ready(&err))
-        goto done;
-
-    r = sg_renderer_create(scene, &o, &err);
-    if (!r)
-        goto done;
-    size_t values = (size_t)o.width * o.height * 3;
-    image = malloc(values * sizeof *image);
-    if (!image) {
-        sg_fail(&err, "%s: out of memory for the image", a.scene);
-        goto done;
-    }
-    if (a.reference) {
-        int rw, rh;
-        if (!sg_image_read(a.reference, &rw, &rh, &log.reference, &err))
-            goto done;
-        if (rw != o.width || rh != o.height) {
-            sg_fail(&err, "%s: is %dx%d, the render is %dx%d", a.reference, rw, rh, o.width, o.height);
-            goto done;
-        }
-        if (!sg_output_open(&log.out, a.log, &err))
-            goto done;
-        log_open = true;
-        fprintf(log.out.file, "seconds,spp,mse,relmse,mse8\n");
-    }
-
-    SgProgress progress;
-    double render_seconds = 0.0;
-    if (a.field_out) { /* the training alone: its passes are the image */
-        int passes = sg_renderer_train_begin(r, &err);
-        if (passes < 0)
-            goto done;
-        sg_progress_begin(&progress, "render: training", (uint64_t)passes);
-        for (int p = 0; p < passes; p++) {
-            double t0 = sg_seconds();
-            sg_renderer_pass(r);
-            render_seconds += sg_seconds() - t0;
-            sg_progress_update(&progress, (uint64_t)p + 1);
-        }
-        sg_renderer_train_end(r);
-        sg_progress_end(&progress);
-        if (!sg_renderer_write_field(r, a.field_out, &err))
-            goto done;
-    } else {
-        if (a.field && !sg_renderer_read_field(r, a.field, &err))
-            goto done;
-        sg_progress_begin(&progress, "render", a.time > 0 ? 0 : (uint64_t)spp_target);
-        for (;;) {
-            double t0 = sg_seconds();
-            sg_renderer_pass(r);
-            render_seconds += sg_seconds() - t0;
-            int spp = sg_renderer_spp(r);
-            if (spp == 1 && sg_renderer_backface_fraction(r) > 0.9)
-                fprintf(stderr,
-                        "render: %s: the camera seems to be inside a solid (%.0f%% of its rays hit back faces)\n",
-                        a.scene, 100.0 * sg_renderer_backface_fraction(r));
-            if (log_open) {
-                double mse, relmse, mse8;
-                sg_renderer_image(r, image);
-                sg_image_errors(image, log.reference, values, (float)exp2(exposure), &relmse, &mse8, &mse);
-                fprintf(log.out.file, "%.6f,%d,%.9g,%.9g,%.9g\n", render_seconds, spp, mse, relmse, mse8);
-            }
-            sg_progress_update(&progress, (uint64_t)spp);
-            if (a.time > 0 ? render_seconds >= a.time : spp >= spp_target)
-                break;
-        }
-        sg_progress_end(&progress);
-    }
-
-    ShardIdentity id;
-    shard_identity(scene, &o, importance.cache, a.field, &id);
-    char shard_s[32], shard_count_s[32], exposure_s[32];
-    snprintf(shard_s, sizeof shard_s, "%d", o.shard);
-    snprintf(shard_count_s, sizeof shard_count_s, "%d", o.shard_count);
-    snprintf(exposure_s, sizeof exposure_s, "%.9g", exposure);
-
-    sg_renderer_image(r, image);
-    char spp_s[32], sec_s[32], seed_s[32], nonfinite_s[32], depth_s[32], exp_s[32];
-    snprintf(spp_s, sizeof spp_s, "%d", sg_renderer_spp(r));
-    snprintf(sec_s, sizeof sec_s, "%.3f", render_seconds);
-    format_u64(seed_s, sizeof seed_s, a.seed);
-    format_u64(nonfinite_s, sizeof nonfinite_s, sg_renderer_nonfinite(r));
-    snprintf(depth_s, sizeof depth_s, "%d", o.max_depth);
-    snprintf(exp_s, sizeof exp_s, "%g", o.lobe_exponent);
-    /* what the guide did: the share of bounces it drew, a learned field's training */
-    SgRenderReport report;
-    sg_renderer_report(r, &report);
-    char guide_share_s[32], training_s[32], training_sec_s[32];
-    snprintf(guide_share_s, sizeof guide_share_s, "%.4f", sg_renderer_lobe_share(r));
-    snprintf(training_s, sizeof training_s, "%d", sg_renderer_training_passes(r));
-    snprintf(training_sec_s, sizeof training_sec_s, "%.3f", sg_renderer_training_seconds(r));
-    double branches = sg_renderer_branches_per_path(r);
-    char roulette[80], branches_s[32], edge_rays_s[32];
-    snprintf(branches_s, sizeof branches_s, "%.3f", branches);
-    snprintf(edge_rays_s, sizeof edge_rays_s, "%.4f", sg_renderer_edge_rays_per_sample(r));
-    if (report.roulette == SG_ROULETTE_LEARNED) /* it also splits paths */
-        snprintf(roulette, sizeof roulette, "%s (%.2f branches split off a path)", sg_roulette_name(report.roulette),
-                 branches);
-    else
-        snprintf(roulette, sizeof roulette, "%s", sg_roulette_name(report.roulette));
-    SgImageAttribute attrs[] = {
-        {SG_ATTR_SPP, spp_s},
-        {SG_ATTR_SECONDS, sec_s},
-        {SG_ATTR_SAMPLING, mode->name},
-        {SG_ATTR_SEED, seed_s},
-        {"sg:max_depth", depth_s},
-        {"sg:lobe_exponent", exp_s},
-        {"sg:alpha", report.alpha},
-        {"sg:roulette", sg_roulette_name(report.roulette)},
-        {"sg:branches_per_path", branches_s},
-        {"sg:edge_rays_per_sample", edge_rays_s},
-        {SG_ATTR_NONFINITE_SAMPLES, nonfinite_s},
-        {SG_ATTR_GUIDE_SHARE, guide_share_s},
-        {"sg:training_passes", training_s},
-        {"sg:training_seconds", training_sec_s},
-        {"sg:clamping", "none"},
-        {"sg:scene", a.scene},
-        {"sg:cache", importance.cache ? a.cache : ""},
-        {"sg:field", a.field ? a.field : a.field_out ? a.field_out : ""},
-        {"sg:training", a.field_out ? "yes" : "no"},
-        {SG_ATTR_EXPOSURE, exposure_s},
-        /* for bin/merge */
-        {SG_ATTR_SHARDS, shard_s},
-        {SG_ATTR_SHARD_COUNT, shard_count_s},
-        {SG_ATTR_SCENE_HASH, id.scene},
-        {SG_ATTR_CACHE_HASH, id.cache},
-        {SG_ATTR_RECIPE, id.recipe},
-    };
-    /* The EXR last: it is make's target, so a run cut short before it
-     * (a PNG or the curve written, then killed) is still run again. */
-    if (a.png && !sg_image_write_png(a.png, o.width, o.height, image, exposure, &err))
-        goto done;
-    if (log_open) {
-        log_open = false;
-        if (!sg_output_commit(&log.out, &err))
-            goto done;
-    }
-    if (!sg_image_write_exr(a.output, o.width, o.height, image, attrs,
-                            (int)(sizeof attrs / sizeof attrs[0]), &err)) {
-        if (a.field_out) /* no output of a failed run */
-            remove(a.field_out);
-        goto done;
-    }
-    if (!a.quiet) {
-        char shard_line[64] = "";
-        if (o.shard_count > 1)
-            snprintf(shard_line, sizeof shard_line, ", shard %d of %d", o.shard, o.shard_count);
-        size_t texture_images = 0, texture_cache = sg_renderer_texture_cache(r, &texture_images);
-        if (texture_images)
-            fprintf(stderr, "render: textures: %.1f MB cached of %.1f MB of images\n", texture_cache / 1048576.0,
-                    texture_images / 1048576.0);
-        double paths = (double)o.width * o.height * sg_renderer_spp(r);
-        char openings[64] = "";
-        if (report.openings)
-            snprintf(openings, sizeof openings, ", sky sampled through %u opening%s", report.openings,
-                     report.openings == 1 ? "" : "s");
-        char edges[80] = "";
-        double edge_rays = sg_renderer_edge_rays_per_sample(r);
-        if (edge_rays > 0.0)
-            snprintf(edges, sizeof edges, ", %.3g edge rays a sample", edge_rays);
-        fprintf(stderr,
-                "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s%s, roulette %s, seed "
-                "%s, %s NaN/inf samples%s\n",
-                o.width, o.height, sg_renderer_spp(r), render_seconds, paths / render_seconds * 1e-6,
-                (double)sg_renderer_rays(r) / render_seconds * 1e-6, mode->name, report.guide, openings, edges,
-                roulette, seed_s, nonfinite_s, shard_line);
-    }
-    status = 0;
-
-done:
-    if (status != 0)
+    bool ok = run_open(&run, &err) && (run.a.field_out ? run_training(&run, &err) : run_passes(&run, &err)) &&
+              run_outputs(&run, &err);
+    if (!ok)
         sg_error_print("render", &err);
-    if (log_open)
-        sg_output_abort(&log.out);
-    free(log.reference);
-    free(image);
-    sg_renderer_free(r);
-    sg_importance_file_close(&importance);
-    if (scene)
-        sg_scene_free(scene);
-    return status;
+    run_close(&run);
+    return ok ? 0 : 1;
 }

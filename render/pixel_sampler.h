@@ -24,14 +24,14 @@ void pixel_sampler_init(PixelSampler *ps, uint64_t seed, uint64_t pass);
 void pixel_sampler_start(const PixelSampler *ps, size_t pix, SgRng *rng, float *jx, float *jy);
 
 /* Where in pixel `pix` the pass's j-th extra camera ray goes (j below
- * `per_pass`, render/seen_light.h): point pass * per_pass + j of an R2
+ * `per_pass`, render/edge_rays.h): point pass * per_pass + j of an R2
  * sequence rotated by an offset of its own per pixel and seed, so that each
  * point alone is uniform over the pixel and the points of a pass, and of
  * all passes, cover it evenly. */
 void pixel_sampler_view(const PixelSampler *ps, size_t pix, int j, int per_pass, float *jx, float *jy);
 
 /* The j-th of the rays that survey pixel `pix` before the first pass
- * (render/seen_light.h): an R2 pattern rotated per pixel and seed, the same
+ * (render/edge_rays.h): an R2 pattern rotated per pixel and seed, the same
  * for every pass and shard. */
 void pixel_sampler_survey(const PixelSampler *ps, size_t pix, int j, float *jx, float *jy);
 

@@ -24,7 +24,7 @@
 #include "pixel_noise.h"
 #include "pixel_sampler.h"
 #include "roulette.h"
-#include "seen_light.h"
+#include "edge_rays.h"
 #include "textures.h"
 #include "threads.h"
 #include "vecmath.h"
@@ -53,7 +53,7 @@ struct SgRenderer {
      * there, made before each pass (NULL: the albedo roulette runs). */
     PixelNoise *noise;
     int noise_spp;        /* the passes in its sums (training's included) */
-    SeenLight *seen;      /* extra camera rays where the light seen directly varies (NULL: none) */
+    EdgeRays *seen;      /* extra camera rays where the light seen directly varies (NULL: none) */
     bool surveyed;        /* seen's survey is done (before the first pass) */
     int seen_passes;      /* the passes in seen's sums (training's included) */
     int tiles_x, tiles_y;
@@ -79,13 +79,13 @@ void sg_render_options_default(SgRenderOptions *o, const SgScene *scene)
     memset(o, 0, sizeof *o);
     o->width = scene && scene->has_camera && scene->camera.width > 0 ? scene->camera.width : 320;
     o->height = scene && scene->has_camera && scene->camera.height > 0 ? scene->camera.height : 240;
-    o->max_depth = scene && scene->render.max_depth > 0 ? scene->render.max_depth : 8;
+    o->max_depth = scene && scene->render.max_depth > 0 ? scene->render.max_depth : SG_MAX_DEPTH_DEFAULT;
     o->sampling = SG_SAMPLING_BSDF;
     o->lobe_exponent = 16.0f;
     o->alpha = SG_ALPHA_LEARNED;
     o->roulette = SG_ROULETTE_LEARNED;
     o->shard_count = 1;
-    o->edge_rays = SEEN_RAYS_MAX;
+    o->edge_rays = EDGE_RAYS_MAX;
 }
 
 const char *sg_roulette_name(SgRoulette r) { return r == SG_ROULETTE_ALBEDO ? "albedo" : "learned"; }
@@ -120,34 +120,62 @@ static bool attach_openings(SgRenderer *r, const SgScene *s, const char *path, S
     return ok || sg_fail(err, "%s: out of memory for the openings", path);
 }
 
-/* `create`: the guide's constructor, NULL: the one o->sampling names. */
-static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, PathGuideCreate create, SgError *err)
+/* Whether scene s can be rendered with options o, and the machine can
+ * hold the render (false, naming the scene, where not). */
+static bool renderable(const SgScene *s, const SgRenderOptions *o, const char *path, SgError *err)
 {
-    const char *path = s->path[0] ? s->path : "scene";
     if (!s->triangle_count || !s->positions || !s->indices)
-        return sg_fail(err, "%s: no triangles to render", path), NULL;
+        return sg_fail(err, "%s: no triangles to render", path);
     if (!s->has_camera)
-        return sg_fail(err, "%s: no camera", path), NULL;
+        return sg_fail(err, "%s: no camera", path);
     if (o->width <= 0 || o->height <= 0 || o->width > 65536 || o->height > 65536)
-        return sg_fail(err, "%s: bad image size %dx%d", path, o->width, o->height), NULL;
+        return sg_fail(err, "%s: bad image size %dx%d", path, o->width, o->height);
     if (o->max_depth < 1)
-        return sg_fail(err, "%s: max depth must be at least 1", path), NULL;
+        return sg_fail(err, "%s: max depth must be at least 1", path);
     if (!(o->lobe_exponent >= 0.0f && o->lobe_exponent <= 1e5f))
-        return sg_fail(err, "%s: lobe exponent must be in [0, 1e5]", path), NULL;
+        return sg_fail(err, "%s: lobe exponent must be in [0, 1e5]", path);
     if (!sg_shard_valid(o->shard, o->shard_count))
         return sg_fail(err, "%s: shard %d of %d: want 0 <= shard < count <= %d", path, o->shard, o->shard_count,
-                       SG_SHARDS_MAX), NULL;
+                       SG_SHARDS_MAX);
     if (o->roulette != SG_ROULETTE_LEARNED && o->roulette != SG_ROULETTE_ALBEDO)
-        return sg_fail(err, "%s: unknown roulette %d", path, (int)o->roulette), NULL;
-    if (o->edge_rays < 0 || o->edge_rays > SEEN_RAYS_MAX)
-        return sg_fail(err, "%s: edge rays must be in [0, %d]", path, SEEN_RAYS_MAX), NULL;
+        return sg_fail(err, "%s: unknown roulette %d", path, (int)o->roulette);
+    if (o->edge_rays < 0 || o->edge_rays > EDGE_RAYS_MAX)
+        return sg_fail(err, "%s: edge rays must be in [0, %d]", path, EDGE_RAYS_MAX);
 
     /* sum (double) + last pass + the caller's image (float) per pixel, and
      * the renderer's and Embree's copies of the triangles (~150 bytes each):
      * refuse up front what the machine cannot hold rather than be killed */
     char what[96];
     snprintf(what, sizeof what, "a %dx%d image", o->width, o->height);
-    if (!sg_memory_check((48.0 + (o->edge_rays ? 44.0 : 0.0)) * o->width * o->height + 150.0 * s->triangle_count, path, what, err))
+    return sg_memory_check((48.0 + (o->edge_rays ? 44.0 : 0.0)) * o->width * o->height + 150.0 * s->triangle_count,
+                           path, what, err);
+}
+
+/* The materials, the lights and (a sky without a portal) the openings. */
+static bool shading_init(SgRenderer *r, const SgScene *s, const char *path, SgError *err)
+{
+    r->material_count = s->material_count;
+    r->materials = calloc(s->material_count, sizeof *r->materials);
+    if (!r->materials)
+        return sg_fail(err, "%s: out of memory", path);
+    for (uint32_t m = 0; m < s->material_count; m++)
+        material_init(&r->materials[m], &s->materials[m]);
+    if (!light_set_init(&r->lights, s, r->geo.vertices, r->materials, r->opt.importance.light_weight, r->geo.centre,
+                        path, err))
+        return false;
+    if (r->opt.importance.cache && !r->opt.no_openings && r->lights.has_escaping && !attach_openings(r, s, path, err))
+        return false;
+    if (!(light_set_power(&r->lights) > 0.0))
+        return sg_fail(err, "%s: no light the renderer can use (no emissive surface of non-zero area, "
+                            "no LightSource or \"lights\" entry that sends light)", path);
+    return true;
+}
+
+/* `create`: the guide's constructor, NULL: the one o->sampling names. */
+static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, PathGuideCreate create, SgError *err)
+{
+    const char *path = s->path[0] ? s->path : "scene";
+    if (!renderable(s, o, path, err))
         return NULL;
     SgRenderer *r = calloc(1, sizeof *r);
     if (!r)
@@ -167,28 +195,14 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
         sg_renderer_free(r);
         return NULL;
     }
-    r->material_count = s->material_count;
-    r->materials = calloc(s->material_count, sizeof *r->materials);
-    if (!film_init(&r->film, o->width, o->height) || !r->materials ||
-        (o->edge_rays && !(r->seen = seen_light_create(o->width, o->height, o->edge_rays)))) {
+    if (!film_init(&r->film, o->width, o->height) ||
+        (o->edge_rays && !(r->seen = edge_rays_create(o->width, o->height, o->edge_rays)))) {
         sg_renderer_free(r);
         return sg_fail(err, "%s: out of memory", path), NULL;
     }
-    for (uint32_t m = 0; m < s->material_count; m++)
-        material_init(&r->materials[m], &s->materials[m]);
-    if (!light_set_init(&r->lights, s, r->geo.vertices, r->materials, r->opt.importance.light_weight, r->geo.centre,
-                        path, err)) {
+    if (!shading_init(r, s, path, err)) {
         sg_renderer_free(r);
         return NULL;
-    }
-    if (o->importance.cache && !o->no_openings && r->lights.has_escaping && !attach_openings(r, s, path, err)) {
-        sg_renderer_free(r);
-        return NULL;
-    }
-    if (!(light_set_power(&r->lights) > 0.0)) {
-        sg_renderer_free(r);
-        return sg_fail(err, "%s: no light the renderer can use (no emissive surface of non-zero area, "
-                            "no LightSource or \"lights\" entry that sends light)", path), NULL;
     }
     camera_init(&r->camera, &s->camera, r->geo.centre, o->width, o->height);
     r->pool = sg_thread_pool_create(o->threads);
@@ -245,7 +259,7 @@ void sg_renderer_free(SgRenderer *r)
     texture_set_free(r->textures);
     light_set_free(&r->lights);
     pixel_noise_free(r->noise);
-    seen_light_free(r->seen);
+    edge_rays_free(r->seen);
     film_free(&r->film);
     free(r);
 }
@@ -258,28 +272,6 @@ typedef struct PassCtx {
     GuidePass plan;       /* what the guide said of this pass */
     double sample_rays;   /* a sample's cost in rays, from the passes before */
 } PassCtx;
-
-/* The sample's light seen directly, `seen`, made the mean of its own view
- * and of the extra camera rays its pixel takes (render/seen_light.h); the
- * views and the rest of the sample go to the pixel's sums. */
-static Vec3 look_again(SgRenderer *r, const PassCtx *pc, int x, int y, size_t pix, Vec3 L, Vec3 seen, PathStats *st)
-{
-    SeenLight *sl = r->seen;
-    int k = seen_light_rays(sl, pix, pc->sample_rays);
-    Vec3 views = seen;
-    seen_light_add_view(sl, pix, luminance(seen));
-    for (int j = 0; j < k; j++) {
-        float jx, jy;
-        pixel_sampler_view(&pc->sampler, pix, j, SEEN_RAYS_MAX, &jx, &jy);
-        Vec3 v = integrator_seen(&r->integrator, r->camera.pos, camera_ray(&r->camera, x, y, jx, jy), st);
-        seen_light_add_view(sl, pix, luminance(v));
-        views = v3_add(views, v);
-    }
-    if (k)
-        L = v3_add(v3_sub(L, seen), v3_scale(views, 1.0f / (float)(k + 1)));
-    seen_light_add_sample(sl, pix, luminance(L));
-    return L;
-}
 
 static void render_tile(PassCtx *pc, uint64_t index, int thread)
 {
@@ -306,7 +298,8 @@ static void render_tile(PassCtx *pc, uint64_t index, int thread)
             /* what the roulette acts on: the light past the camera ray's own hit, not the edge rays' views */
             Vec3 rest = v3_sub(L, seen);
             if (r->seen)
-                L = look_again(r, pc, x, y, pix, L, seen, &st);
+                L = edge_rays_sample(r->seen, &r->integrator, &r->camera, &pc->sampler, pc->sample_rays, x, y, L,
+                                     seen, &st);
             if (!film_add(&r->film, pix, &L)) {
                 nonfinite++;
                 rest = v3(0, 0, 0);
@@ -345,80 +338,12 @@ static void pass_job(void *vctx, uint64_t index, int thread)
 }
 
 /* Before the first pass the survey looks for the light seen directly, so
- * that its silhouettes are known from the first pass on
- * (render/seen_light.h), in two steps, one job per image row each: one ray
- * a pixel, then the other SEEN_SURVEY - 1 only where that first view
- * differs within the pixel's 3x3 neighbourhood. A silhouette crossing a
- * pixel also crosses between its neighbours' first views; where nothing
- * differs (no light in view, the inside of a lamp or of a flat sky) the
- * other rays would find nothing, and the survey's time is on the render's
- * clock. A sliver that every neighbour's first ray misses is left to the
- * pixel's own samples, as it was before the survey existed. */
-typedef struct SurveyCtx {
-    SgRenderer *r;
-    PixelSampler sampler;
-    float *first; /* per pixel: the first view's luminance (seen->survey_first) */
-    _Atomic uint64_t rays;
-} SurveyCtx;
-
-static float survey_view(SurveyCtx *sc, int x, int y, int j, PathStats *st)
-{
-    SgRenderer *r = sc->r;
-    size_t pix = (size_t)y * r->opt.width + x;
-    float jx, jy;
-    pixel_sampler_survey(&sc->sampler, pix, j, &jx, &jy);
-    float v = luminance(integrator_seen(&r->integrator, r->camera.pos, camera_ray(&r->camera, x, y, jx, jy), st));
-    seen_light_add_view(r->seen, pix, v);
-    return v;
-}
-
-static void survey_first_row(void *vctx, uint64_t row, int thread)
-{
-    (void)thread;
-    SurveyCtx *sc = vctx;
-    PathStats st = {0};
-    int y = (int)row, w = sc->r->opt.width;
-    for (int x = 0; x < w; x++)
-        sc->first[(size_t)y * w + x] = survey_view(sc, x, y, 0, &st);
-    atomic_fetch_add(&sc->rays, st.rays);
-}
-
-/* Whether pixel (x, y)'s first view differs from a neighbour's (exactly:
- * a lamp of one radiance against the dark is two values; a NaN differs). */
-static bool survey_differs(const SurveyCtx *sc, int x, int y)
-{
-    int w = sc->r->opt.width, h = sc->r->opt.height;
-    float v = sc->first[(size_t)y * w + x];
-    for (int dy = -1; dy <= 1; dy++)
-        for (int dx = -1; dx <= 1; dx++) {
-            int nx = x + dx, ny = y + dy;
-            if (nx >= 0 && nx < w && ny >= 0 && ny < h && !(sc->first[(size_t)ny * w + nx] == v))
-                return true;
-        }
-    return false;
-}
-
-static void survey_rest_row(void *vctx, uint64_t row, int thread)
-{
-    (void)thread;
-    SurveyCtx *sc = vctx;
-    PathStats st = {0};
-    int y = (int)row;
-    for (int x = 0; x < sc->r->opt.width; x++)
-        if (survey_differs(sc, x, y))
-            for (int j = 1; j < SEEN_SURVEY; j++)
-                survey_view(sc, x, y, j, &st);
-    atomic_fetch_add(&sc->rays, st.rays);
-}
-
+ * that its silhouettes are known from the first pass on (edge_rays.h). */
 static void survey_views(SgRenderer *r)
 {
-    SurveyCtx sc = {.r = r, .first = r->seen->survey_first};
-    pixel_sampler_init(&sc.sampler, r->opt.seed, 0);
-    sg_thread_pool_run(r->pool, (uint64_t)r->opt.height, survey_first_row, &sc);
-    sg_thread_pool_run(r->pool, (uint64_t)r->opt.height, survey_rest_row, &sc);
-    atomic_fetch_add(&r->rays, atomic_load(&sc.rays));
-    atomic_fetch_add(&r->views, atomic_load(&sc.rays));
+    uint64_t rays = edge_rays_survey(r->seen, &r->integrator, &r->camera, r->opt.seed, r->pool);
+    atomic_fetch_add(&r->rays, rays);
+    atomic_fetch_add(&r->views, rays);
     r->surveyed = true;
 }
 
@@ -427,7 +352,7 @@ void sg_renderer_pass(SgRenderer *r)
     if (r->seen && !r->surveyed)
         survey_views(r);
     if (r->seen && (r->seen_passes < 8 || !(r->seen_passes & (r->seen_passes - 1)) || r->seen_passes % 16 == 0))
-        seen_light_estimate(r->seen, r->seen_passes);
+        edge_rays_estimate(r->seen, r->seen_passes);
     roulette_prepare_pass(r->noise, r->noise_spp, r->pool);
     /* the whole render's pass this one is (this one, unsharded) */
     uint64_t pass = sg_shard_pass(r->opt.shard, r->opt.shard_count, (uint64_t)r->spp);
@@ -455,65 +380,44 @@ int sg_renderer_spp(const SgRenderer *r) { return r->spp; }
 void sg_renderer_image(const SgRenderer *r, float *rgb) { film_image(&r->film, r->spp, rgb); }
 
 const float *sg_renderer_last_pass(const SgRenderer *r) { return r->film.last; }
-uint64_t sg_renderer_nonfinite(const SgRenderer *r) { return atomic_load(&((SgRenderer *)r)->nonfinite); }
-double sg_renderer_guided_fraction(const SgRenderer *r)
-{
-    GuideStats gs;
-    path_guide_stats(r->guide, &gs);
-    return gs.guided_fraction;
-}
 
-size_t sg_renderer_texture_cache(const SgRenderer *r, size_t *images)
-{
-    *images = 0;
-    return r->textures ? texture_set_cache_bytes(r->textures, images) : 0;
-}
-
-uint64_t sg_renderer_rays(const SgRenderer *r) { return atomic_load(&((SgRenderer *)r)->rays); }
-
-double sg_renderer_edge_rays_per_sample(const SgRenderer *r)
+/* per sample of the passes so far (0 before any) */
+static double per_sample(const SgRenderer *r, uint64_t count)
 {
     double samples = (double)r->opt.width * r->opt.height * r->spp;
-    return samples > 0.0 ? (double)atomic_load(&((SgRenderer *)r)->views) / samples : 0.0;
+    return samples > 0.0 ? (double)count / samples : 0.0;
 }
 
-double sg_renderer_branches_per_path(const SgRenderer *r)
+void sg_renderer_stats(const SgRenderer *r, SgRenderStats *stats)
 {
-    double paths = (double)r->opt.width * r->opt.height * r->spp;
-    return paths > 0.0 ? (double)atomic_load(&((SgRenderer *)r)->branches) / paths : 0.0;
-}
-
-int sg_renderer_training_passes(const SgRenderer *r)
-{
+    SgRenderer *m = (SgRenderer *)r; /* the counters are atomics */
     GuideStats gs;
     path_guide_stats(r->guide, &gs);
-    return gs.training_passes;
-}
-
-double sg_renderer_training_seconds(const SgRenderer *r)
-{
-    GuideStats gs;
-    path_guide_stats(r->guide, &gs);
-    return gs.training_seconds;
-}
-
-double sg_renderer_lobe_share(const SgRenderer *r)
-{
-    uint64_t bounces = atomic_load(&((SgRenderer *)r)->bounces);
-    return bounces ? (double)atomic_load(&((SgRenderer *)r)->lobe_bounces) / (double)bounces : 0.0;
-}
-
-double sg_renderer_backface_fraction(const SgRenderer *r)
-{
-    double n = (double)r->opt.width * r->opt.height;
-    return r->spp > 0 ? (double)atomic_load(&((SgRenderer *)r)->backface_hits) / n : 0.0;
+    memset(stats, 0, sizeof *stats);
+    stats->spp = r->spp;
+    stats->rays = atomic_load(&m->rays);
+    stats->nonfinite = atomic_load(&m->nonfinite);
+    double pixels = (double)r->opt.width * r->opt.height;
+    stats->backface_fraction = r->spp > 0 ? (double)atomic_load(&m->backface_hits) / pixels : 0.0;
+    stats->guided_fraction = gs.guided_fraction;
+    uint64_t bounces = atomic_load(&m->bounces);
+    stats->lobe_share = bounces ? (double)atomic_load(&m->lobe_bounces) / (double)bounces : 0.0;
+    stats->training_passes = gs.training_passes;
+    stats->training_updates = gs.training_updates;
+    stats->training_seconds = gs.training_seconds;
+    stats->branches_per_path = per_sample(r, atomic_load(&m->branches));
+    stats->edge_rays_per_sample = per_sample(r, atomic_load(&m->views));
+    if (r->textures)
+        stats->texture_cache_bytes = texture_set_cache_bytes(r->textures, &stats->texture_image_bytes);
 }
 
 void sg_renderer_report(const SgRenderer *r, SgRenderReport *report)
 {
     GuideStats gs;
     path_guide_stats(r->guide, &gs);
-    gs.lobe_share = sg_renderer_lobe_share(r);
+    SgRenderStats stats;
+    sg_renderer_stats(r, &stats);
+    gs.lobe_share = stats.lobe_share;
     report->roulette = r->noise ? SG_ROULETTE_LEARNED : SG_ROULETTE_ALBEDO;
     snprintf(report->alpha, sizeof report->alpha, "%g", r->opt.alpha);
     report->guide[0] = '\0';
@@ -559,13 +463,28 @@ void sg_renderer_freeze(SgRenderer *r)
     atomic_store(&r->views, 0);
     /* the edge rays start afresh, as in a render from the field's file */
     if (r->seen)
-        seen_light_clear(r->seen);
+        edge_rays_clear(r->seen);
     r->surveyed = false;
     r->seen_passes = 0;
     r->path_rays = r->path_samples = 0;
     /* the roulette starts from all it knows of the pixels */
     if (r->noise && r->noise_spp > 1)
         pixel_noise_estimate(r->noise, r->noise_spp, r->pool);
+}
+
+void sg_render_options_summary(const SgRenderOptions *o, char *buf, size_t size)
+{
+    char alpha[32];
+    if (o->alpha == SG_ALPHA_LEARNED)
+        snprintf(alpha, sizeof alpha, "learned");
+    else
+        snprintf(alpha, sizeof alpha, "%.9g", o->alpha);
+    /* openpgl: the mode draws the paths the field learns from; no openings:
+     * the sky's light samples shape what a learner sees */
+    bool pgl = o->sampling == SG_SAMPLING_OPENPGL;
+    snprintf(buf, size, "%dx%d, max depth %d, exponent %.9g, alpha %s, roulette %s%s%s%s", o->width, o->height,
+             o->max_depth, o->lobe_exponent, alpha, sg_roulette_name(o->roulette), pgl ? ", openpgl " : "",
+             pgl ? sg_openpgl_mode_name(o->openpgl_mode) : "", o->no_openings ? ", no openings" : "");
 }
 
 /* What a field is for: the mode, the scene, the cache, and the options
@@ -577,18 +496,7 @@ static void field_identity(const SgRenderer *r, FieldIdentity *id)
     snprintf(id->mode, sizeof id->mode, "%s", sg_sampling_name(o->sampling));
     id->scene_hash = r->scene_hash;
     id->cache_hash = o->importance.cache ? sg_cache_checksum(o->importance.cache) : 0;
-    char alpha[32];
-    if (o->alpha == SG_ALPHA_LEARNED)
-        snprintf(alpha, sizeof alpha, "learned");
-    else
-        snprintf(alpha, sizeof alpha, "%.9g", o->alpha);
-    /* openpgl: the mode draws the paths the field learns from; no openings:
-     * the sky's light samples shape what a learner sees */
-    bool pgl = o->sampling == SG_SAMPLING_OPENPGL;
-    snprintf(id->recipe, sizeof id->recipe, "%dx%d, max depth %d, exponent %.9g, alpha %s, roulette %s%s%s%s",
-             o->width, o->height, o->max_depth, o->lobe_exponent, alpha, sg_roulette_name(o->roulette),
-             pgl ? ", openpgl " : "", pgl ? sg_openpgl_mode_name(o->openpgl_mode) : "",
-             o->no_openings ? ", no openings" : "");
+    sg_render_options_summary(o, id->recipe, sizeof id->recipe);
 }
 
 bool sg_renderer_write_field(const SgRenderer *r, const char *path, SgError *err)
@@ -596,26 +504,10 @@ bool sg_renderer_write_field(const SgRenderer *r, const char *path, SgError *err
     if (!r->guide->ops->field_store)
         return sg_fail(err, "%s: --sampling %s learns nothing: it has no field to store", path,
                        sg_sampling_name(r->opt.sampling));
-    FieldFile f = {0};
-    field_identity(r, &f.id);
-    f.id.training_spp = (uint32_t)r->training_passes;
-    FieldSection *guide = field_file_add_section(&f, "guide");
-    bool ok = r->guide->ops->field_store(r->guide, &guide->bytes);
-    if (ok && r->noise) { /* the learned roulette's knowledge of the pixels */
-        FieldSection *noise = field_file_add_section(&f, "pixel-noise");
-        size_t pixels = (size_t)r->opt.width * r->opt.height;
-        int32_t spp = r->noise_spp;
-        ok = field_bytes_put(&noise->bytes, &spp, sizeof spp) &&
-             field_bytes_put(&noise->bytes, r->noise->sum, pixels * sizeof *r->noise->sum) &&
-             field_bytes_put(&noise->bytes, r->noise->sum_sq, pixels * sizeof *r->noise->sum_sq);
-    }
-    if (!ok) {
-        field_file_free(&f);
-        return sg_fail(err, "%s: out of memory for the field", path);
-    }
-    ok = field_file_write(path, &f, err);
-    field_file_free(&f);
-    return ok;
+    FieldIdentity id;
+    field_identity(r, &id);
+    id.training_spp = (uint32_t)r->training_passes;
+    return field_file_save(path, &id, r->guide, r->noise, r->noise_spp, err);
 }
 
 bool sg_renderer_read_field(SgRenderer *r, const char *path, SgError *err)
@@ -625,34 +517,11 @@ bool sg_renderer_read_field(SgRenderer *r, const char *path, SgError *err)
                        sg_sampling_name(r->opt.sampling));
     if (r->spp || r->noise_spp)
         return sg_fail(err, "%s: a field is read before the first pass", path);
-    FieldFile f;
-    if (!field_file_read(path, &f, err))
-        return false;
     FieldIdentity want;
     field_identity(r, &want);
-    bool ok = field_identity_check(path, &f.id, &want, err);
-    FieldSection *guide = field_file_section(&f, "guide");
-    FieldSection *noise = field_file_section(&f, "pixel-noise");
-    size_t pixels = (size_t)r->opt.width * r->opt.height;
-    size_t noise_size = sizeof(int32_t) + 2 * pixels * sizeof(double);
-    if (ok && (!guide || (r->noise != NULL) != (noise != NULL) || (noise && noise->bytes.size != noise_size)))
-        ok = sg_fail(err, "%s: corrupt: its sections are not those of a --sampling %s field", path, f.id.mode);
-    if (ok) {
-        FieldReader in = {guide->bytes.data, guide->bytes.size, 0};
-        SgError e = {0};
-        if (!r->guide->ops->field_load(r->guide, &in, &e) || in.at != in.size)
-            ok = sg_fail(err, "%s: %s", path, e.message[0] ? e.message : "its guide's part is corrupt");
-    }
-    if (ok && noise) {
-        int32_t spp;
-        memcpy(&spp, noise->bytes.data, sizeof spp);
-        memcpy(r->noise->sum, noise->bytes.data + sizeof spp, pixels * sizeof(double));
-        memcpy(r->noise->sum_sq, noise->bytes.data + sizeof spp + pixels * sizeof(double), pixels * sizeof(double));
-        r->noise_spp = spp > 0 ? spp : 0;
-    }
-    field_file_free(&f);
-    if (ok && r->noise && r->noise_spp > 1)
+    if (!field_file_load(path, &want, r->guide, r->noise, &r->noise_spp, err))
+        return false;
+    if (r->noise && r->noise_spp > 1)
         pixel_noise_estimate(r->noise, r->noise_spp, r->pool);
-    return ok;
+    return true;
 }
-

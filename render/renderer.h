@@ -6,6 +6,7 @@
 #define SG_RENDERER_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "error.h"
@@ -18,13 +19,13 @@ extern "C" {
 #endif
 
 /* The sampling modes, one line each: its name in the enum, on the command
- * line, and the guide that implements it (render/guides/guide_FILE.c,
- * which holds everything else about the mode: SgSamplingMode below). A new
- * mode is one file there and one line here. */
-#define SG_SAMPLING_MODES(X)            \
-    X(BSDF, bsdf, bsdf)                 \
-    X(SKELETON, skeleton, skeleton_rule) \
-    X(GUIDED, guided, mixture)          \
+ * line, and the guide that implements it (render/guides/guide_FILE.c, FILE
+ * the mode's name; it holds everything else about the mode: SgSamplingMode
+ * below). A new mode is one file there and one line here. */
+#define SG_SAMPLING_MODES(X)        \
+    X(BSDF, bsdf, bsdf)             \
+    X(SKELETON, skeleton, skeleton) \
+    X(GUIDED, guided, guided)       \
     X(OPENPGL, openpgl, openpgl)
 
 typedef enum SgSampling {
@@ -139,14 +140,22 @@ typedef struct SgRenderOptions {
     bool no_openings;
     /* at a pixel where the light the camera sees directly varies (a light's
      * or the sky's silhouette), the most extra camera rays a sample takes
-     * to look for it (render/seen_light.h); default SEEN_RAYS_MAX (16), 0: none */
+     * to look for it (render/edge_rays.h); default EDGE_RAYS_MAX (16), 0: none */
     int edge_rays;
 } SgRenderOptions;
 
-/* Defaults: image size and depth from the scene (320x240, 8 when not
- * given), bsdf sampling, seed 0, every core, lobe exponent 16, alpha
- * learned, learned roulette, shard 0 of 1, 16 edge rays. */
+/* Defaults: image size and depth from the scene (320x240 and
+ * SG_MAX_DEPTH_DEFAULT when not given), bsdf sampling, seed 0, every core,
+ * lobe exponent 16, alpha learned, learned roulette, shard 0 of 1, 16 edge
+ * rays. */
 void sg_render_options_default(SgRenderOptions *o, const SgScene *scene);
+
+/* The options that shape what a render draws and learns, in words: image
+ * size, max depth, lobe exponent, alpha, roulette, openpgl's mode, the
+ * openings (not the mode, seed, shard, threads or passes). The one summary
+ * of them: a field file keeps it, refusing a render made otherwise, and a
+ * shard's recipe hashes it, bin/merge refusing shards made otherwise. */
+void sg_render_options_summary(const SgRenderOptions *o, char *buf, size_t size);
 
 typedef struct SgRenderer SgRenderer;
 
@@ -159,39 +168,45 @@ void sg_renderer_free(SgRenderer *r);
 /* One more sample in every pixel. */
 void sg_renderer_pass(SgRenderer *r);
 int sg_renderer_spp(const SgRenderer *r);
-/* Extra camera rays a sample took, on average, where the light seen
- * directly varies (SgRenderOptions.edge_rays; since the last freeze). */
-double sg_renderer_edge_rays_per_sample(const SgRenderer *r);
 /* Mean radiance per pixel, linear RGB, width * height * 3 floats. */
 void sg_renderer_image(const SgRenderer *r, float *rgb);
 /* The samples of the last pass alone (for variance estimates in tests). */
 const float *sg_renderer_last_pass(const SgRenderer *r);
-/* Samples that came out NaN or infinite (they count as zero, never reach the image). */
-uint64_t sg_renderer_nonfinite(const SgRenderer *r);
-/* Fraction of the first pass's camera rays that hit the back of a surface:
- * near 1 means the camera is inside a solid. */
-double sg_renderer_backface_fraction(const SgRenderer *r);
-/* Guided with a learned alpha: the share of the learner's bounces that
- * fall where the mixture now uses the lobe (alpha < 1); -1 otherwise. */
-double sg_renderer_guided_fraction(const SgRenderer *r);
-/* The share of the diffuse and glossy bounces drawn so far whose direction
- * the guide's lobe drew (the rest: the BSDF's sampler); 0 before any. */
-double sg_renderer_lobe_share(const SgRenderer *r);
-/* A learned mode: the passes whose paths trained the field so far (the
- * first SgRenderOptions.training_passes; openpgl's default is
- * SG_OPENPGL_TRAINING_PASSES: Cycles' 128 updates, the first from 1 pass,
- * the second from 2, the rest from 4), and the seconds its updates took;
- * 0 in other modes. */
+/* What the passes so far did, in numbers (since the last freeze). */
+typedef struct SgRenderStats {
+    int spp;                     /* the passes */
+    uint64_t rays;               /* rays traced: camera, bounce, shadow and edge rays */
+    uint64_t nonfinite;          /* samples that came out NaN or infinite (counted as zero, never in the image) */
+    /* the share of the first pass's camera rays that hit the back of a
+     * surface: near 1 means the camera is inside a solid */
+    double backface_fraction;
+    /* guided with a learned alpha: the share of the learner's bounces that
+     * fall where the mixture now uses the lobe (alpha < 1); -1 otherwise */
+    double guided_fraction;
+    /* the share of the diffuse and glossy bounces whose direction the
+     * guide's lobe drew (the rest: the BSDF's sampler); 0 before any */
+    double lobe_share;
+    /* a learned mode: the passes whose paths trained the field (the first
+     * SgRenderOptions.training_passes; openpgl's default is
+     * SG_OPENPGL_TRAINING_PASSES) and the seconds its updates took; 0 in
+     * other modes */
+    int training_passes;
+    int training_updates;        /* openpgl: the field's updates from those passes */
+    double training_seconds;
+    double branches_per_path;    /* branches the learned roulette split off, per camera path */
+    /* extra camera rays a sample took, on average, where the light seen
+     * directly varies (SgRenderOptions.edge_rays) */
+    double edge_rays_per_sample;
+    /* bytes of texels the texture cache holds, and the images' full size
+     * (0 and 0 without textures) */
+    size_t texture_cache_bytes, texture_image_bytes;
+} SgRenderStats;
+
+/* Openpgl's training by default: Cycles' 128 updates, the first from 1
+ * pass, the second from 2, the rest from 4. */
 #define SG_OPENPGL_TRAINING_PASSES (1 + 2 + 4 * 126)
-int sg_renderer_training_passes(const SgRenderer *r);
-double sg_renderer_training_seconds(const SgRenderer *r);
-/* Bytes of texels the texture cache holds; *images: the images' full size
- * (0 and 0 without textures). */
-size_t sg_renderer_texture_cache(const SgRenderer *r, size_t *images);
-/* Rays traced so far (camera, bounce and shadow rays). */
-uint64_t sg_renderer_rays(const SgRenderer *r);
-/* Branches the learned roulette split off, per camera path, so far. */
-double sg_renderer_branches_per_path(const SgRenderer *r);
+
+void sg_renderer_stats(const SgRenderer *r, SgRenderStats *stats);
 
 /* A learned mode's training as a step of its own (render --field-out,
  * --field), so that a render's clock counts no learning and the shards of

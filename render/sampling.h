@@ -1,7 +1,9 @@
-/* Direction sampling routines of the renderer, each with its pdf (solid
- * angle measure, over the whole sphere). Vectors are unit length. Every
- * sample routine draws from the density its pdf function returns: the
- * chi-square tests in tests/test_render_sampling.c hold them to it. */
+/* Sampling routines of the renderer: directions, each with its pdf (solid
+ * angle measure, over the whole sphere; vectors are unit length), and
+ * piecewise-constant distributions over bins (lights by power, a sky's
+ * texels, the learner's histograms). Every sample routine draws from the
+ * density its pdf function returns: the chi-square tests in
+ * tests/test_render_sampling.c hold them to it. */
 #ifndef SG_RENDER_SAMPLING_H
 #define SG_RENDER_SAMPLING_H
 
@@ -181,6 +183,72 @@ static inline float sg_pdf_folded_lobe(Vec3 a, Vec3 n, float p, Vec3 w)
     SgFoldedLobe l = sg_folded_lobe(a, n, p);
     float c1, c2;
     return sg_pdf_folded_lobe_at(&l, w, v3_dot(w, n), &c1, &c2);
+}
+
+/* ---- piecewise-constant distributions -------------------------------------
+ * A distribution over n bins held as its running sums: cdf[i] is the weight
+ * of bins 0..i, cdf[n - 1] the total (1 where normalized). Doubles for the
+ * lights and the sky, floats for the learner's histograms: one search. */
+typedef struct SgPiecewise1D {
+    const double *cdf;
+    uint32_t n;
+} SgPiecewise1D;
+
+/* A 2D distribution over width x height cells, row by row: the rows'
+ * running sums (normalized), then within each row its cells' (normalized). */
+typedef struct SgPiecewise2D {
+    const double *row_cdf; /* height */
+    const double *col_cdf; /* height x width */
+    uint32_t width, height;
+} SgPiecewise2D;
+
+/* The bin i with cdf[i - 1] <= u < cdf[i] (binary search; the last bin
+ * where u is past every sum). */
+#define SG_PIECEWISE_SEARCH(cdf, n, u)          \
+    do {                                        \
+        uint32_t lo_ = 0, hi_ = (n) - 1;        \
+        while (lo_ < hi_) {                     \
+            uint32_t mid_ = (lo_ + hi_) / 2;    \
+            if ((u) < (cdf)[mid_])              \
+                hi_ = mid_;                     \
+            else                                \
+                lo_ = mid_ + 1;                 \
+        }                                       \
+        return lo_;                             \
+    } while (0)
+
+static inline uint32_t sg_piecewise_pick(const double *cdf, uint32_t n, double u) { SG_PIECEWISE_SEARCH(cdf, n, u); }
+static inline uint32_t sg_piecewise_pickf(const float *cdf, uint32_t n, float u) { SG_PIECEWISE_SEARCH(cdf, n, u); }
+
+/* Bin i's weight. */
+static inline double sg_piecewise_mass(const double *cdf, uint32_t i) { return cdf[i] - (i ? cdf[i - 1] : 0.0); }
+static inline float sg_piecewise_massf(const float *cdf, uint32_t i) { return cdf[i] - (i ? cdf[i - 1] : 0.0f); }
+
+/* The bin u falls in, and in *within where in it u fell ([0, 1]; 0.5 in a
+ * bin of no weight). */
+static inline uint32_t sg_piecewise1d_sample(SgPiecewise1D d, double u, double *within)
+{
+    uint32_t i = sg_piecewise_pick(d.cdf, d.n, u);
+    double lo = i ? d.cdf[i - 1] : 0.0, span = d.cdf[i] - lo;
+    *within = span > 0.0 ? (u - lo) / span : 0.5;
+    return i;
+}
+
+static inline uint32_t sg_piecewise_samplef(const float *cdf, uint32_t n, float u, float *within)
+{
+    uint32_t i = sg_piecewise_pickf(cdf, n, u);
+    float lo = i ? cdf[i - 1] : 0.0f, span = cdf[i] - lo;
+    *within = span > 0.0f ? (u - lo) / span : 0.5f;
+    return i;
+}
+
+/* The cell (x, y) (u1 picks the row, u2 the cell within it), and where in
+ * it the two fell (fx, fy, as sg_piecewise1d_sample's `within`). */
+static inline void sg_piecewise2d_sample(const SgPiecewise2D *d, double u1, double u2, uint32_t *x, uint32_t *y,
+                                         double *fx, double *fy)
+{
+    *y = sg_piecewise1d_sample((SgPiecewise1D){d->row_cdf, d->height}, u1, fy);
+    *x = sg_piecewise1d_sample((SgPiecewise1D){d->col_cdf + (size_t)*y * d->width, d->width}, u2, fx);
 }
 
 #ifdef __cplusplus

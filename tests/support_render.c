@@ -1,8 +1,10 @@
 #include "support_render.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "color.h"
 #include "memory.h"
@@ -245,4 +247,18 @@ SgRenderOptions sgt_options(const SgScene *s, SgSampling mode)
     o.threads = 2;
     o.seed = 7;
     return o;
+}
+
+SgScene *sgt_scene_from_text(const char *name, const char *text, SgError *err)
+{
+    char path[256];
+    snprintf(path, sizeof path, "/tmp/sg_test_scene_%d_%s", (int)getpid(), name);
+    FILE *f = fopen(path, "w");
+    if (!f)
+        return sg_fail(err, "%s: cannot write the test scene", path), NULL;
+    fputs(text, f);
+    fclose(f);
+    SgScene *s = sg_scene_load(path, err);
+    remove(path);
+    return s;
 }

@@ -42,6 +42,24 @@ bool sgt_fixed_point_guide(void *ctx, const double p[3], uint32_t light, double 
 typedef struct SgtSampleMean {
     double mean, std_error;
 } SgtSampleMean;
+/* The renderer's statistics (sg_renderer_stats), as a value. */
+static inline SgRenderStats sgt_stats(const SgRenderer *r)
+{
+    SgRenderStats st;
+    sg_renderer_stats(r, &st);
+    return st;
+}
+
+/* The scene a file of `text` named `name` (its extension says the format)
+ * loads as; NULL with err set where the loader refuses it. */
+SgScene *sgt_scene_from_text(const char *name, const char *text, SgError *err);
+
+/* A pbrt-v4 scene's start: an 8x8 camera over a 2x2 floor, after WorldBegin. */
+#define SGT_PBRT_ROOM                                                                                             \
+    "Scale -1 1 1\nLookAt 0 1 -3  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\nFilm \"rgb\" "     \
+    "\"integer xresolution\" 8 \"integer yresolution\" 8\nWorldBegin\n"                                       \
+    "Shape \"trianglemesh\" \"point3 P\" [-1 0 -1 1 0 -1 1 0 1 -1 0 1] \"integer indices\" [0 1 2 0 2 3]\n"
+
 SgtSampleMean sgt_passes_mean(SgRenderer *r, int passes, size_t pixels);
 
 /* s's default options for `mode`, on 2 threads with seed 7 (the tests' usual). */

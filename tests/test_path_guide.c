@@ -188,7 +188,7 @@ static FurnaceResult furnace(float pdf_error, int passes, int threads)
     SgRenderer *r = sg_renderer_create_with_guide(s, &o, uniform_create, &err);
     cr_assert_not_null(r, "%s", err.message);
     SgtSampleMean m = sgt_passes_mean(r, passes, (size_t)o.width * o.height);
-    FurnaceResult fr = {.mean = m.mean, .std_error = m.std_error, .guide_share = sg_renderer_lobe_share(r)};
+    FurnaceResult fr = {.mean = m.mean, .std_error = m.std_error, .guide_share = sgt_stats(r).lobe_share};
     sg_renderer_free(r);
     sgt_scene_free(s);
     return fr;

@@ -126,3 +126,63 @@ Test(pbrt_lights, area_sphere) { check_against_pbrt("area-sphere"); }
 Test(pbrt_lights, area_cylinder) { check_against_pbrt("area-cylinder"); }
 Test(pbrt_lights, room_window) { check_against_pbrt("room-window"); }
 Test(pbrt_lights, room_portal) { check_against_pbrt("room-portal"); }
+
+/* ---- the pbrt loader's reading of the lights ----------------------------------- */
+
+/* sgt_scene_from_text that must succeed. */
+static SgScene *load_ok(const char *name, const char *text)
+{
+    SgError err = {0};
+    SgScene *s = sgt_scene_from_text(name, text, &err);
+    cr_assert(s, "%s", err.message);
+    return s;
+}
+
+Test(pbrt_lights, pbrt_light_sources_read_as_pbrt_v4_does)
+{
+    SgScene *s = load_ok("sources.pbrt",
+                           SGT_PBRT_ROOM "LightSource \"point\" \"rgb I\" [1 2 3] \"float power\" 100 \"point3 from\" [0 2 0]\n"
+                                     "AttributeBegin\nTranslate 1 0 0\n"
+                                     "LightSource \"spot\" \"rgb I\" [1 1 1] \"float scale\" 2 \"float coneangle\" 40 "
+                                     "\"float conedeltaangle\" 10 \"point3 from\" [0 3 0] \"point3 to\" [0 0 0]\n"
+                                     "AttributeEnd\n"
+                                     "LightSource \"distant\" \"rgb L\" [1 1 1] \"float illuminance\" 5 "
+                                     "\"point3 from\" [0 1 1] \"point3 to\" [0 0 0]\n"
+                                     "Rotate -90 1 0 0\n"
+                                     "LightSource \"infinite\" \"rgb L\" [0.5 0.5 0.5] \"float scale\" 2 "
+                                     "\"point3 portal\" [-1 -1 2  1 -1 2  1 1 2  -1 1 2]\n");
+    cr_assert_eq(s->light_source_count, 4);
+    const SgLightSource *p = &s->light_sources[0], *spot = &s->light_sources[1], *sun = &s->light_sources[2],
+                        *sky = &s->light_sources[3];
+    cr_expect(p->kind == SG_LIGHT_POINT && fabs(p->position[1] - 2) < 1e-12);
+    cr_expect(fabsf(p->rgb[2] - (float)(3 * 100 / (4 * M_PI))) < 1e-4f, "power over 4 pi: %g", p->rgb[2]);
+    cr_expect(spot->kind == SG_LIGHT_SPOT && fabs(spot->position[0] - 1) < 1e-12 && fabs(spot->direction[1] + 1) < 1e-12);
+    cr_expect(fabs(spot->cos_cone - cos(40 * M_PI / 180)) < 1e-12 && fabs(spot->cos_falloff_start - cos(30 * M_PI / 180)) < 1e-12);
+    cr_expect(spot->rgb[0] == 2.0f);
+    cr_expect(sun->kind == SG_LIGHT_DISTANT && sun->rgb[0] == 5.0f);
+    cr_expect(fabs(sun->direction[1] + sqrt(0.5)) < 1e-9 && fabs(sun->direction[2] + sqrt(0.5)) < 1e-9);
+    cr_expect(sky->kind == SG_LIGHT_INFINITE && sky->rgb[0] == 1.0f && sky->has_portal);
+    /* Rotate -90 about x takes light space's z (up) to world +y */
+    cr_expect(fabs(sky->light_to_world[1][2] - 1) < 1e-9, "light z to world y: %g", sky->light_to_world[1][2]);
+    /* but the portal's points are world space, whatever the transform, as
+     * pbrt-v4 reads them (its lights.cpp maps them by RenderFromWorld) */
+    cr_expect(fabs(sky->portal[0][0] + 1) < 1e-9 && fabs(sky->portal[0][1] + 1) < 1e-9 && fabs(sky->portal[0][2] - 2) < 1e-9,
+              "portal in world space: %g %g %g", sky->portal[0][0], sky->portal[0][1], sky->portal[0][2]);
+    sg_scene_free(s);
+}
+
+Test(pbrt_lights, pbrt_disk_lamp_has_its_true_area)
+{
+    SgScene *s = load_ok("disk.pbrt",
+                           SGT_PBRT_ROOM "AttributeBegin\nTranslate 0 2 0\nRotate 90 1 0 0\n"
+                                     "AreaLightSource \"diffuse\" \"rgb L\" [4 4 4]\n"
+                                     "Shape \"disk\" \"float radius\" 0.25\nAttributeEnd\n"
+                                     "Shape \"sphere\" \"float radius\" 0.3\nShape \"cylinder\" \"float radius\" 0.1\n");
+    cr_assert_eq(s->light_count, 1);
+    cr_expect(fabs(s->lights[0].area - M_PI * 0.0625) < 1e-9, "disk area %.12g", s->lights[0].area);
+    /* Rotate 90 about x takes the disk's +z to -y: it shines down */
+    cr_expect(s->lights[0].normal[1] < -0.999, "disk normal %g", s->lights[0].normal[1]);
+    cr_expect_eq(s->warning_count, 0, "no shape left out: %s", s->warning_count ? s->warnings[0] : "");
+    cr_expect_eq(s->degenerate_dropped, 0, "the meshes hold no zero-area triangle (a sphere's poles)");
+    sg_scene_free(s);
+}

@@ -11,7 +11,7 @@
 
 #include "../render/guides/openpgl_field.h"
 #include "../render/renderer.h"
-#include "../render/seen_light.h"
+#include "../render/edge_rays.h"
 #include "support_files.h"
 #include "support_importance.h"
 #include "support_render.h"
@@ -116,7 +116,7 @@ Test(render_field, guided_with_albedo_roulette_round_trips, .timeout = 120)
 Test(render_field, openpgl_round_trips_bit_for_bit, .timeout = 120) { field_round_trip(SG_SAMPLING_OPENPGL, 6, false); }
 
 /* A room whose back wall holds a light with an edge through a column of
- * pixels: those pixels take extra camera rays (render/seen_light.h), chosen
+ * pixels: those pixels take extra camera rays (render/edge_rays.h), chosen
  * from the render's own survey and samples, never from the training's: the
  * renderer that trained the field and one that reads it back render the
  * same image, bit for bit. */
@@ -150,13 +150,13 @@ Test(render_field, a_lights_edge_in_view_renders_the_same_from_a_field_read_back
     cr_assert(sg_renderer_write_field(a, f1, &err), "%s", err.message);
     sg_renderer_freeze(a);
     float *ia = render_passes(a, &o, 12);
-    double rays = sg_renderer_edge_rays_per_sample(a);
+    double rays = sgt_stats(a).edge_rays_per_sample;
     SgRenderer *b = renderer(s, &o);
     cr_assert(sg_renderer_read_field(b, f1, &err), "%s", err.message);
     float *ib = render_passes(b, &o, 12);
     cr_log_info("light's edge from a field: %.3f extra camera rays a sample", rays);
-    cr_assert(rays > (double)SEEN_SURVEY / 12.0, "the edge took no extra rays (%g a sample)", rays);
-    cr_assert_float_eq(sg_renderer_edge_rays_per_sample(b), rays, 1e-12, "the two renders took other edge rays");
+    cr_assert(rays > (double)EDGE_RAYS_SURVEY / 12.0, "the edge took no extra rays (%g a sample)", rays);
+    cr_assert_float_eq(sgt_stats(b).edge_rays_per_sample, rays, 1e-12, "the two renders took other edge rays");
     cr_assert_eq(memcmp(ia, ib, sizeof *ia * 3 * (size_t)o.width * o.height), 0,
                  "a field read back renders another image where a light's edge is in view");
     free(ia);
@@ -177,14 +177,14 @@ Test(render_field, the_edge_rays_leave_the_paths_as_they_were, .timeout = 120)
     double branches[2], path_rays[2], edge[2];
     for (int with = 0; with < 2; with++) {
         SgRenderOptions o = field_options(s, SG_SAMPLING_GUIDED, 4);
-        o.edge_rays = with ? SEEN_RAYS_MAX : 0;
+        o.edge_rays = with ? EDGE_RAYS_MAX : 0;
         SgRenderer *r = renderer(s, &o);
         const int passes = 40; /* splitting from pass 16 */
         free(render_passes(r, &o, passes));
         double samples = (double)o.width * o.height * passes;
-        branches[with] = sg_renderer_branches_per_path(r);
-        edge[with] = sg_renderer_edge_rays_per_sample(r);
-        path_rays[with] = (double)sg_renderer_rays(r) - edge[with] * samples;
+        branches[with] = sgt_stats(r).branches_per_path;
+        edge[with] = sgt_stats(r).edge_rays_per_sample;
+        path_rays[with] = (double)sgt_stats(r).rays - edge[with] * samples;
         sg_renderer_free(r);
     }
     cr_log_info("guided, learned roulette: %.4f / %.4f branches a path, %.0f / %.0f path rays, %.3f edge rays a "

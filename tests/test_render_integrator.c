@@ -11,7 +11,6 @@
 #include "scene_builder.h"
 #include "../render/guides/openpgl_field.h"
 #include "../render/renderer.h"
-#include "../render/seen_light.h"
 #include "support_render.h"
 
 typedef struct Stats {
@@ -56,9 +55,9 @@ static Stats render_stats(SgRenderer *r, const SgRenderOptions *o, int spp, int 
             st.min_pixel = fmin(st.min_pixel, v);
             st.max_pixel = fmax(st.max_pixel, v);
         }
-    st.nonfinite = sg_renderer_nonfinite(r);
-    st.branches = sg_renderer_branches_per_path(r);
-    st.lobe_share = sg_renderer_lobe_share(r);
+    st.nonfinite = sgt_stats(r).nonfinite;
+    st.branches = sgt_stats(r).branches_per_path;
+    st.lobe_share = sgt_stats(r).lobe_share;
     free(img);
     return st;
 }
@@ -164,7 +163,7 @@ static void furnace_run(const FurnaceCase *fc)
     SgRenderer *r = sg_renderer_create(s, &o, &err);
     cr_assert_not_null(r, "%s", err.message);
     Stats st = render_stats(r, &o, spp, 0, 0, o.width, o.height);
-    double lobe = sg_renderer_lobe_share(r);
+    double lobe = sgt_stats(r).lobe_share;
     sg_renderer_free(r);
     const char *name = sg_sampling_name(fc->mode);
     cr_log_info("furnace %s alpha %g scale %g: mean %.5f %.5f %.5f +- %.5f, pixels in [%.3f, %.3f], "
@@ -373,7 +372,7 @@ static Stats floor_in_glowing_box_lit(SgSampling mode, const SgMaterial *floor, 
     SgRenderer *r = sg_renderer_create(s, &o, &err);
     cr_assert_not_null(r, "%s", err.message);
     Stats st = render_stats(r, &o, spp, 0, 0, o.width, o.height);
-    *lobe_share = sg_renderer_lobe_share(r);
+    *lobe_share = sgt_stats(r).lobe_share;
     sg_renderer_free(r);
     sgt_scene_free(s);
     return st;
@@ -640,145 +639,6 @@ Test(render_integrator, emitter_in_a_glass_slab)
     sgt_scene_free(s);
 }
 
-/* A light's edge through the middle of pixel column 3 of an 8x8 image,
- * over `passes` passes with up to `edge_rays` extra camera
- * rays a sample: column 3's values (8 of them) to `col`, extra rays a
- * sample to *per_sample; every other pixel must be exact. */
-static void render_edge_column(int edge_rays, uint64_t seed, int passes, double col[8], double *per_sample)
-{
-    SgScene *s = sgt_scene_new();
-    const float black[3] = {0, 0, 0}, glow[3] = {1, 1, 1};
-    uint32_t lm = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, glow);
-    const int w = 8;
-    const double fov = 40.0, t = tan(fov * M_PI / 360.0);
-    const double edge = (2.0 * 3.5 / w - 1.0) * t;
-    const double q[4][3] = {{edge, -10, -1}, {10, -10, -1}, {10, 10, -1}, {edge, 10, -1}};
-    sgt_add_quad(s, q, lm);
-    const double pos[3] = {0, 0, 0}, at[3] = {0, 0, -1}, up[3] = {0, 1, 0};
-    sgt_set_camera(s, pos, at, up, fov, w, w);
-    sgt_finish(s);
-    SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.max_depth = 1;
-    o.seed = seed;
-    o.edge_rays = edge_rays;
-    SgError err = {0};
-    SgRenderer *r = sg_renderer_create(s, &o, &err);
-    cr_assert_not_null(r, "%s", err.message);
-    for (int p = 0; p < passes; p++)
-        sg_renderer_pass(r);
-    float img[3 * 8 * 8];
-    sg_renderer_image(r, img);
-    *per_sample = sg_renderer_edge_rays_per_sample(r);
-    sg_renderer_free(r);
-    for (int y = 0; y < w; y++)
-        for (int x = 0; x < w; x++) {
-            double v = img[3 * (y * w + x)];
-            if (x == 3)
-                col[y] = v;
-            else
-                cr_assert_float_eq(v, x < 3 ? 0.0 : 1.0, 1e-6, "pixel (%d, %d) is %g", x, y, v);
-        }
-    sgt_scene_free(s);
-}
-
-/* A light's edge through the middle of a column of pixels: each of them
- * sees the light over exactly half its area, so its value is 0.5 Le. With
- * independent jitter its error after n passes would be 0.5 Le / sqrt(n)
- * (0.031 at 256); the passes' stratified jitter must do far better on
- * every one of them (render_tile's pixel_jitter), the edge rays off (the
- * passes' own rays alone; render/seen_light.h: the test below). */
-Test(render_integrator, a_lights_edge_converges_faster_than_independent_jitter)
-{
-    const int passes = 256;
-    double col[8], per_sample, worst = 0.0;
-    render_edge_column(0, 3, passes, col, &per_sample);
-    for (int y = 0; y < 8; y++)
-        worst = fmax(worst, fabs(col[y] - 0.5));
-    double independent = 0.5 / sqrt((double)passes);
-    cr_log_info("light's edge: worst pixel off by %.4f after %d passes (independent jitter: %.4f typical)", worst,
-                passes, independent);
-    cr_assert_lt(worst, independent / 3, "the edge's pixels are off by up to %.4f", worst);
-}
-
-/* The edge's pixels see a light over half their area and nothing else
- * varies in the image: the survey finds them, and each of their samples
- * takes extra camera rays (the most until the image's noise is known, then
- * as many as that noise makes worth it), the other pixels none
- * (render/seen_light.h). Their
- * error falls well below what the sample's own stratified ray leaves, and
- * over 16 seeds their mean is 0.5 within its standard error (a view
- * weighted wrong, k views for k + 1, say, would be off by 3%). */
-Test(render_integrator, a_lights_edge_takes_extra_camera_rays)
-{
-    const int passes = 32, seeds = 16;
-    double sq[2] = {0, 0}, sum = 0.0, sum2 = 0.0;
-    for (int with = 0; with < 2; with++)
-        for (int k = 0; k < seeds; k++) {
-            double col[8], per_sample;
-            render_edge_column(with ? 16 : 0, (uint64_t)k + 1, passes, col, &per_sample);
-            /* the survey's first ray a pixel and the rest in columns 2 to 4 (the
-             * first views differ there: dark, either, lit), then up to 16 a
-             * sample in column 3 alone */
-            double survey = (64.0 + (SEEN_SURVEY - 1) * 24.0) / 64.0;
-            double most = with ? survey / passes + 16.0 * 8.0 / 64.0 : 0.0;
-            cr_assert(per_sample <= most + 1e-9 && per_sample >= 0.5 * most, "extra rays a sample %g (most %g)",
-                      per_sample, most);
-            for (int y = 0; y < 8; y++) {
-                sq[with] += (col[y] - 0.5) * (col[y] - 0.5);
-                if (with) {
-                    sum += col[y];
-                    sum2 += col[y] * col[y];
-                }
-            }
-        }
-    double n = 8.0 * seeds, rms_own = sqrt(sq[0] / n), rms_extra = sqrt(sq[1] / n);
-    double mean = sum / n, se = sqrt((sum2 / n - mean * mean) / (n - 1.0));
-    cr_log_info("light's edge after %d passes: rms error %.5f with its own rays, %.5f with extra rays; mean %.5f +- "
-                "%.5f", passes, rms_own, rms_extra, mean, se);
-    cr_assert_lt(rms_extra, rms_own / 3, "extra rays: rms %.5f against %.5f", rms_extra, rms_own);
-    cr_assert(fabs(mean - 0.5) < 4.0 * se + 1e-6, "the edge's mean is %.5f +- %.5f, not 0.5", mean, se);
-}
-
-/* The survey takes its other rays only where the first views differ
- * within a pixel's 3x3 neighbourhood: with the light's edge through
- * column 3, columns 3 and some of 2 and 4 (whose neighbours in column 3
- * saw either side), 8 to 24 pixels of 64; the edge's 8 pixels then take
- * 16 rays a sample each in the first pass (the image's noise not known
- * yet). A light that fills the view differs nowhere: one ray a pixel and
- * nothing more. */
-Test(render_integrator, the_survey_looks_again_only_where_first_views_differ)
-{
-    double col[8], per_sample;
-    render_edge_column(16, 5, 1, col, &per_sample);
-    double extra = 16.0 * 8.0, least = (64.0 + (SEEN_SURVEY - 1) * 8.0 + extra) / 64.0,
-           most = (64.0 + (SEEN_SURVEY - 1) * 24.0 + extra) / 64.0;
-    cr_log_info("the edge: %.4f extra rays a sample in the first pass (%.4f to %.4f; every pixel surveyed: %.4f)",
-                per_sample, least, most, (64.0 * SEEN_SURVEY + extra) / 64.0);
-    cr_assert(per_sample >= least - 1e-12 && per_sample <= most + 1e-12, "%.4f extra rays a sample", per_sample);
-
-    SgScene *s = sgt_scene_new();
-    const float black[3] = {0, 0, 0}, glow[3] = {1, 1, 1};
-    uint32_t lm = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, glow);
-    const double q[4][3] = {{-10, -10, -1}, {10, -10, -1}, {10, 10, -1}, {-10, 10, -1}};
-    sgt_add_quad(s, q, lm);
-    const double pos[3] = {0, 0, 0}, at[3] = {0, 0, -1}, up[3] = {0, 1, 0};
-    sgt_set_camera(s, pos, at, up, 40.0, 8, 8);
-    sgt_finish(s);
-    SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.max_depth = 1;
-    o.edge_rays = 16;
-    SgError err = {0};
-    SgRenderer *r = sg_renderer_create(s, &o, &err);
-    cr_assert_not_null(r, "%s", err.message);
-    sg_renderer_pass(r);
-    cr_assert_float_eq(sg_renderer_edge_rays_per_sample(r), 1.0, 1e-12, "a light filling the view: %g rays a sample",
-                       sg_renderer_edge_rays_per_sample(r));
-    sg_renderer_free(r);
-    sgt_scene_free(s);
-}
-
 /* A two-room scene: the light is in room A, the camera looks at a wall of
  * room B that only indirect light reaches, through a door. */
 static SgScene *two_rooms_with(bool dressed);
@@ -913,8 +773,8 @@ Test(render_integrator, openpgl_agrees_with_bsdf_in_dark_room)
     SgRenderer *r = sg_renderer_create(s, &o, &err);
     cr_assert_not_null(r, "%s", err.message);
     Stats p = render_stats(r, &o, 64, 0, 0, o.width, o.height);
-    double share = sg_renderer_lobe_share(r);
-    int passes = sg_renderer_training_passes(r);
+    double share = sgt_stats(r).lobe_share;
+    int passes = sgt_stats(r).training_passes;
     sg_renderer_free(r);
     double se = sqrt(b.std_error * b.std_error + p.std_error * p.std_error);
     cr_log_info("two rooms: bsdf %.5f +- %.5f, openpgl %.5f +- %.5f, guide drew %.3f, %d training passes", b.mean[0],
@@ -957,7 +817,7 @@ static float *same_image_for_any_thread_count(const SgScene *s, SgRenderOptions 
 
 static void check_openpgl_guides(const SgRenderer *r, int threads)
 {
-    cr_assert_gt(sg_renderer_lobe_share(r), 0.1, "%d threads: the field guides in this test", threads);
+    cr_assert_gt(sgt_stats(r).lobe_share, 0.1, "%d threads: the field guides in this test", threads);
 }
 
 /* The same image for any thread count: openpgl's field is trained
@@ -978,7 +838,7 @@ Test(render_integrator, openpgl_same_image_for_any_thread_count)
  * learned choices are part of what must not depend on threads. */
 static void check_learned_lobe(const SgRenderer *r, int threads)
 {
-    double regions = sg_renderer_guided_fraction(r), lobe = sg_renderer_lobe_share(r);
+    double regions = sgt_stats(r).guided_fraction, lobe = sgt_stats(r).lobe_share;
     cr_log_info("%d threads: lobe in %.3f of the learner's bounces, drew %.3f of all", threads, regions, lobe);
     cr_assert(regions > 0.005 && lobe > 0.005, "the mixture uses the lobe in this test: %.3f of the "
               "learner's bounces, drew %.3f", regions, lobe);
@@ -1056,7 +916,7 @@ Test(render_integrator, camera_inside_a_solid_is_detected)
     SgError err = {0};
     SgRenderer *r = sg_renderer_create(s, &o, &err);
     sg_renderer_pass(r);
-    cr_assert_gt(sg_renderer_backface_fraction(r), 0.99);
+    cr_assert_gt(sgt_stats(r).backface_fraction, 0.99);
     sg_renderer_free(r);
     sgt_scene_free(s);
     /* and the furnace (camera inside, facing front faces) is not flagged */
@@ -1064,7 +924,7 @@ Test(render_integrator, camera_inside_a_solid_is_detected)
     sg_render_options_default(&o, s);
     r = sg_renderer_create(s, &o, &err);
     sg_renderer_pass(r);
-    cr_assert_lt(sg_renderer_backface_fraction(r), 0.01);
+    cr_assert_lt(sgt_stats(r).backface_fraction, 0.01);
     sg_renderer_free(r);
     sgt_scene_free(s);
 }

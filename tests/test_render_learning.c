@@ -569,7 +569,7 @@ static double pixel_variance(SgScene *s, SgRenderOptions *o, int skip, int passe
     uint64_t rays_before = 0;
     for (int p = 0; p < skip + passes; p++) {
         if (p == skip)
-            rays_before = sg_renderer_rays(r);
+            rays_before = sgt_stats(r).rays;
         sg_renderer_pass(r);
         if (p < skip)
             continue;
@@ -580,7 +580,7 @@ static double pixel_variance(SgScene *s, SgRenderOptions *o, int skip, int passe
             sum2[i] += v * v;
         }
     }
-    cr_assert_eq(sg_renderer_nonfinite(r), 0);
+    cr_assert_eq(sgt_stats(r).nonfinite, 0);
     double var = 0.0, mean = 0.0;
     for (size_t i = 0; i < n; i++) {
         double m = sum[i] / passes;
@@ -589,7 +589,7 @@ static double pixel_variance(SgScene *s, SgRenderOptions *o, int skip, int passe
     }
     if (ps) {
         ps->mean = mean / n;
-        ps->rays = (double)(sg_renderer_rays(r) - rays_before) / passes;
+        ps->rays = (double)(sgt_stats(r).rays - rays_before) / passes;
     }
     free(sum);
     free(sum2);

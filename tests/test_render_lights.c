@@ -326,92 +326,18 @@ Test(render_lights, quadric_meshes_have_true_area_and_face_out)
 
 /* ---- the scene files --------------------------------------------------------------- */
 
-static SgScene *load_text(const char *name, const char *text, SgError *err)
-{
-    char path[256];
-    snprintf(path, sizeof path, "/tmp/sg_test_lights_%d_%s", (int)getpid(), name);
-    FILE *f = fopen(path, "w");
-    cr_assert(f);
-    fputs(text, f);
-    fclose(f);
-    SgScene *s = sg_scene_load(path, err);
-    remove(path);
-    return s;
-}
-
-/* load_text that must succeed. */
-static SgScene *load_ok(const char *name, const char *text)
-{
-    SgError err = {0};
-    SgScene *s = load_text(name, text, &err);
-    cr_assert(s, "%s", err.message);
-    return s;
-}
-
-#define PBRT_ROOM                                                                                                   \
-    "Scale -1 1 1\nLookAt 0 1 -3  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\nFilm \"rgb\" \"integer xresolution\" 8 " \
-    "\"integer yresolution\" 8\nWorldBegin\n"                                                                       \
-    "Shape \"trianglemesh\" \"point3 P\" [-1 0 -1 1 0 -1 1 0 1 -1 0 1] \"integer indices\" [0 1 2 0 2 3]\n"
-
-Test(render_lights, pbrt_light_sources_read_as_pbrt_v4_does)
-{
-    SgScene *s = load_ok("sources.pbrt",
-                           PBRT_ROOM "LightSource \"point\" \"rgb I\" [1 2 3] \"float power\" 100 \"point3 from\" [0 2 0]\n"
-                                     "AttributeBegin\nTranslate 1 0 0\n"
-                                     "LightSource \"spot\" \"rgb I\" [1 1 1] \"float scale\" 2 \"float coneangle\" 40 "
-                                     "\"float conedeltaangle\" 10 \"point3 from\" [0 3 0] \"point3 to\" [0 0 0]\n"
-                                     "AttributeEnd\n"
-                                     "LightSource \"distant\" \"rgb L\" [1 1 1] \"float illuminance\" 5 "
-                                     "\"point3 from\" [0 1 1] \"point3 to\" [0 0 0]\n"
-                                     "Rotate -90 1 0 0\n"
-                                     "LightSource \"infinite\" \"rgb L\" [0.5 0.5 0.5] \"float scale\" 2 "
-                                     "\"point3 portal\" [-1 -1 2  1 -1 2  1 1 2  -1 1 2]\n");
-    cr_assert_eq(s->light_source_count, 4);
-    const SgLightSource *p = &s->light_sources[0], *spot = &s->light_sources[1], *sun = &s->light_sources[2],
-                        *sky = &s->light_sources[3];
-    cr_expect(p->kind == SG_LIGHT_POINT && fabs(p->position[1] - 2) < 1e-12);
-    cr_expect(fabsf(p->rgb[2] - (float)(3 * 100 / (4 * M_PI))) < 1e-4f, "power over 4 pi: %g", p->rgb[2]);
-    cr_expect(spot->kind == SG_LIGHT_SPOT && fabs(spot->position[0] - 1) < 1e-12 && fabs(spot->direction[1] + 1) < 1e-12);
-    cr_expect(fabs(spot->cos_cone - cos(40 * M_PI / 180)) < 1e-12 && fabs(spot->cos_falloff_start - cos(30 * M_PI / 180)) < 1e-12);
-    cr_expect(spot->rgb[0] == 2.0f);
-    cr_expect(sun->kind == SG_LIGHT_DISTANT && sun->rgb[0] == 5.0f);
-    cr_expect(fabs(sun->direction[1] + sqrt(0.5)) < 1e-9 && fabs(sun->direction[2] + sqrt(0.5)) < 1e-9);
-    cr_expect(sky->kind == SG_LIGHT_INFINITE && sky->rgb[0] == 1.0f && sky->has_portal);
-    /* Rotate -90 about x takes light space's z (up) to world +y */
-    cr_expect(fabs(sky->light_to_world[1][2] - 1) < 1e-9, "light z to world y: %g", sky->light_to_world[1][2]);
-    /* but the portal's points are world space, whatever the transform, as
-     * pbrt-v4 reads them (its lights.cpp maps them by RenderFromWorld) */
-    cr_expect(fabs(sky->portal[0][0] + 1) < 1e-9 && fabs(sky->portal[0][1] + 1) < 1e-9 && fabs(sky->portal[0][2] - 2) < 1e-9,
-              "portal in world space: %g %g %g", sky->portal[0][0], sky->portal[0][1], sky->portal[0][2]);
-    sg_scene_free(s);
-}
-
-Test(render_lights, pbrt_disk_lamp_has_its_true_area)
-{
-    SgScene *s = load_ok("disk.pbrt",
-                           PBRT_ROOM "AttributeBegin\nTranslate 0 2 0\nRotate 90 1 0 0\n"
-                                     "AreaLightSource \"diffuse\" \"rgb L\" [4 4 4]\n"
-                                     "Shape \"disk\" \"float radius\" 0.25\nAttributeEnd\n"
-                                     "Shape \"sphere\" \"float radius\" 0.3\nShape \"cylinder\" \"float radius\" 0.1\n");
-    cr_assert_eq(s->light_count, 1);
-    cr_expect(fabs(s->lights[0].area - M_PI * 0.0625) < 1e-9, "disk area %.12g", s->lights[0].area);
-    /* Rotate 90 about x takes the disk's +z to -y: it shines down */
-    cr_expect(s->lights[0].normal[1] < -0.999, "disk normal %g", s->lights[0].normal[1]);
-    cr_expect_eq(s->warning_count, 0, "no shape left out: %s", s->warning_count ? s->warnings[0] : "");
-    cr_expect_eq(s->degenerate_dropped, 0, "the meshes hold no zero-area triangle (a sphere's poles)");
-    sg_scene_free(s);
-}
-
 Test(render_lights, json_light_sources)
 {
-    SgScene *s = load_ok("sources.json",
+    SgError err = {0};
+    SgScene *s = sgt_scene_from_text("sources.json",
                            "{\"lights\": [{\"type\": \"quad\", \"corners\": [[0,2,0],[1,2,0],[1,2,1],[0,2,1]], "
                            "\"radiance\": [1,1,1]},"
                            "{\"type\": \"sky\", \"radiance\": [0.2,0.3,0.4], \"up\": [0,0,2]},"
                            "{\"type\": \"sun\", \"irradiance\": [3,3,3], \"direction\": [0,-2,0], \"angular_radius\": 0.5},"
                            "{\"type\": \"point\", \"intensity\": [1,1,1], \"scale\": 4, \"position\": [0,1,0]},"
                            "{\"type\": \"spot\", \"intensity\": [1,1,1], \"position\": [0,1,0], \"direction\": [0,-1,0], "
-                           "\"cone_angle\": 20}]}");
+                           "\"cone_angle\": 20}]}", &err);
+    cr_assert(s, "%s", err.message);
     cr_assert_eq(s->light_source_count, 4);
     cr_expect(s->light_sources[0].kind == SG_LIGHT_INFINITE && s->light_sources[0].rgb[2] == 0.4f);
     cr_expect(fabs(s->light_sources[0].light_to_world[2][2] - 1) < 1e-12, "up is the map's z");
@@ -427,21 +353,21 @@ Test(render_lights, bad_lights_are_refused_with_the_cause)
     struct {
         const char *name, *text, *cause;
     } cases[] = {
-        {"negative.pbrt", PBRT_ROOM "LightSource \"point\" \"rgb I\" [-1 1 1]\n", "negative"},
-        {"scale.pbrt", PBRT_ROOM "LightSource \"distant\" \"float scale\" -2\n", "\"scale\" must be finite"},
-        {"both.pbrt", PBRT_ROOM "LightSource \"infinite\" \"rgb L\" [1 1 1] \"string filename\" \"sky.exr\"\n",
+        {"negative.pbrt", SGT_PBRT_ROOM "LightSource \"point\" \"rgb I\" [-1 1 1]\n", "negative"},
+        {"scale.pbrt", SGT_PBRT_ROOM "LightSource \"distant\" \"float scale\" -2\n", "\"scale\" must be finite"},
+        {"both.pbrt", SGT_PBRT_ROOM "LightSource \"infinite\" \"rgb L\" [1 1 1] \"string filename\" \"sky.exr\"\n",
          "not both"},
-        {"portal.pbrt", PBRT_ROOM "LightSource \"infinite\" \"point3 portal\" [0 0 0 1 1 1]\n", "must be 4 points"},
-        {"cone.pbrt", PBRT_ROOM "LightSource \"spot\" \"float coneangle\" 10 \"float conedeltaangle\" 20\n",
+        {"portal.pbrt", SGT_PBRT_ROOM "LightSource \"infinite\" \"point3 portal\" [0 0 0 1 1 1]\n", "must be 4 points"},
+        {"cone.pbrt", SGT_PBRT_ROOM "LightSource \"spot\" \"float coneangle\" 10 \"float conedeltaangle\" 20\n",
          "conedeltaangle"},
-        {"radius.pbrt", PBRT_ROOM "Shape \"sphere\" \"float radius\" -1\n", "\"radius\" must be positive"},
+        {"radius.pbrt", SGT_PBRT_ROOM "Shape \"sphere\" \"float radius\" -1\n", "\"radius\" must be positive"},
         {"sun.json", "{\"lights\": [{\"type\": \"sun\", \"irradiance\": [1,1,1]}]}", "direction is missing"},
         {"sky.json", "{\"lights\": [{\"type\": \"sky\", \"radiance\": [1,-1,1]}]}", "non-negative"},
         {"kind.json", "{\"lights\": [{\"type\": \"lamp\"}]}", "\"sky\", \"sun\""},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
         SgError err = {0};
-        SgScene *s = load_text(cases[k].name, cases[k].text, &err);
+        SgScene *s = sgt_scene_from_text(cases[k].name, cases[k].text, &err);
         cr_expect(!s, "%s loaded", cases[k].name);
         cr_expect(strstr(err.message, cases[k].cause) && strstr(err.message, cases[k].name), "%s: %s",
                   cases[k].name, err.message);

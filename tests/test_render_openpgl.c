@@ -34,8 +34,8 @@ static Estimate estimate(const SgScene *s, const SgRenderOptions *o, int spp)
     cr_assert_not_null(r, "%s", err.message);
     SgtSampleMean m = sgt_passes_mean(r, spp, (size_t)o->width * o->height);
     Estimate e = {.mean = m.mean, .std_error = m.std_error};
-    e.lobe_share = sg_renderer_lobe_share(r);
-    e.nonfinite = sg_renderer_nonfinite(r);
+    e.lobe_share = sgt_stats(r).lobe_share;
+    e.nonfinite = sgt_stats(r).nonfinite;
     sg_renderer_free(r);
     return e;
 }
@@ -223,12 +223,10 @@ Test(render_openpgl, training_updates_on_cycles_schedule, .timeout = 300)
     SgRenderer *r = sg_renderer_create(s, &o, &err);
     cr_assert_not_null(r, "%s", err.message);
     cr_assert(sg_renderer_train(r, &err), "%s", err.message);
-    SgRenderReport report;
-    sg_renderer_report(r, &report);
-    int passes = sg_renderer_training_passes(r);
+    SgRenderStats stats = sgt_stats(r);
     sg_renderer_free(r);
     sgt_scene_free(s);
-    cr_assert_eq(passes, 9, "every training pass's paths reach the field: %d", passes);
-    cr_assert(strstr(report.guide, "on 9 passes in 4 updates") != NULL, "the schedule: %s", report.guide);
+    cr_assert_eq(stats.training_passes, 9, "every training pass's paths reach the field: %d", stats.training_passes);
+    cr_assert_eq(stats.training_updates, 4, "the schedule: %d updates", stats.training_updates);
     cr_assert_eq(SG_OPENPGL_TRAINING_PASSES, 1 + 2 + 4 * 126, "Cycles' 128 updates");
 }

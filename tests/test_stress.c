@@ -930,7 +930,7 @@ static Estimate estimate(const SgScene *s, const SgRenderOptions *o, int spp)
     for (size_t i = 0; i < 3 * pixels; i++)
         e.image_finite = e.image_finite && isfinite(img[i]);
     free(img);
-    e.nonfinite = sg_renderer_nonfinite(r);
+    e.nonfinite = sgt_stats(r).nonfinite;
     sg_renderer_free(r);
     return e;
 }

@@ -67,7 +67,7 @@ static inline bool importance_lookup_begin(const ImportanceLookup *g, Vec3 p, Ve
     uint32_t count = ls->follow_count;
     if (!count || ls->follow_cdf[count - 1] <= 0.0)
         return false;
-    gq->light = count == 1 ? 0 : pick_cdf(ls->follow_cdf, count, u * ls->follow_cdf[count - 1]);
+    gq->light = count == 1 ? 0 : sg_piecewise_pick(ls->follow_cdf, count, u * ls->follow_cdf[count - 1]);
     if (g->points) {
         Vec3 w = v3_add(p, v3_scale(n, g->offset));
         gq->voxel[0] = (w.x - g->origin.x) * g->inv_voxel;

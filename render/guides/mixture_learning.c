@@ -1,5 +1,7 @@
 #include "mixture_learning.h"
+#include "mixture_learner_state.h"
 
+#include "../lights.h" /* PORTAL_SHARE */
 #include "../sampling.h"
 
 #include <math.h>
@@ -16,216 +18,16 @@ const SgMixtureCandidate sg_mixture_candidates[SG_MIXTURE_CANDIDATES] = {
     {0.7f, 64.0f, true, true, false},   {0.4f, 4.0f, true, true, false},   {0.4f, 16.0f, true, true, false},
     {0.4f, 64.0f, true, true, false},   {0.7f, 16.0f, true, false, true}, {0.45f, 16.0f, true, false, true},
     {0.2f, 16.0f, true, false, true}};
-/* The portal shares: none (out in the open), even, render/lights.h's
- * PORTAL_SHARE (the default), and nearly all (deep in a room lit through
+/* The portal shares: none (out in the open), even, PORTAL_SHARE (the
+ * default, render/lights.h), and nearly all (deep in a room lit through
  * its windows; not all, so that sky a window found too small still gets
  * light samples). */
-const float sg_portal_shares[SG_PORTAL_SHARES] = {0.0f, 0.5f, 0.8f, 0.95f, 0.99f};
-#define SKELETON_CANDIDATES SG_MIXTURE_SKELETON_CANDIDATES
-/* the learned candidates come in families: six around the learned
- * direction (family 0), six toward the learned point (family 1), three
- * drawing from the learned histogram (family 2) */
-#define FAMILIES 3
-#define AXIS_CANDIDATES 6
-#define HISTOGRAM_FAMILY 2
-#define HISTOGRAM_CANDIDATES 3
-_Static_assert(SKELETON_CANDIDATES + HISTOGRAM_FAMILY * AXIS_CANDIDATES + HISTOGRAM_CANDIDATES ==
-                   SG_MIXTURE_CANDIDATES,
-               "candidate families");
-/* The candidates' lobe exponents, each a power of 4 of the one before, so
- * that a record computes cos^e for all of them by squaring. */
-#define EXPONENTS 3
-static const float exponents[EXPONENTS] = {4.0f, 16.0f, 64.0f};
+const float sg_portal_shares[SG_PORTAL_SHARES] = {0.0f, 0.5f, PORTAL_SHARE, 0.95f, 0.99f};
 
-/* Samples a region needs before its own estimate is trusted, and after
- * which it stops learning. */
-#define MIN_SAMPLES 256u
-#define SETTLED_SAMPLES SG_MIXTURE_SETTLED_SAMPLES
-/* A region fits its axis when its records reach AXIS_FIT_FIRST, then each
- * time they grow AXIS_FIT_GROWTH times (each refit forgets the moments
- * measured around the old axis), never once it settles; its learned
- * candidates compete once AXIS_MIN_SAMPLES records were drawn while the
- * axis was in use. */
-#define AXIS_FIT_FIRST 256u
-#define AXIS_FIT_GROWTH 4u
-#define AXIS_MIN_SAMPLES 128u
-/* A fine region fits a histogram of its own, rather than use its coarse
- * region's, from this many records on (at its axis's refits); every bin
- * keeps HISTOGRAM_FLOOR of the density spread evenly, so that a bin no
- * record has reached yet can still be drawn. */
-#define HISTOGRAM_OWN_SAMPLES 1024u
-#define HISTOGRAM_FLOOR 0.1f
-/* Sky samples a region needs before it chooses its own portal share. */
-#define SHARE_MIN_SAMPLES 256u
-/* Vertices a region needs before its outgoing radiance is used. */
-#define RADIANCE_MIN_SAMPLES 64u
-/* A coarse region, or the whole scene, with this many guided bounces and
- * as many vertices stops taking records: it is only a fallback, and adding
- * every record to three levels cost more than the rest of learning (it
- * runs on one thread between passes). */
-#define FALLBACK_SETTLED 65536u
-#define STATE_INITIAL SG_MIXTURE_STATE_CANDIDATE
-#define STATE_SETTLED SG_MIXTURE_STATE_SETTLED
-#define REGION_SEEN 1u         /* has records (listed in seen) */
-#define REGION_OWN_RADIANCE 2u /* enough of them for its own radiance estimate */
-#define REGION_CHANGED 4u      /* listed in changed: its view entry is stale */
-
-/* A record as kept: its terms computed by the thread that made it, so that
- * the sequential sum after the pass is only additions. */
-typedef struct StoredRecord {
-    uint32_t region;
-    float estimate;                    /* v */
-    float weight;                      /* w: the bounce's weight in the image */
-    float radiance;                    /* outgoing radiance estimate, < 0 none */
-    bool lobe;                         /* a guided bounce: estimate and terms set */
-    bool axis_terms[FAMILIES];         /* the learned candidates' terms are set */
-    int16_t bin;                       /* the direction's histogram bin, -1: none */
-    uint32_t generation;               /* the view's when the record was made */
-    float fit[3];                      /* v d: the axis fit's share (zero: none) */
-    float point_fit[4];                /* v (x + t d) and v: the point fit's share */
-    float term[SG_MIXTURE_CANDIDATES]; /* v^2 p / p_k */
-    bool sky;                          /* it took a sky sample: sky_term set */
-    float sky_term[SG_PORTAL_SHARES];  /* F^2 / (q_k q0) */
-} StoredRecord;
-
-/* One cache line each: threads rendering neighbouring tiles append to
- * neighbouring buffers. */
-typedef struct RecordBuffer {
-    _Alignas(64) StoredRecord *data;
-    size_t count, capacity;
-} RecordBuffer;
-
-typedef struct RegionStats {
-    double moment[SKELETON_CANDIDATES];   /* sums of w v^2 p / p_k */
-    double weight, weighted;              /* sums of w and of w v */
-    uint64_t samples;
-    double radiance_sum2;                 /* sum of squared outgoing radiance estimates */
-    uint64_t radiance_samples;
-    uint64_t radiance_published;          /* samples when last passed to its fine regions */
-    /* what the region adds to its level's totals under its current choice */
-    double variance, cost;
-    /* the learned axis: sum of v d over its records, the samples at the
-     * last fit, and the learned candidates' sums over the records drawn
-     * while the current axis was in use (generation axis_from or later) */
-    double fit[3], point_fit[4];
-    uint64_t fitted_at;
-    uint32_t axis_from[FAMILIES];
-    uint64_t axis_samples[FAMILIES];
-    double axis_weight[FAMILIES], axis_weighted[FAMILIES];
-    double axis_moment[FAMILIES][AXIS_CANDIDATES];
-    /* its sky samples: count, those that brought light, and each portal
-     * share's second-moment sum */
-    uint64_t sky_samples, sky_lit;
-    double sky_moment[SG_PORTAL_SHARES];
-} RegionStats;
-
-/* One level of regions (fine or coarse): sums over its regions of the
- * image variance and the cost of their current choices. */
-typedef struct Totals {
-    double variance, cost;
-} Totals;
-
-/* Cost of a guided bounce relative to a BSDF one (cache query, densities
- * of the lobe), measured on the corridor and the Cornell box; a bounce
- * around the learned axis asks no cache. */
-#define GUIDED_COST 1.25
-#define LEARNED_AXIS_COST 1.15
-/* A coarse region is this many fine cells on a side: it answers for the
- * fine regions that have too few samples of their own. */
-#define COARSE 4
-
-struct SgMixtureLearner {
-    int cells[3];          /* fine grid */
-    int coarse_cells[3];
-    uint32_t region_count, coarse_count;
-    int initial;
-    /* per fine region, all the renderer reads at a bounce (one byte, so
-     * that the table stays in cache): the candidate in use (STATE_INITIAL:
-     * none yet) and STATE_SETTLED once the region stops learning */
-    uint8_t *state;
-    int8_t *choice;        /* per fine region: candidate index, -1 too few samples */
-    int8_t *coarse_choice; /* per coarse region */
-    RegionStats *stats;    /* per fine region */
-    RegionStats *coarse;   /* per coarse region */
-    Totals fine_totals, coarse_totals, global_totals;
-    RegionStats global;    /* the whole scene: answers where a coarse region cannot yet */
-    int8_t global_choice;
-    uint32_t *touched;     /* fine regions, then coarse ones, with new records */
-    uint8_t *is_touched, *coarse_touched;
-    uint32_t *coarse_of;   /* fine region -> coarse region */
-    uint32_t tiles;
-    /* two sets of per-tile buffers: the pass being rendered fills one
-     * while sg_mixture_learn reads the other (the pass before) */
-    RecordBuffer *buffers;
-    uint32_t filling;      /* the set records go to: buffers + filling * tiles */
-    int exponent_of[SG_MIXTURE_CANDIDATES]; /* index in exponents[] of each candidate's lobe */
-    /* learned axes (3 floats a region, zero: none): the fine regions' in
-     * use (their own, else their coarse region's), whether a fine region
-     * has its own, the coarse regions', and the copy the renderer reads */
-    float *axis, *coarse_axis, *view_axis;
-    float *point, *coarse_point, *view_point; /* 4 floats a region: x, y, z, 1 where there is one */
-    uint8_t *own_axis;
-    uint32_t generation;   /* publications so far */
-    /* learned histograms, one entry per fine region then per coarse one
-     * (SG_MIXTURE_BINS floats each, untouched pages cost nothing): the sums
-     * of v per bin, the distribution fitted from them, and the view's copy;
-     * entries fitted since the last publication are listed in
-     * histogram_changed; per fine region the entry it uses (histogram_of,
-     * and the view's) and whether it is its own */
-    float *histogram_sum, *histogram, *view_histogram;
-    uint32_t *histogram_of, *view_histogram_of;
-    uint8_t *own_histogram, *histogram_dirty;
-    uint32_t *histogram_changed;
-    uint32_t histogram_changed_count;
-    float *radiance;       /* per fine region, as learned */
-    float global_radiance;
-    /* what the renderer reads (the view) is a copy, brought up to date by
-     * sg_mixture_end_pass, so that learning can run while a pass renders */
-    uint8_t *view_state;
-    float *view_radiance;
-    uint32_t *changed;     /* fine regions whose state or radiance changed since (REGION_CHANGED) */
-    uint32_t changed_count;
-    /* per fine region, REGION_* bits: what the update would otherwise read
-     * from the region's statistics (a cache miss each; most of them are
-     * cold) */
-    uint8_t *flags;
-    uint32_t *seen;        /* fine regions with records, in the order they came */
-    uint32_t seen_count;
-    /* portal shares: each level's own choice (-1: too few sky samples), the
-     * one each fine region uses, and the view's copy */
-    int8_t *share_choice, *coarse_share_choice;
-    int8_t global_share_choice;
-    uint8_t *portal_share, *view_portal_share;
-    SgMixtureView view;
-};
-
-SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest, uint32_t tiles,
-                                            int initial, SgError *err)
+/* Every array the learner holds, sized for its regions; false when one
+ * could not be had (sg_mixture_learner_free frees what was). */
+static bool learner_alloc(SgMixtureLearner *l)
 {
-    float ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
-    float longest = fmaxf(ext[0], fmaxf(ext[1], ext[2]));
-    if (!(longest > 0.0f) || !isfinite(longest) || cells_longest < 1 || cells_longest > 1024 || initial < 0 ||
-        initial >= SG_MIXTURE_CANDIDATES)
-        return sg_fail(err, "mixture learner: bad bounds or cell count"), NULL;
-    SgMixtureLearner *l = calloc(1, sizeof *l);
-    if (!l)
-        return sg_fail(err, "mixture learner: out of memory"), NULL;
-    float size = longest / (float)cells_longest;
-    size_t cells = 1, coarse = 1;
-    for (int i = 0; i < 3; i++) {
-        l->cells[i] = (int)ceilf(ext[i] / size) + 1;
-        l->coarse_cells[i] = (l->cells[i] + COARSE - 1) / COARSE;
-        cells *= (size_t)l->cells[i];
-        coarse *= (size_t)l->coarse_cells[i];
-    }
-    l->region_count = (uint32_t)(cells * 6);
-    l->coarse_count = (uint32_t)(coarse * 6);
-    l->initial = initial;
-    for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++)
-        for (int e = 0; e < EXPONENTS; e++)
-            if (sg_mixture_candidates[k].exponent == exponents[e])
-                l->exponent_of[k] = e;
-    l->tiles = tiles;
     l->choice = malloc(l->region_count);
     l->state = malloc(l->region_count);
     l->coarse_choice = malloc(l->coarse_count);
@@ -235,7 +37,7 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->stats = calloc(l->region_count, sizeof *l->stats);
     l->coarse = calloc(l->coarse_count, sizeof *l->coarse);
     l->coarse_of = malloc(sizeof *l->coarse_of * l->region_count);
-    size_t buffers = 2 * (size_t)(tiles ? tiles : 1);
+    size_t buffers = 2 * (size_t)(l->tiles ? l->tiles : 1);
     l->buffers = aligned_alloc(_Alignof(RecordBuffer), buffers * sizeof *l->buffers);
     if (l->buffers)
         memset(l->buffers, 0, buffers * sizeof *l->buffers);
@@ -265,15 +67,21 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     l->coarse_share_choice = malloc(l->coarse_count);
     l->portal_share = malloc(l->region_count);
     l->view_portal_share = malloc(l->region_count);
-    if (!l->share_choice || !l->coarse_share_choice || !l->portal_share || !l->view_portal_share ||
-        !l->histogram_sum || !l->histogram || !l->view_histogram || !l->histogram_of || !l->view_histogram_of ||
-        !l->own_histogram || !l->histogram_dirty || !l->histogram_changed || !l->point || !l->view_point || !l->coarse_point || !l->axis || !l->view_axis || !l->coarse_axis ||
-        !l->own_axis || !l->radiance || !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
-        !l->coarse_touched || !l->stats || !l->coarse || !l->coarse_of || !l->buffers || !l->view_state ||
-        !l->view_radiance || !l->changed || !l->flags || !l->seen) {
-        sg_mixture_learner_free(l);
-        return sg_fail(err, "mixture learner: out of memory for %u regions", (unsigned)(cells * 6)), NULL;
-    }
+    bool missing = !l->choice || !l->state || !l->coarse_choice || !l->touched || !l->is_touched ||
+                   !l->coarse_touched || !l->stats || !l->coarse || !l->coarse_of || !l->buffers || !l->radiance ||
+                   !l->view_state || !l->view_radiance || !l->changed || !l->flags || !l->seen || !l->axis ||
+                   !l->view_axis || !l->coarse_axis || !l->own_axis || !l->point || !l->view_point ||
+                   !l->coarse_point || !l->histogram_sum || !l->histogram || !l->view_histogram ||
+                   !l->histogram_of || !l->view_histogram_of || !l->own_histogram || !l->histogram_dirty ||
+                   !l->histogram_changed || !l->share_choice || !l->coarse_share_choice || !l->portal_share ||
+                   !l->view_portal_share;
+    return !missing;
+}
+
+/* The view's region index (the strides of each of the 6 normal bins'
+ * cell grids) and each fine region's coarse region. */
+static void learner_index(SgMixtureLearner *l, size_t cells)
+{
     for (uint32_t b = 0; b < 6; b++) {
         uint32_t nx = (uint32_t)l->cells[0], ny = (uint32_t)l->cells[1], nz = (uint32_t)l->cells[2];
         uint32_t *st = l->view.stride[b];
@@ -293,6 +101,12 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
                     l->coarse_of[sg_mixture_region_of_cell(&l->view, (uint32_t)x, (uint32_t)y, (uint32_t)z,
                                                            (uint32_t)bin)] = (uint32_t)(c * 6 + bin);
             }
+}
+
+/* Where learning starts: no choice, the initial candidate in use, no
+ * radiance, axis, histogram or share of a region's own; the view a copy. */
+static void learner_start(SgMixtureLearner *l, Vec3 lo, float size, int initial)
+{
     memset(l->choice, -1, l->region_count);
     memset(l->state, STATE_INITIAL | (sg_mixture_candidates[initial].alpha < 1.0f ? SG_MIXTURE_STATE_LOBE : 0),
            l->region_count);
@@ -323,6 +137,41 @@ SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest,
     memset(l->portal_share, SG_PORTAL_SHARE_DEFAULT, l->region_count);
     memset(l->view_portal_share, SG_PORTAL_SHARE_DEFAULT, l->region_count);
     l->view.portal_share = l->view_portal_share;
+}
+
+SgMixtureLearner *sg_mixture_learner_create(Vec3 lo, Vec3 hi, int cells_longest, uint32_t tiles,
+                                            int initial, SgError *err)
+{
+    float ext[3] = {hi.x - lo.x, hi.y - lo.y, hi.z - lo.z};
+    float longest = fmaxf(ext[0], fmaxf(ext[1], ext[2]));
+    if (!(longest > 0.0f) || !isfinite(longest) || cells_longest < 1 || cells_longest > 1024 || initial < 0 ||
+        initial >= SG_MIXTURE_CANDIDATES)
+        return sg_fail(err, "mixture learner: bad bounds or cell count"), NULL;
+    SgMixtureLearner *l = calloc(1, sizeof *l);
+    if (!l)
+        return sg_fail(err, "mixture learner: out of memory"), NULL;
+    float size = longest / (float)cells_longest;
+    size_t cells = 1, coarse = 1;
+    for (int i = 0; i < 3; i++) {
+        l->cells[i] = (int)ceilf(ext[i] / size) + 1;
+        l->coarse_cells[i] = (l->cells[i] + COARSE - 1) / COARSE;
+        cells *= (size_t)l->cells[i];
+        coarse *= (size_t)l->coarse_cells[i];
+    }
+    l->region_count = (uint32_t)(cells * 6);
+    l->coarse_count = (uint32_t)(coarse * 6);
+    l->initial = initial;
+    for (int k = 0; k < SG_MIXTURE_CANDIDATES; k++)
+        for (int e = 0; e < EXPONENTS; e++)
+            if (sg_mixture_candidates[k].exponent == exponents[e])
+                l->exponent_of[k] = e;
+    l->tiles = tiles;
+    if (!learner_alloc(l)) {
+        sg_mixture_learner_free(l);
+        return sg_fail(err, "mixture learner: out of memory for %u regions", (unsigned)(cells * 6)), NULL;
+    }
+    learner_index(l, cells);
+    learner_start(l, lo, size, initial);
     return l;
 }
 
@@ -455,72 +304,33 @@ static float candidate_term(int k, float weight, float pdf_bsdf, float pdf_guide
     return p > 0.0f ? weight / p : INFINITY;
 }
 
-void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord *rec)
+/* A sky sample's terms: each portal share's second-moment estimate. */
+static void record_sky_terms(StoredRecord *st, const SgMixtureRecord *rec)
 {
-    if (tile >= l->tiles || rec->region >= l->region_count)
-        return;
-    RecordBuffer *b = &l->buffers[l->filling * l->tiles + tile];
-    if (b->count == b->capacity) {
-        size_t cap = b->capacity ? 2 * b->capacity : 1024;
-        StoredRecord *d = realloc(b->data, cap * sizeof *d);
-        if (!d)
-            return;
-        b->data = d;
-        b->capacity = cap;
+    float f = rec->sky_contribution,
+          q0 = rec->sky_share * rec->sky_pdf_portals + (1.0f - rec->sky_share) * rec->sky_pdf_sky;
+    for (int k = 0; k < SG_PORTAL_SHARES; k++) {
+        float qk = sg_portal_shares[k] * rec->sky_pdf_portals + (1.0f - sg_portal_shares[k]) * rec->sky_pdf_sky;
+        /* a share that could never have drawn a direction that brought light: infinite */
+        st->sky_term[k] = !(f > 0.0f) || !isfinite(f) || !(q0 > 0.0f) ? 0.0f
+                          : qk > 0.0f                                  ? f / qk * (f / q0)
+                                                                       : INFINITY;
     }
-    StoredRecord *st = &b->data[b->count++];
-    st->region = rec->region;
-    st->weight = rec->weight;
-    st->radiance = rec->radiance >= 0.0f && isfinite(rec->radiance) ? rec->radiance : -1.0f;
-    st->lobe = rec->lobe;
-    st->estimate = 0.0f;
-    memset(st->axis_terms, 0, sizeof st->axis_terms);
-    st->bin = -1;
-    st->generation = l->view.generation;
-    memset(st->fit, 0, sizeof st->fit);
-    memset(st->point_fit, 0, sizeof st->point_fit);
-    st->sky = rec->sky;
-    if (rec->sky) {
-        float f = rec->sky_contribution, q0 = rec->sky_share * rec->sky_pdf_portals +
-                                              (1.0f - rec->sky_share) * rec->sky_pdf_sky;
-        for (int k = 0; k < SG_PORTAL_SHARES; k++) {
-            float qk = sg_portal_shares[k] * rec->sky_pdf_portals + (1.0f - sg_portal_shares[k]) * rec->sky_pdf_sky;
-            /* a share that could never have drawn a direction that brought light: infinite */
-            st->sky_term[k] = !(f > 0.0f) || !isfinite(f) || !(q0 > 0.0f) ? 0.0f
-                              : qk > 0.0f                                  ? f / qk * (f / q0)
-                                                                           : INFINITY;
-        }
-    }
-    if (!rec->lobe)
-        return;
+}
+
+/* A guided bounce's direction, for what is learned from it: the axis and
+ * point fits' shares, its histogram bin, and the learned candidates' terms
+ * (weight: v^2 p). */
+static void record_learned_terms(const SgMixtureLearner *l, StoredRecord *st, const SgMixtureRecord *rec,
+                                 float weight)
+{
     const float *axis = &l->view_axis[3 * (size_t)rec->region];
     const float *point = &l->view_point[4 * (size_t)rec->region];
     bool has_axis = axis[0] != 0.0f || axis[1] != 0.0f || axis[2] != 0.0f;
     bool has_point = has_axis && point[3] > 0.0f;
     uint32_t histogram = l->view.histogram_of[rec->region];
-    bool has_direction = rec->direction.x != 0.0f || rec->direction.y != 0.0f || rec->direction.z != 0.0f;
     float v = rec->estimate;
-    if (!(v > 0.0f) || !isfinite(v)) {
-        /* a sample that brought nothing back */
-        st->axis_terms[0] = has_axis;
-        st->axis_terms[1] = has_point;
-        st->axis_terms[HISTOGRAM_FAMILY] = histogram != SG_NO_REGION;
-        return;
-    }
-    st->estimate = v;
-    float weight = v * v * rec->pdf;
     float lobe[EXPONENTS];
-    if (rec->no_skeleton) { /* every skeleton candidate draws from the BSDF here */
-        float term = rec->pdf_bsdf > 0.0f ? weight / rec->pdf_bsdf : INFINITY;
-        for (int k = 0; k < SKELETON_CANDIDATES; k++)
-            st->term[k] = term;
-    } else {
-        folded_lobe_densities(rec->cos_axis, rec->cos_mirror, lobe);
-        for (int k = 0; k < SKELETON_CANDIDATES; k++)
-            st->term[k] = candidate_term(k, weight, rec->pdf_bsdf, lobe[l->exponent_of[k]]);
-    }
-    if (!has_direction)
-        return;
     Vec3 d = rec->direction, x = rec->position;
     st->fit[0] = v * d.x, st->fit[1] = v * d.y, st->fit[2] = v * d.z;
     st->bin = (int16_t)sg_mixture_histogram_bin(d);
@@ -553,6 +363,65 @@ void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord
         }
         st->axis_terms[f] = true;
     }
+}
+
+void sg_mixture_record(SgMixtureLearner *l, uint32_t tile, const SgMixtureRecord *rec)
+{
+    if (tile >= l->tiles || rec->region >= l->region_count)
+        return;
+    RecordBuffer *b = &l->buffers[l->filling * l->tiles + tile];
+    if (b->count == b->capacity) {
+        size_t cap = b->capacity ? 2 * b->capacity : 1024;
+        StoredRecord *d = realloc(b->data, cap * sizeof *d);
+        if (!d)
+            return;
+        b->data = d;
+        b->capacity = cap;
+    }
+    StoredRecord *st = &b->data[b->count++];
+    st->region = rec->region;
+    st->weight = rec->weight;
+    st->radiance = rec->radiance >= 0.0f && isfinite(rec->radiance) ? rec->radiance : -1.0f;
+    st->lobe = rec->lobe;
+    st->estimate = 0.0f;
+    memset(st->axis_terms, 0, sizeof st->axis_terms);
+    st->bin = -1;
+    st->generation = l->view.generation;
+    memset(st->fit, 0, sizeof st->fit);
+    memset(st->point_fit, 0, sizeof st->point_fit);
+    st->sky = rec->sky;
+    if (rec->sky)
+        record_sky_terms(st, rec);
+    if (!rec->lobe)
+        return;
+    const float *axis = &l->view_axis[3 * (size_t)rec->region];
+    const float *point = &l->view_point[4 * (size_t)rec->region];
+    bool has_axis = axis[0] != 0.0f || axis[1] != 0.0f || axis[2] != 0.0f;
+    bool has_point = has_axis && point[3] > 0.0f;
+    uint32_t histogram = l->view.histogram_of[rec->region];
+    bool has_direction = rec->direction.x != 0.0f || rec->direction.y != 0.0f || rec->direction.z != 0.0f;
+    float v = rec->estimate;
+    if (!(v > 0.0f) || !isfinite(v)) {
+        /* a sample that brought nothing back */
+        st->axis_terms[0] = has_axis;
+        st->axis_terms[1] = has_point;
+        st->axis_terms[HISTOGRAM_FAMILY] = histogram != SG_NO_REGION;
+        return;
+    }
+    st->estimate = v;
+    float weight = v * v * rec->pdf;
+    float lobe[EXPONENTS];
+    if (rec->no_skeleton) { /* every skeleton candidate draws from the BSDF here */
+        float term = rec->pdf_bsdf > 0.0f ? weight / rec->pdf_bsdf : INFINITY;
+        for (int k = 0; k < SKELETON_CANDIDATES; k++)
+            st->term[k] = term;
+    } else {
+        folded_lobe_densities(rec->cos_axis, rec->cos_mirror, lobe);
+        for (int k = 0; k < SKELETON_CANDIDATES; k++)
+            st->term[k] = candidate_term(k, weight, rec->pdf_bsdf, lobe[l->exponent_of[k]]);
+    }
+    if (has_direction)
+        record_learned_terms(l, st, rec, weight);
 }
 
 static bool fallback_settled(const RegionStats *st)
@@ -862,16 +731,13 @@ static void fit_fine_axis(SgMixtureLearner *l, uint32_t region)
     mark_changed(l, region);
 }
 
-void sg_mixture_learn(SgMixtureLearner *l)
+/* The pass before's records into their regions' sums (fine, coarse and
+ * the whole scene's); the regions they touched listed in l->touched, the
+ * fine ones' count in *fine and the coarse ones' in *coarse (after them). */
+static void gather_records(SgMixtureLearner *l, uint32_t *fine, uint32_t *coarse)
 {
-    uint32_t fine = 0, coarse = 0;
     uint32_t *coarse_list = l->touched + l->region_count;
     const uint32_t learning = l->filling ^ 1u;
-    size_t records = 0;
-    for (uint32_t t = 0; t < l->tiles; t++)
-        records += l->buffers[learning * l->tiles + t].count;
-    if (!records)
-        return;
     for (uint32_t t = 0; t < l->tiles; t++) {
         RecordBuffer *b = &l->buffers[learning * l->tiles + t];
         for (size_t i = 0; i < b->count; i++) {
@@ -887,7 +753,7 @@ void sg_mixture_learn(SgMixtureLearner *l)
             }
             if (!l->is_touched[rec->region]) {
                 l->is_touched[rec->region] = 1;
-                l->touched[fine++] = rec->region;
+                l->touched[(*fine)++] = rec->region;
             }
             if (!fallback_settled(&l->global))
                 add_record(&l->global, rec);
@@ -898,12 +764,16 @@ void sg_mixture_learn(SgMixtureLearner *l)
                 l->histogram_sum[((size_t)l->region_count + c) * SG_MIXTURE_BINS + (size_t)rec->bin] += rec->estimate;
             if (!l->coarse_touched[c]) {
                 l->coarse_touched[c] = 1;
-                coarse_list[coarse++] = c;
+                coarse_list[(*coarse)++] = c;
             }
         }
         b->count = 0;
     }
-    /* the whole scene has no axis of its own */
+}
+
+/* The whole scene's choices (it has no axis of its own). */
+static void learn_global(SgMixtureLearner *l)
+{
     int8_t g = (int8_t)choose(&l->global, &l->global_totals, SKELETON_CANDIDATES);
     int8_t gs = (int8_t)best_share(&l->global);
     if (g != l->global_choice || gs != l->global_share_choice) {
@@ -915,6 +785,75 @@ void sg_mixture_learn(SgMixtureLearner *l)
                 (share && l->share_choice[i] < 0 && l->coarse_share_choice[l->coarse_of[i]] < 0))
                 refresh_state(l, i);
     }
+}
+
+/* What changed in coarse region c, for the fine regions it answers for. */
+typedef struct CoarseNews {
+    bool refitted, new_histogram, rechosen, share_rechosen, answers_radiance;
+} CoarseNews;
+
+/* Coarse region c's news to the fine regions it answers for: its cells,
+ * the same normal bin. */
+static void hand_down(SgMixtureLearner *l, uint32_t c, const CoarseNews *news)
+{
+    uint32_t cell = c / 6, bin = c % 6;
+    int cx = (int)(cell % (uint32_t)l->coarse_cells[0]);
+    int cy = (int)(cell / (uint32_t)l->coarse_cells[0] % (uint32_t)l->coarse_cells[1]);
+    int cz = (int)(cell / ((uint32_t)l->coarse_cells[0] * (uint32_t)l->coarse_cells[1]));
+    for (int z = cz * COARSE; z < (cz + 1) * COARSE && z < l->cells[2]; z++)
+        for (int y = cy * COARSE; y < (cy + 1) * COARSE && y < l->cells[1]; y++)
+            for (int x = cx * COARSE; x < (cx + 1) * COARSE && x < l->cells[0]; x++) {
+                uint32_t f = sg_mixture_region_of_cell(&l->view, (uint32_t)x, (uint32_t)y, (uint32_t)z, bin);
+                if (news->refitted && !l->own_axis[f])
+                    set_axis(l, f, &l->coarse_axis[3 * (size_t)c], &l->coarse_point[4 * (size_t)c]);
+                if (news->new_histogram && !l->own_histogram[f]) { /* its histogram is the coarse one, refitted */
+                    l->histogram_of[f] = l->region_count + c;
+                    forget_family(&l->stats[f], HISTOGRAM_FAMILY, l->generation);
+                    mark_changed(l, f);
+                }
+                if ((news->rechosen && l->choice[f] < 0) || (news->share_rechosen && l->share_choice[f] < 0))
+                    refresh_state(l, f);
+                if (news->answers_radiance && !(l->flags[f] & REGION_OWN_RADIANCE))
+                    refresh_radiance(l, f);
+            }
+}
+
+static void learn_coarse(SgMixtureLearner *l, uint32_t c)
+{
+    l->coarse_touched[c] = 0;
+    CoarseNews news;
+    news.refitted =
+        fit_axis(&l->coarse[c], &l->coarse_axis[3 * (size_t)c], &l->coarse_point[4 * (size_t)c], l->generation);
+    news.new_histogram = news.refitted && fit_histogram(l, (size_t)l->region_count + c);
+    int8_t k = (int8_t)choose(&l->coarse[c], &l->coarse_totals, SG_MIXTURE_CANDIDATES);
+    news.rechosen = k != l->coarse_choice[c];
+    int8_t share = (int8_t)best_share(&l->coarse[c]);
+    news.share_rechosen = share != l->coarse_share_choice[c];
+    l->coarse_share_choice[c] = share;
+    /* its radiance goes to its sparse fine regions each time its
+     * samples double: the estimate settles, the copies cost */
+    RegionStats *cs = &l->coarse[c];
+    news.answers_radiance = cs->radiance_samples >= RADIANCE_MIN_SAMPLES &&
+                            cs->radiance_samples >= 2 * cs->radiance_published;
+    if (news.answers_radiance)
+        cs->radiance_published = cs->radiance_samples;
+    if (!news.rechosen && !news.share_rechosen && !news.answers_radiance && !news.refitted)
+        return;
+    l->coarse_choice[c] = k;
+    hand_down(l, c, &news);
+}
+
+void sg_mixture_learn(SgMixtureLearner *l)
+{
+    const uint32_t learning = l->filling ^ 1u;
+    size_t records = 0;
+    for (uint32_t t = 0; t < l->tiles; t++)
+        records += l->buffers[learning * l->tiles + t].count;
+    if (!records)
+        return;
+    uint32_t fine = 0, coarse = 0;
+    gather_records(l, &fine, &coarse);
+    learn_global(l);
     for (uint32_t i = 0; i < fine; i++) {
         l->is_touched[l->touched[i]] = 0;
         fit_fine_axis(l, l->touched[i]);
@@ -923,49 +862,9 @@ void sg_mixture_learn(SgMixtureLearner *l)
         refresh_state(l, l->touched[i]);
         refresh_radiance(l, l->touched[i]);
     }
-    for (uint32_t i = 0; i < coarse; i++) {
-        uint32_t c = coarse_list[i];
-        l->coarse_touched[c] = 0;
-        bool refitted =
-            fit_axis(&l->coarse[c], &l->coarse_axis[3 * (size_t)c], &l->coarse_point[4 * (size_t)c], l->generation);
-        bool new_histogram = refitted && fit_histogram(l, (size_t)l->region_count + c);
-        int8_t k = (int8_t)choose(&l->coarse[c], &l->coarse_totals, SG_MIXTURE_CANDIDATES);
-        bool rechosen = k != l->coarse_choice[c];
-        int8_t share = (int8_t)best_share(&l->coarse[c]);
-        bool share_rechosen = share != l->coarse_share_choice[c];
-        l->coarse_share_choice[c] = share;
-        /* its radiance goes to its sparse fine regions each time its
-         * samples double: the estimate settles, the copies cost */
-        RegionStats *cs = &l->coarse[c];
-        bool answers_radiance = cs->radiance_samples >= RADIANCE_MIN_SAMPLES &&
-                                cs->radiance_samples >= 2 * cs->radiance_published;
-        if (answers_radiance)
-            cs->radiance_published = cs->radiance_samples;
-        if (!rechosen && !share_rechosen && !answers_radiance && !refitted)
-            continue;
-        l->coarse_choice[c] = k;
-        /* the fine regions it answers for: its cells, same normal bin */
-        uint32_t cell = c / 6, bin = c % 6;
-        int cx = (int)(cell % (uint32_t)l->coarse_cells[0]);
-        int cy = (int)(cell / (uint32_t)l->coarse_cells[0] % (uint32_t)l->coarse_cells[1]);
-        int cz = (int)(cell / ((uint32_t)l->coarse_cells[0] * (uint32_t)l->coarse_cells[1]));
-        for (int z = cz * COARSE; z < (cz + 1) * COARSE && z < l->cells[2]; z++)
-            for (int y = cy * COARSE; y < (cy + 1) * COARSE && y < l->cells[1]; y++)
-                for (int x = cx * COARSE; x < (cx + 1) * COARSE && x < l->cells[0]; x++) {
-                    uint32_t f = sg_mixture_region_of_cell(&l->view, (uint32_t)x, (uint32_t)y, (uint32_t)z, bin);
-                    if (refitted && !l->own_axis[f])
-                        set_axis(l, f, &l->coarse_axis[3 * (size_t)c], &l->coarse_point[4 * (size_t)c]);
-                    if (new_histogram && !l->own_histogram[f]) { /* its histogram is the coarse one, refitted */
-                        l->histogram_of[f] = l->region_count + c;
-                        forget_family(&l->stats[f], HISTOGRAM_FAMILY, l->generation);
-                        mark_changed(l, f);
-                    }
-                    if ((rechosen && l->choice[f] < 0) || (share_rechosen && l->share_choice[f] < 0))
-                        refresh_state(l, f);
-                    if (answers_radiance && !(l->flags[f] & REGION_OWN_RADIANCE))
-                        refresh_radiance(l, f);
-                }
-    }
+    const uint32_t *coarse_list = l->touched + l->region_count;
+    for (uint32_t i = 0; i < coarse; i++)
+        learn_coarse(l, coarse_list[i]);
     l->global_radiance = rms_radiance(&l->global);
 }
 
@@ -1032,184 +931,4 @@ bool sg_mixture_region_point(const SgMixtureLearner *l, uint32_t region, Vec3 *p
     const float *p = &l->view_point[4 * (size_t)region];
     *point = v3(p[0], p[1], p[2]);
     return p[3] > 0.0f;
-}
-
-/* region count, the scene's radiance, then per region its state byte,
- * radiance, axis and point, then per region its portal share; then the
- * histograms in use: their count, each entry's index and distribution, and
- * per region the entry it uses */
-static size_t fixed_view_size(const SgMixtureLearner *l)
-{
-    return sizeof(uint32_t) + sizeof(float) + (size_t)l->region_count * (2 + 8 * sizeof(float));
-}
-
-#define HISTOGRAM_BYTES (sizeof(uint32_t) + SG_MIXTURE_BINS * sizeof(float))
-
-/* The histogram entries some region's view uses, marked in `used` (one
- * byte an entry); their count. */
-static uint32_t used_histograms(const SgMixtureLearner *l, uint8_t *used)
-{
-    uint32_t n = 0;
-    for (uint32_t r = 0; r < l->region_count; r++) {
-        uint32_t e = l->view_histogram_of[r];
-        if (e != SG_NO_REGION && !used[e]) {
-            used[e] = 1;
-            n++;
-        }
-    }
-    return n;
-}
-
-size_t sg_mixture_view_size(const SgMixtureLearner *l)
-{
-    uint8_t *used = calloc((size_t)l->region_count + l->coarse_count, 1);
-    if (!used)
-        return 0;
-    uint32_t n = used_histograms(l, used);
-    free(used);
-    return fixed_view_size(l) + sizeof(uint32_t) + n * HISTOGRAM_BYTES + sizeof(uint32_t) * l->region_count;
-}
-
-void sg_mixture_view_save(const SgMixtureLearner *l, void *out)
-{
-    unsigned char *o = out;
-    memcpy(o, &l->region_count, sizeof(uint32_t));
-    memcpy(o + 4, &l->view.global_radiance, sizeof(float));
-    memcpy(o + 8, l->view_state, l->region_count);
-    memcpy(o + 8 + l->region_count, l->view_radiance, sizeof(float) * l->region_count);
-    memcpy(o + 8 + l->region_count * (size_t)5, l->view_axis, 3 * sizeof(float) * l->region_count);
-    memcpy(o + 8 + l->region_count * (size_t)17, l->view_point, 4 * sizeof(float) * l->region_count);
-    memcpy(o + 8 + l->region_count * (size_t)33, l->view_portal_share, l->region_count);
-    o += fixed_view_size(l);
-    uint32_t entries = l->region_count + l->coarse_count;
-    uint8_t *used = calloc(entries, 1);
-    uint32_t n = used ? used_histograms(l, used) : 0;
-    memcpy(o, &n, sizeof n);
-    o += sizeof n;
-    for (uint32_t e = 0; used && e < entries; e++)
-        if (used[e]) {
-            memcpy(o, &e, sizeof e);
-            memcpy(o + sizeof e, &l->view_histogram[(size_t)e * SG_MIXTURE_BINS], SG_MIXTURE_BINS * sizeof(float));
-            o += HISTOGRAM_BYTES;
-        }
-    memcpy(o, l->view_histogram_of, sizeof(uint32_t) * l->region_count);
-    free(used);
-}
-
-bool sg_mixture_view_restore(SgMixtureLearner *l, const void *in, size_t size)
-{
-    const unsigned char *i = in;
-    uint32_t regions, n;
-    size_t fixed = fixed_view_size(l), entries = (size_t)l->region_count + l->coarse_count;
-    if (size < fixed + sizeof n)
-        return false;
-    memcpy(&regions, i, sizeof regions);
-    memcpy(&n, i + fixed, sizeof n);
-    if (regions != l->region_count || n > entries ||
-        size != fixed + sizeof n + n * HISTOGRAM_BYTES + sizeof(uint32_t) * l->region_count)
-        return false;
-    const unsigned char *h = i + fixed + sizeof n, *of = h + n * HISTOGRAM_BYTES;
-    for (uint32_t k = 0; k < n; k++, h += HISTOGRAM_BYTES) {
-        uint32_t e;
-        memcpy(&e, h, sizeof e);
-        float last; /* a cumulative distribution ends at 1 */
-        memcpy(&last, h + sizeof e + (SG_MIXTURE_BINS - 1) * sizeof(float), sizeof last);
-        if (e >= entries || last != 1.0f)
-            return false;
-        memcpy(&l->view_histogram[(size_t)e * SG_MIXTURE_BINS], h + sizeof e, SG_MIXTURE_BINS * sizeof(float));
-    }
-    const unsigned char *share = i + 8 + l->region_count * (size_t)33;
-    for (uint32_t r = 0; r < l->region_count; r++)
-        if (share[r] >= SG_PORTAL_SHARES)
-            return false;
-    for (uint32_t r = 0; r < l->region_count; r++) {
-        uint32_t e;
-        memcpy(&e, of + sizeof e * r, sizeof e);
-        if (e != SG_NO_REGION && e >= entries)
-            return false;
-        l->view_histogram_of[r] = e;
-    }
-    memcpy(&l->view.global_radiance, i + 4, sizeof(float));
-    memcpy(l->view_state, i + 8, l->region_count);
-    memcpy(l->view_radiance, i + 8 + l->region_count, sizeof(float) * l->region_count);
-    memcpy(l->view_axis, i + 8 + l->region_count * (size_t)5, 3 * sizeof(float) * l->region_count);
-    memcpy(l->view_point, i + 8 + l->region_count * (size_t)17, 4 * sizeof(float) * l->region_count);
-    memcpy(l->view_portal_share, share, l->region_count);
-    return true;
-}
-
-/* ---- the histogram's density ------------------------------------------------ */
-
-/* The octahedral map of the sphere onto the square [-1, 1]^2: w / |w|_1 on
- * the octahedron, its lower half folded out to the corners. No
- * trigonometry either way (a bounce draws and evaluates it several times;
- * the equal-area map's atan, sin and cos cost the Cornell box 40% of its
- * rays per second). Its solid angle per unit of the square is 1 / |p|^3
- * for p on the octahedron (|p|_1 = 1), i.e. |w|_1^3 for unit w: between 1
- * and 3^1.5 across the square, so a bin's solid angle is not all equal and
- * the density within a bin follows that factor. */
-/* The fold between the octahedron's lower half and the square's corners:
- * its own inverse. */
-static inline void octahedral_fold(float *x, float *y)
-{
-    float fx = copysignf(1.0f - fabsf(*y), *x), fy = copysignf(1.0f - fabsf(*x), *y);
-    *x = fx, *y = fy;
-}
-
-static inline void octahedral_square(Vec3 w, float *px, float *py, float *l1)
-{
-    float s = fabsf(w.x) + fabsf(w.y) + fabsf(w.z);
-    *px = w.x / s, *py = w.y / s, *l1 = s;
-    if (w.z < 0.0f)
-        octahedral_fold(px, py);
-}
-
-static inline uint32_t octahedral_bin(float px, float py)
-{
-    int x = (int)((px + 1.0f) * (0.5f * SG_MIXTURE_HIST_RES)), y = (int)((py + 1.0f) * (0.5f * SG_MIXTURE_HIST_RES));
-    x = x < 0 ? 0 : x >= SG_MIXTURE_HIST_RES ? SG_MIXTURE_HIST_RES - 1 : x;
-    y = y < 0 ? 0 : y >= SG_MIXTURE_HIST_RES ? SG_MIXTURE_HIST_RES - 1 : y;
-    return (uint32_t)(y * SG_MIXTURE_HIST_RES + x);
-}
-
-uint32_t sg_mixture_histogram_bin(Vec3 w)
-{
-    float px, py, l1;
-    octahedral_square(w, &px, &py, &l1);
-    return octahedral_bin(px, py);
-}
-
-float sg_mixture_histogram_pdf(const float *cdf, Vec3 w)
-{
-    float px, py, l1;
-    octahedral_square(w, &px, &py, &l1);
-    uint32_t b = octahedral_bin(px, py);
-    float p = cdf[b] - (b ? cdf[b - 1] : 0.0f);
-    /* the bin's probability over its area of the square (4 / bins), times
-     * the square's area per solid angle, |p|^3 = 1 / |w|_1^3 */
-    float inv = 1.0f / l1;
-    return fmaxf(p, 0.0f) * (SG_MIXTURE_BINS * 0.25f) * inv * inv * inv;
-}
-
-Vec3 sg_mixture_histogram_sample(const float *cdf, float u1, float u2)
-{
-    /* the first bin whose cumulative probability exceeds u1 */
-    uint32_t lo = 0, hi = SG_MIXTURE_BINS - 1;
-    while (lo < hi) {
-        uint32_t mid = (lo + hi) / 2;
-        if (cdf[mid] > u1)
-            hi = mid;
-        else
-            lo = mid + 1;
-    }
-    float below = lo ? cdf[lo - 1] : 0.0f, p = cdf[lo] - below;
-    float s = p > 0.0f ? (u1 - below) / p : 0.5f;
-    s = fminf(fmaxf(s, 0.0f), 0x1.fffffep-1f);
-    const float cell = 2.0f / SG_MIXTURE_HIST_RES;
-    float x = -1.0f + ((float)(lo % SG_MIXTURE_HIST_RES) + s) * cell;
-    float y = -1.0f + ((float)(lo / SG_MIXTURE_HIST_RES) + u2) * cell;
-    float z = 1.0f - fabsf(x) - fabsf(y);
-    if (z < 0.0f)
-        octahedral_fold(&x, &y);
-    return v3_normalize(v3(x, y, z));
 }

@@ -2,8 +2,8 @@
  * vertex. The integrator (render/integrator.c) does not know which guide
  * it runs; each sampling mode is one file implementing these calls:
  *   guide_bsdf.c           bsdf: the material's own sampler
- *   guide_skeleton_rule.c  skeleton: the paper's rule (section 3.4), biased
- *   guide_mixture.c        guided: BSDF and a lobe toward the skeleton's
+ *   guide_skeleton.c       skeleton: the paper's rule (section 3.4), biased
+ *   guide_guided.c         guided: BSDF and a lobe toward the skeleton's
  *                          importance point, mixed per region as learned
  *   guide_openpgl.c        openpgl: the peer, Open PGL's learned field
  * A new guide is a new file defining its PathGuideKind (what the mode is,

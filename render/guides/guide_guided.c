@@ -368,7 +368,7 @@ static PathGuide *mixture_create(const PathGuideSetup *setup, SgError *err)
     return &x->base;
 }
 
-const PathGuideKind guide_mixture_kind = {
+const PathGuideKind guide_guided_kind = {
     .mode = {.name = "guided",
              .help = "unbiased mixture of BSDF and a lobe toward the skeleton's\nimportance point (default with a cache)",
              .uses_cache = true,

@@ -103,7 +103,7 @@ static PathGuide *rule_create(const PathGuideSetup *setup, SgError *err)
     return &s->base;
 }
 
-const PathGuideKind guide_skeleton_rule_kind = {
+const PathGuideKind guide_skeleton_kind = {
     .mode = {.name = "skeleton",
              .help = "the paper's rule as written (biased; for reproduction)",
              .uses_cache = true,
