@@ -148,7 +148,9 @@ static bool obj(MtsParser *p, XmlNode *shape, const char *path, const SgTransfor
     SgMeshFileMaterials rules = {.name = "mitsuba", .plain = any_material, .context = &tmp};
     SgTransform identity;
     sg_transform_identity(&identity);
-    bool ok = sg_mesh_file_load(&tmp, &p->images, path, &identity, &rules, p->err);
+    SgError local = {0};
+    bool ok = sg_mesh_file_load(&tmp, &p->images, path, &identity, &rules, &local) ||
+              mts_fail(p, shape, "%s", local.message);
     SgScene *s = tmp.scene;
     if (ok && s->triangle_count == 0)
         ok = mts_fail(p, shape, "%s: no triangles", path);
