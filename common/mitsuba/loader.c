@@ -401,11 +401,28 @@ static bool declaration(MtsParser *p, XmlNode *n)
     return true;
 }
 
+/* The ids of an element and of everything nested in it (a bsdf's id
+ * inside a bumpmap is known to the whole scene, as in Mitsuba). */
+static bool register_ids(MtsParser *p, XmlNode *n, int depth)
+{
+    if (depth > 64)
+        return mts_fail(p, n, "elements nested too deeply");
+    if (!mts_substitute(p, n) || !mts_register_id(p, n))
+        return false;
+    for (size_t i = 0; i < n->child_count; i++)
+        if (!mts_is_tag(n->children[i], "ref") && !register_ids(p, n->children[i], depth + 1))
+            return false;
+    return true;
+}
+
 static bool scene_children(MtsParser *p, XmlNode *scene)
 {
     for (size_t i = 0; i < scene->child_count; i++) {
         XmlNode *n = scene->children[i];
         bool ok;
+        if (!mts_is_tag(n, "default") && !mts_is_tag(n, "include") && !mts_is_tag(n, "path") &&
+            !mts_is_tag(n, "alias") && !register_ids(p, n, 0))
+            return false;
         if (mts_is_tag(n, "default"))
             ok = define_default(p, n);
         else if (mts_is_tag(n, "include"))

@@ -153,7 +153,9 @@ bool mts_register_id(MtsParser *p, const XmlNode *n)
     if (!id)
         return true;
     const XmlNode *old = mts_lookup_id(p, id);
-    if (old && old != n)
+    if (old == n)
+        return true;
+    if (old)
         mts_warn(p, n, "an id given twice: references name the later element");
     if (!MTS_RESERVE(p, p->ids, p->id_count, p->id_capacity, 1))
         return false;
@@ -507,6 +509,16 @@ bool mts_transform(MtsParser *p, const XmlNode *obj, const char *name, SgTransfo
         return false;
     if (!n)
         return true;
+    if (mts_is_tag(n, "animation")) { /* motion: where it starts */
+        mts_warn(p, n, "animated transforms are taken at their first key");
+        const XmlNode *first = NULL;
+        for (size_t i = 0; !first && i < n->child_count; i++)
+            if (mts_is_tag(n->children[i], "transform"))
+                first = n->children[i];
+        if (!first)
+            return mts_fail(p, n, "<animation> without a <transform>");
+        n = first;
+    }
     if (!mts_is_tag(n, "transform"))
         return mts_fail(p, n, "\"%s\" must be a <transform>", name);
     if (present)

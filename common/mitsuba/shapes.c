@@ -152,8 +152,9 @@ static bool obj(MtsParser *p, XmlNode *shape, const char *path, const SgTransfor
     bool ok = sg_mesh_file_load(&tmp, &p->images, path, &identity, &rules, &local) ||
               mts_fail(p, shape, "%s", local.message);
     SgScene *s = tmp.scene;
-    if (ok && s->triangle_count == 0)
+    if (ok && s->triangle_count == 0 && tmp.dropped_degenerate == 0)
         ok = mts_fail(p, shape, "%s: no triangles", path);
+    p->core.dropped_degenerate += tmp.dropped_degenerate; /* counted as every other mesh's */
     float *uvs = NULL;
     if (ok && s->uvs) { /* Mitsuba flips OBJ's v (flip_tex_coords, true unless told) */
         bool flip_v;
@@ -166,8 +167,8 @@ static bool obj(MtsParser *p, XmlNode *shape, const char *path, const SgTransfor
             uvs[2 * v + 1] = flip_v ? 1.0f - s->uvs[2 * v + 1] : s->uvs[2 * v + 1];
         }
     }
-    ok = ok && emit_mesh(p, shape, path, s->positions, s->vertex_count, s->indices, s->triangle_count, NULL, uvs,
-                         xf);
+    ok = ok && (s->triangle_count == 0 || emit_mesh(p, shape, path, s->positions, s->vertex_count, s->indices, s->triangle_count, NULL,
+                                                    uvs, xf));
     free(uvs);
     sg_scene_free(s);
     return ok;
