@@ -246,6 +246,19 @@ Test(mitsuba_shapes, flip_normals_turns_an_area_light_over)
     }
 }
 
+/* A mirroring to_world turns a rectangle's winding over but not its normal
+ * (Mitsuba takes it through the inverse transpose): the light still faces +z. */
+Test(mitsuba_shapes, mirrored_analytic_light_keeps_its_side)
+{
+    SgScene *s = load_body("3.0.0", "<shape type=\"rectangle\"><transform name=\"to_world\"><scale x=\"-2\"/>"
+                                    "</transform><emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/>"
+                                    "</emitter></shape>\n");
+    cr_assert_eq(s->light_count, 1);
+    cr_expect(fabs(s->lights[0].normal[2] - 1) < 1e-12, "normal z %g", s->lights[0].normal[2]);
+    cr_expect(fabs(s->lights[0].area - 8) < 1e-12);
+    sg_scene_free(s);
+}
+
 /* ---- transforms ----------------------------------------------------------- */
 
 static void expect_point(const double *p, double x, double y, double z)
@@ -492,6 +505,7 @@ static void expect_error(const char *body, const char *what)
 Test(mitsuba_errors, meaningless_scenes)
 {
     expect_error("<shape type=\"cube\"/>\n", "no light");
+    expect_error("<shape type=\"cube\"/><emitter type=\"sunsky\"/>\n", "no light (sunsky is not supported)");
     expect_error("<shape type=\"cube\"><ref id=\"nothing\"/></shape>" LIGHT, "unknown id \"nothing\"");
     expect_error("<shape type=\"ply\"><string name=\"filename\" value=\"absent.ply\"/></shape>" LIGHT, "absent.ply");
     expect_error("<shape type=\"obj\"><string name=\"filename\" value=\"absent.obj\"/></shape>" LIGHT, "absent.obj");

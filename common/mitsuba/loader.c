@@ -155,6 +155,8 @@ static bool emitter(MtsParser *p, XmlNode *e)
             return false;
     } else {
         mts_warn(p, e, "emitter \"%s\" is not supported: left out", type);
+        if (!p->unsupported_emitter[0])
+            snprintf(p->unsupported_emitter, sizeof p->unsupported_emitter, "%.40s", type);
         return true;
     }
     return sg_builder_add_light_source(&p->core, &l, p->err);
@@ -539,7 +541,9 @@ SgScene *sg_mitsuba_scene_load(const char *path, SgError *err)
         ok = sg_fail(err, "%s: the scene has no triangles%s", path,
                      p.core.dropped_degenerate ? " (all were degenerate)" : "");
     ok = ok && sg_builder_finish(&p.core, err);
-    if (ok && s->light_count == 0 && s->light_source_count == 0)
+    if (ok && s->light_count == 0 && s->light_source_count == 0 && p.unsupported_emitter[0])
+        ok = sg_fail(err, "%s: the scene has no light (%s is not supported)", path, p.unsupported_emitter);
+    else if (ok && s->light_count == 0 && s->light_source_count == 0)
         ok = sg_fail(err, "%s: the scene has no light (no area, point, spot, directional, constant or envmap emitter)",
                      path);
     if (ok)

@@ -105,6 +105,7 @@ typedef struct MtsParser {
     MtsGroup *defining; /* inside a shapegroup */
 
     bool has_sensor;
+    char unsupported_emitter[64]; /* the first emitter type left out, for "no light" */
     MtsWarning *warnings;
     size_t warning_count, warning_capacity;
     SgImageAverages images;

@@ -49,10 +49,13 @@ static void flip_triangle(uint32_t *idx)
 /* Appends a mesh (object space, placed by xf) with the shape's bsdf and
  * emitter, into the scene or the shapegroup being defined. Emission leaves
  * the side the vertex normals point to where there are normals, else the
- * winding's (flip_normals turns both over), as Mitsuba's area lights. */
+ * winding's (flip_normals turns both over), as Mitsuba's area lights. An
+ * analytic shape's normal goes through the inverse transpose of to_world,
+ * which keeps its side where a mirroring transform turns the winding over:
+ * its triangles are turned back. */
 static bool emit_mesh(MtsParser *p, const XmlNode *shape, const char *what, const double *positions,
                       uint32_t vertex_count, uint32_t *indices, uint32_t triangle_count, const double *normals,
-                      const float *uvs, const SgTransform *xf)
+                      const float *uvs, const SgTransform *xf, bool analytic)
 {
     const XmlNode *bsdf;
     float radiance[3];
@@ -72,6 +75,8 @@ static bool emit_mesh(MtsParser *p, const XmlNode *shape, const char *what, cons
     }
     if (!mts_scene_material(p, material, emits ? radiance : NULL, &scene_material))
         return false;
+    if (analytic && sg_transform_determinant(xf) < 0)
+        flip = !flip;
     for (uint32_t t = 0; t < triangle_count; t++) {
         uint32_t *idx = indices + 3 * (size_t)t;
         bool turn = flip;
@@ -168,7 +173,7 @@ static bool obj(MtsParser *p, XmlNode *shape, const char *path, const SgTransfor
         }
     }
     ok = ok && (s->triangle_count == 0 || emit_mesh(p, shape, path, s->positions, s->vertex_count, s->indices, s->triangle_count, NULL,
-                                                    uvs, xf));
+                                                    uvs, xf, false));
     free(uvs);
     sg_scene_free(s);
     return ok;
@@ -191,7 +196,7 @@ static bool mesh_file(MtsParser *p, XmlNode *shape, const char *type, const SgTr
         if (!sg_ply_mesh_read(&mesh, path, &local))
             return mts_fail(p, shape, "%s", local.message);
         bool ok = emit_mesh(p, shape, path, mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count,
-                            mesh.normals, mesh.uvs, xf);
+                            mesh.normals, mesh.uvs, xf, false);
         sg_ply_mesh_release(&mesh);
         return ok;
     }
@@ -202,7 +207,7 @@ static bool mesh_file(MtsParser *p, XmlNode *shape, const char *type, const SgTr
     if (!mts_read_serialized(path, index, &mesh, &local))
         return mts_fail(p, shape, "%s", local.message);
     bool ok = emit_mesh(p, shape, path, mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count,
-                        mesh.normals, mesh.uvs, xf);
+                        mesh.normals, mesh.uvs, xf, false);
     mts_mesh_release(&mesh);
     return ok;
 }
@@ -259,7 +264,7 @@ static bool quadric_shape(MtsParser *p, XmlNode *shape, const char *type, const 
     char what[4300];
     snprintf(what, sizeof what, "%s:%d", shape->doc->path, shape->line);
     bool ok = emit_mesh(p, shape, what, mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count, NULL,
-                        mesh.uvs, &xf);
+                        mesh.uvs, &xf, true);
     sg_quadric_mesh_free(&mesh);
     return ok;
 }
@@ -277,8 +282,8 @@ static bool rectangle_or_cube(MtsParser *p, XmlNode *shape, bool cube, const SgT
     char what[4300];
     snprintf(what, sizeof what, "%s:%d", shape->doc->path, shape->line);
     if (cube)
-        return emit_mesh(p, shape, what, &corners[0][0], 8, cube_idx, 12, NULL, NULL, xf);
-    return emit_mesh(p, shape, what, &square[0][0], 4, square_idx, 2, NULL, square_uv, xf);
+        return emit_mesh(p, shape, what, &corners[0][0], 8, cube_idx, 12, NULL, NULL, xf, true);
+    return emit_mesh(p, shape, what, &square[0][0], 4, square_idx, 2, NULL, square_uv, xf, true);
 }
 
 /* ---- groups ------------------------------------------------------------- */
