@@ -18,12 +18,13 @@
 /* What every hand-written scene needs to load: a point light. */
 #define LIGHT "<emitter type=\"point\"><point name=\"position\" x=\"0\" y=\"5\" z=\"0\"/></emitter>\n"
 
-static const char *dir;
+static char dir[4096];
 
+/* The test's temporary folder (copied: the helpers' strings are reused). */
 static const char *folder(void)
 {
-    if (!dir)
-        dir = sg_test_tmpdir();
+    if (!dir[0])
+        snprintf(dir, sizeof dir, "%s", sg_test_tmpdir());
     return dir;
 }
 
@@ -539,7 +540,8 @@ static void write_bytes(const char *name, const unsigned char *data, size_t size
     char path[4300];
     snprintf(path, sizeof path, "%s/%s", folder(), name);
     FILE *f = fopen(path, "wb");
-    cr_assert(f && fwrite(data, 1, size, f) == size && fclose(f) == 0);
+    cr_assert(f, "cannot write %s", path);
+    cr_assert(fwrite(data, 1, size, f) == size && fclose(f) == 0, "cannot write %s (%zu bytes)", path, size);
 }
 
 Test(mitsuba_errors, serialized_cut_short_or_absurd)
@@ -568,6 +570,54 @@ Test(mitsuba_errors, serialized_cut_short_or_absurd)
     expect_error("<shape type=\"serialized\"><string name=\"filename\" value=\"absurd.serialized\"/>"
                  "<integer name=\"shape_index\" value=\"3\"/></shape>" LIGHT,
                  "absurd");
+}
+
+/* Every cut of a scene file and of a serialized mesh either loads or fails
+ * with one line: never a crash, never a scene with a message. */
+Test(mitsuba_errors, every_truncation_fails_cleanly, .timeout = 60)
+{
+    const char *inputs[] = {BOX_V06, "tests/data/mitsuba/meshes.serialized"};
+    const char *companions[] = {"quad.ply", "meshes.serialized", "light_v06.xml"};
+    for (int i = 0; i < 3; i++) { /* what the box names, beside its cut copies */
+        char from[4300];
+        snprintf(from, sizeof from, "tests/data/mitsuba/%s", companions[i]);
+        FILE *f = fopen(sg_test_source_path(from), "rb");
+        cr_assert(f);
+        unsigned char data[8192];
+        size_t size = fread(data, 1, sizeof data, f);
+        fclose(f);
+        write_bytes(companions[i], data, size);
+    }
+    for (int which = 0; which < 2; which++) {
+        FILE *f = fopen(sg_test_source_path(inputs[which]), "rb");
+        cr_assert(f);
+        unsigned char data[8192];
+        size_t size = fread(data, 1, sizeof data, f);
+        fclose(f);
+        cr_assert(size > 0 && size < sizeof data);
+        for (size_t cut = 0; cut < size; cut += which ? 1 : 23) {
+            const char *path;
+            if (which) {
+                write_bytes("cut.serialized", data, cut);
+                path = write_xml("cut_mesh.xml", "3.0.0",
+                                 "<shape type=\"serialized\"><string name=\"filename\" value=\"cut.serialized\"/>"
+                                 "<integer name=\"shape_index\" value=\"1\"/></shape>" LIGHT);
+            } else {
+                write_bytes("cut_box.xml", data, cut);
+                static char box[4300];
+                snprintf(box, sizeof box, "%s/cut_box.xml", folder());
+                path = box;
+            }
+            SgError err = {0};
+            SgScene *s = sg_scene_load(path, &err);
+            if (s)
+                cr_expect(!err.failed, "a scene and an error at cut %zu", cut);
+            else
+                cr_expect(err.failed && err.message[0] && !strchr(err.message, '\n'), "cut %zu: \"%s\"", cut,
+                          err.message);
+            sg_scene_free(s);
+        }
+    }
 }
 
 /* ---- the programs take .xml files --------------------------------------- */
