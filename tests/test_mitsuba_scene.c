@@ -371,6 +371,14 @@ Test(mitsuba_bsdfs, conductors)
     m = material_of("<bsdf type=\"conductor\"><rgb name=\"eta\" value=\"0.2 0.3 0.4\"/>"
                     "<rgb name=\"k\" value=\"3 4 5\"/></bsdf>", NULL);
     cr_expect(m.eta[2] == 0.4f && m.k[0] == 3.0f, "explicit eta and k");
+    /* a tint keeps the tinted reflectance at normal incidence: eta 1 and its k */
+    SgScene *s;
+    m = material_of("<bsdf type=\"conductor\"><rgb name=\"eta\" value=\"2\"/><rgb name=\"k\" value=\"0\"/>"
+                    "<rgb name=\"specular_reflectance\" value=\"0.5\"/></bsdf>", &s);
+    cr_expect(fabsf(m.diffuse[0] - 0.5f / 9) < 1e-6f, "0.5 of ((2-1)/(2+1))^2: %g", m.diffuse[0]);
+    cr_expect(m.eta[0] == 1.0f && fabsf(m.k[0] - sg_conductor_k_of_reflectance(0.5f / 9)) < 1e-6f);
+    cr_expect(has_warning(s, "specular_reflectance"));
+    sg_scene_free(s);
 }
 
 Test(mitsuba_bsdfs, wrappers_and_blends)
@@ -416,6 +424,14 @@ Test(mitsuba_bsdfs, textures)
     cr_expect_eq(t->uscale, 2.0f, "Mitsuba's squares are half a unit");
     cr_expect_eq(t->input[0].value[0], 1.0f);
     cr_expect_eq(t->input[1].value[2], 1.0f);
+    sg_scene_free(s);
+    m = material_of("<bsdf type=\"diffuse\"><texture type=\"scale\" name=\"reflectance\">"
+                    "<float name=\"scale\" value=\"0.5\"/><texture type=\"checkerboard\"/></texture></bsdf>", &s);
+    cr_assert_eq(s->texture_count, 2, "the checkerboard, then its scale");
+    cr_expect_eq(m.diffuse_texture, 2);
+    cr_expect_eq(s->textures[1].kind, SG_TEXTURE_SCALE);
+    cr_expect_eq(s->textures[1].input[0].texture, 1);
+    cr_expect(fabsf(m.diffuse[0] - 0.15f) < 1e-6f, "half the checkerboard's mean 0.3: %g", m.diffuse[0]);
     sg_scene_free(s);
     m = material_of("<bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\">"
                     "<string name=\"filename\" value=\"missing.png\"/></texture></bsdf>", &s);

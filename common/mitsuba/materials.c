@@ -4,7 +4,7 @@
  * dielectric, roughdielectric and thindielectric as glass, phong as the
  * glossy material; twosided, mask, bumpmap and normalmap pass their inner
  * bsdf through, blendbsdf blends two diffuse ones and otherwise keeps the
- * heavier. Textures: bitmap and checkerboard. */
+ * heavier. Textures: bitmap, checkerboard and scale. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -52,7 +52,11 @@ static bool bitmap(MtsParser *p, const XmlNode *n, SgTexture *t, char *path, siz
     if (!file)
         return mts_fail(p, n, "bitmap texture without a \"filename\"");
     mts_resolve(p, n, file, path, path_size);
-    double gamma = raw ? 0 : sg_image_default_gamma(path);
+    double gamma = raw ? 0 : sg_image_default_gamma(path), file_gamma;
+    if (!mts_float(p, n, "gamma", 0, &file_gamma)) /* 0.x: the file's encoding, -1 sRGB */
+        return false;
+    if (file_gamma == -1 || file_gamma > 0)
+        gamma = file_gamma == 1 ? 0 : file_gamma;
     float mean[3] = {0.5f, 0.5f, 0.5f};
     bool readable = sg_image_average(&p->images, path, gamma, mean, NULL);
     if (!readable)
@@ -77,8 +81,8 @@ static bool checkerboard(MtsParser *p, const XmlNode *n, SgTexture *t)
 {
     float c0[3], c1[3];
     static const float dark[3] = {0.4f, 0.4f, 0.4f}, darker[3] = {0.2f, 0.2f, 0.2f};
-    if (!mts_color(p, n, "color0", dark, c0, NULL, NULL) || !mts_color(p, n, "color1", darker, c1, NULL, NULL) ||
-        !texture_uv(p, n, t))
+    if (!mts_color(p, n, "color0", dark, c0, &t->input[0].texture, NULL) ||
+        !mts_color(p, n, "color1", darker, c1, &t->input[1].texture, NULL) || !texture_uv(p, n, t))
         return false;
     t->kind = SG_TEXTURE_CHECKERBOARD;
     t->uscale *= 2;
@@ -115,6 +119,24 @@ static bool texture(MtsParser *p, const XmlNode *n, uint32_t *scene_texture, flo
     } else if (!strcmp(type, "checkerboard")) {
         if (!checkerboard(p, n, &t))
             return false;
+    } else if (!strcmp(type, "scale")) { /* 0.x: a nested texture times a constant */
+        static const float one[3] = {1, 1, 1};
+        float value[3], scale[3];
+        const XmlNode *nested;
+        if (!mts_find_object(p, n, "texture", 0, &nested) ||
+            !mts_color(p, n, "scale", one, scale, &t.input[1].texture, NULL))
+            return false;
+        if (!nested)
+            return mts_fail(p, n, "scale texture without a nested texture");
+        if (!texture(p, nested, &t.input[0].texture, value))
+            return false;
+        t.kind = SG_TEXTURE_SCALE;
+        for (int c = 0; c < 3; c++) {
+            t.input[0].value[c] = value[c];
+            t.input[1].value[c] = scale[c];
+            t.mean[c] = value[c] * scale[c];
+        }
+        varies = t.input[0].texture || t.input[1].texture;
     } else {
         mts_warn(p, n, "texture \"%s\" is not supported: grey 0.5", type);
         t.mean[0] = t.mean[1] = t.mean[2] = 0.5f;
@@ -231,8 +253,7 @@ static bool conductor(MtsParser *p, const XmlNode *n, bool rough, SgMaterial *m)
     static const float one[3] = {1, 1, 1};
     if (!mts_color(p, n, "specular_reflectance", one, tint, NULL, &tinted))
         return false;
-    if (tinted && (tint[0] != 1 || tint[1] != 1 || tint[2] != 1))
-        mts_warn(p, n, "conductor specular_reflectance tints are ignored");
+    tinted = tinted && (tint[0] != 1 || tint[1] != 1 || tint[2] != 1);
     if (!strcmp(name, "none")) {
         m->type = SG_MATERIAL_MIRROR;
         memcpy(m->specular, tint, sizeof tint);
@@ -263,6 +284,20 @@ static bool conductor(MtsParser *p, const XmlNode *n, bool rough, SgMaterial *m)
     }
     m->type = SG_MATERIAL_CONDUCTOR;
     m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
+    if (tinted) {
+        /* Mitsuba multiplies the Fresnel term by the tint; ours cannot, so
+         * the tinted reflectance at normal incidence becomes the metal's,
+         * as pbrt's conductor given a "reflectance" (eta 1) */
+        mts_warn(p, n, "conductor specular_reflectance: the tinted reflectance at normal incidence is kept, with eta 1");
+        for (int c = 0; c < 3; c++) {
+            double e = m->eta[c], k = m->k[c];
+            double f0 = ((e - 1) * (e - 1) + k * k) / ((e + 1) * (e + 1) + k * k);
+            float r = (float)(tint[c] * f0);
+            m->diffuse[c] = r;
+            m->eta[c] = 1;
+            m->k[c] = sg_conductor_k_of_reflectance(r);
+        }
+    }
     return true;
 }
 
