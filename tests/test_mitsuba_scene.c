@@ -329,9 +329,9 @@ Test(mitsuba_sensor, max_depth_rule)
                            "<integrator type=\"path\"><integer name=\"max_depth\" value=\"-1\"/></integrator>",
                            "<integrator type=\"aov\"><integrator type=\"path\"><integer name=\"max_depth\" "
                            "value=\"7\"/></integrator></integrator>",
-                           ""};
-    int want[] = {3, 1024, 7, 1024};
-    for (int i = 0; i < 4; i++) {
+                           "", "<integrator type=\"direct\"/>"};
+    int want[] = {3, 1024, 7, 1024, 2};
+    for (int i = 0; i < 5; i++) {
         char body[1024];
         snprintf(body, sizeof body, "%s<shape type=\"cube\"/>" LIGHT, cases[i]);
         SgScene *s = load_body("3.0.0", body);

@@ -275,9 +275,14 @@ static bool integrator(MtsParser *p, XmlNode *n)
     if (!integrator_depth(p, n, &depth, 0))
         return false;
     const char *type = sg_xml_attr(n, "type");
-    if (type && strcmp(type, "path") && strcmp(type, "volpath") && strcmp(type, "volpath_simple") &&
-        strcmp(type, "guided_path"))
+    bool direct = type && (!strcmp(type, "direct") || !strcmp(type, "direct_projective"));
+    if (direct && depth < 0)
+        depth = 2; /* direct light only: the camera's segment and the light's */
+    else if (type && strcmp(type, "path") && strcmp(type, "volpath") && strcmp(type, "volpath_simple") &&
+             strcmp(type, "guided_path") && !direct)
         mts_warn(p, n, "integrator \"%s\" is taken for its max_depth only", type);
+    if (direct)
+        mts_warn(p, n, "integrator \"%s\" is rendered as paths of at most 2 segments (direct light)", type);
     if (depth == 0) {
         mts_warn(p, n, "max_depth 0 (Mitsuba renders black) is taken as 1");
         depth = 1;
