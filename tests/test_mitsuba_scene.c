@@ -148,6 +148,21 @@ Test(mitsuba_dialects, box_scene_maps_as_written)
     sg_scene_free(s);
 }
 
+/* An included file speaks its own dialect; "$name" reaches into include
+ * names; an alias names the same element. */
+Test(mitsuba_dialects, includes_keep_their_own_dialect)
+{
+    write_xml("old_part.xml", "0.6.0",
+              "<shape type=\"rectangle\"><transform name=\"toWorld\"><translate x=\"5\"/></transform>"
+              "<ref id=\"other\"/></shape>\n");
+    SgScene *s = load_body("3.0.0", "<default name=\"part\" value=\"old_part\"/>\n"
+                                    "<bsdf type=\"diffuse\" id=\"grey\"/>\n<alias id=\"grey\" as=\"other\"/>\n"
+                                    "<include filename=\"$part.xml\"/>\n" LIGHT);
+    cr_expect_eq(s->triangle_count, 2);
+    cr_expect(fabs(s->bounds_min[0] - 4) < 1e-12, "toWorld read in the 0.6 file: %g", s->bounds_min[0]);
+    sg_scene_free(s);
+}
+
 /* ---- shapes ------------------------------------------------------------- */
 
 static double area_of(const char *shape)

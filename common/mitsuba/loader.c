@@ -404,7 +404,8 @@ static bool declaration(MtsParser *p, XmlNode *n)
     if (!mts_substitute(p, n) || !mts_register_id(p, n))
         return false;
     if (!sg_xml_attr(n, "id"))
-        mts_warn(p, n, "a top-level <%s> without an id is never used", n->tag);
+        mts_warn(p, n, "a top-level <%s> without an id is never used (as in Mitsuba: only the ids inside it are "
+                       "reached)", n->tag);
     return true;
 }
 
