@@ -333,6 +333,51 @@ static void clamp_albedo(MtsParser *p, const XmlNode *n, float c[3])
         }
 }
 
+/* plastic and roughplastic: the coated diffuse of index int_ior / ext_ior. */
+static bool plastic(MtsParser *p, const XmlNode *n, bool rough, SgMaterial *m)
+{
+    double int_ior, ext_ior;
+    float spec[3];
+    bool has_spec;
+    static const float one[3] = {1, 1, 1}, half[3] = {0.5f, 0.5f, 0.5f};
+    if (!mts_color(p, n, "diffuse_reflectance", half, m->diffuse, &m->diffuse_texture, NULL) ||
+        !ior(p, n, "int_ior", 1.49, &int_ior) || !ior(p, n, "ext_ior", 1.000277, &ext_ior) ||
+        !mts_color(p, n, "specular_reflectance", one, spec, NULL, &has_spec))
+        return false;
+    if (has_spec && (spec[0] != 1 || spec[1] != 1 || spec[2] != 1))
+        mts_warn(p, n, "plastic specular_reflectance is ignored (the coat is clear)");
+    clamp_albedo(p, n, m->diffuse);
+    m->roughness[0] = m->roughness[1] = 0;
+    if (rough && !alphas(p, n, m->roughness))
+        return false;
+    double eta = int_ior / ext_ior;
+    m->type = SG_MATERIAL_COATED_DIFFUSE;
+    m->ior = (float)(eta > 1 ? eta : 1.49);
+    return true;
+}
+
+/* dielectric, roughdielectric, thindielectric: glass of int_ior / ext_ior. */
+static bool dielectric(MtsParser *p, const XmlNode *n, const char *type, SgMaterial *m)
+{
+    double int_ior, ext_ior;
+    if (!ior(p, n, "int_ior", 1.5046, &int_ior) || !ior(p, n, "ext_ior", 1.000277, &ext_ior))
+        return false;
+    double eta = int_ior / ext_ior;
+    if (eta < 1 && eta > 0)
+        eta = 1 / eta;
+    if (!(eta >= 1 && eta <= 10))
+        return mts_fail(p, n, "dielectric index %g is out of range", eta);
+    if (!strcmp(type, "thindielectric"))
+        mts_warn(p, n, "thindielectric is taken as a solid dielectric");
+    m->roughness[0] = m->roughness[1] = 0;
+    if (!strcmp(type, "roughdielectric") && !alphas(p, n, m->roughness))
+        return false;
+    m->type = SG_MATERIAL_DIELECTRIC;
+    m->ior = (float)eta;
+    m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
+    return true;
+}
+
 static bool make_material(MtsParser *p, const XmlNode *n, MtsMaterial *out, int depth);
 
 /* The inner bsdf of twosided, mask, bumpmap, normalmap (the first nested one). */
@@ -418,26 +463,8 @@ static bool make_material_of_type(MtsParser *p, const XmlNode *n, MtsMaterial *o
         m->type = SG_MATERIAL_DIFFUSE;
         return true;
     }
-    if (!strcmp(type, "plastic") || !strcmp(type, "roughplastic")) {
-        double int_ior, ext_ior;
-        float spec[3];
-        bool has_spec;
-        static const float one[3] = {1, 1, 1};
-        if (!mts_color(p, n, "diffuse_reflectance", half, m->diffuse, &m->diffuse_texture, NULL) ||
-            !ior(p, n, "int_ior", 1.49, &int_ior) || !ior(p, n, "ext_ior", 1.000277, &ext_ior) ||
-            !mts_color(p, n, "specular_reflectance", one, spec, NULL, &has_spec))
-            return false;
-        if (has_spec && (spec[0] != 1 || spec[1] != 1 || spec[2] != 1))
-            mts_warn(p, n, "plastic specular_reflectance is ignored (the coat is clear)");
-        clamp_albedo(p, n, m->diffuse);
-        m->roughness[0] = m->roughness[1] = 0;
-        if (!strcmp(type, "roughplastic") && !alphas(p, n, m->roughness))
-            return false;
-        double eta = int_ior / ext_ior;
-        m->type = SG_MATERIAL_COATED_DIFFUSE;
-        m->ior = (float)(eta > 1 ? eta : 1.49);
-        return true;
-    }
+    if (!strcmp(type, "plastic") || !strcmp(type, "roughplastic"))
+        return plastic(p, n, !strcmp(type, "roughplastic"), m);
     if (!strcmp(type, "conductor") || !strcmp(type, "roughconductor")) {
         bool rough = !strcmp(type, "roughconductor");
         m->roughness[0] = m->roughness[1] = 0;
@@ -445,25 +472,8 @@ static bool make_material_of_type(MtsParser *p, const XmlNode *n, MtsMaterial *o
             return false;
         return true;
     }
-    if (!strcmp(type, "dielectric") || !strcmp(type, "roughdielectric") || !strcmp(type, "thindielectric")) {
-        double int_ior, ext_ior;
-        if (!ior(p, n, "int_ior", 1.5046, &int_ior) || !ior(p, n, "ext_ior", 1.000277, &ext_ior))
-            return false;
-        double eta = int_ior / ext_ior;
-        if (eta < 1 && eta > 0)
-            eta = 1 / eta;
-        if (!(eta >= 1 && eta <= 10))
-            return mts_fail(p, n, "dielectric index %g is out of range", eta);
-        if (!strcmp(type, "thindielectric"))
-            mts_warn(p, n, "thindielectric is taken as a solid dielectric");
-        m->roughness[0] = m->roughness[1] = 0;
-        if (!strcmp(type, "roughdielectric") && !alphas(p, n, m->roughness))
-            return false;
-        m->type = SG_MATERIAL_DIELECTRIC;
-        m->ior = (float)eta;
-        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
-        return true;
-    }
+    if (!strcmp(type, "dielectric") || !strcmp(type, "roughdielectric") || !strcmp(type, "thindielectric"))
+        return dielectric(p, n, type, m);
     if (!strcmp(type, "phong")) {
         double exponent;
         static const float spec_default[3] = {0.2f, 0.2f, 0.2f};
