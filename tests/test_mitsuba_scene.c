@@ -383,6 +383,11 @@ Test(mitsuba_bsdfs, conductors)
     cr_expect_eq(m.type, SG_MATERIAL_CONDUCTOR);
     cr_expect(fabsf(m.eta[1] - 0.924f) < 1e-6f, "copper by default");
     cr_expect(fabsf(m.roughness[0] - 0.3f) < 1e-6f);
+    SgScene *rough;
+    m = material_of("<bsdf type=\"roughconductor\"><texture type=\"checkerboard\" name=\"alpha\"/></bsdf>", &rough);
+    cr_expect(fabsf(m.roughness[0] - 0.3f) < 1e-6f, "a textured alpha is its mean: %g", m.roughness[0]);
+    cr_expect(has_warning(rough, "taken as its mean"));
+    sg_scene_free(rough);
     m = material_of("<bsdf type=\"conductor\"><rgb name=\"eta\" value=\"0.2 0.3 0.4\"/>"
                     "<rgb name=\"k\" value=\"3 4 5\"/></bsdf>", NULL);
     cr_expect(m.eta[2] == 0.4f && m.k[0] == 3.0f, "explicit eta and k");

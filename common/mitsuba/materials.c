@@ -301,26 +301,23 @@ static bool conductor(MtsParser *p, const XmlNode *n, bool rough, SgMaterial *m)
     return true;
 }
 
-/* GGX alphas of a rough bsdf: "alpha", or "alpha_u" and "alpha_v". */
+/* GGX alphas of a rough bsdf: "alpha", or "alpha_u" and "alpha_v" (a
+ * texture: its mean, with a warning). */
 static bool alphas(MtsParser *p, const XmlNode *n, float alpha[2])
 {
-    double a, u, v;
+    static const float tenth[3] = {0.1f, 0.1f, 0.1f};
+    float a[3], u[3], v[3];
     const char *distribution;
-    if (!mts_float(p, n, "alpha", 0.1, &a) || !mts_float(p, n, "alpha_u", a, &u) ||
-        !mts_float(p, n, "alpha_v", a, &v) || !mts_string(p, n, "distribution", "beckmann", &distribution))
+    if (!mts_color(p, n, "alpha", tenth, a, NULL, NULL) || !mts_color(p, n, "alpha_u", a, u, NULL, NULL) ||
+        !mts_color(p, n, "alpha_v", a, v, NULL, NULL) || !mts_string(p, n, "distribution", "beckmann", &distribution))
         return false;
     /* Mitsuba 3's default is beckmann too; GGX is all the renderer has */
     if (strcmp(distribution, "ggx"))
         mts_warn(p, n, "microfacet distribution \"%s\" is taken as GGX of the same alpha", distribution);
-    if (fabs(u - v) > 1e-6 * fmax(u, v))
+    if (fabsf(u[0] - v[0]) > 1e-6f * fmaxf(u[0], v[0]))
         mts_warn(p, n, "anisotropic roughness is oriented around the normal arbitrarily");
-    const XmlNode *tex;
-    if (!mts_find(p, n, "alpha", &tex))
-        return false;
-    if (tex && mts_is_tag(tex, "texture"))
-        return mts_fail(p, tex, "textured roughness is not supported");
-    alpha[0] = (float)fmax(u, 0);
-    alpha[1] = (float)fmax(v, 0);
+    alpha[0] = fmaxf(u[0], 0);
+    alpha[1] = fmaxf(v[0], 0);
     return true;
 }
 
