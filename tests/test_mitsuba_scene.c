@@ -214,7 +214,9 @@ Test(mitsuba_shapes, ply_serialized_and_obj_meshes)
     cr_expect_eq(s->vertex_count, 4);
     cr_expect_eq(s->triangle_count, 2);
     cr_expect(fabs(total_area(s) - 2) < 1e-9);
-    cr_expect_not_null(s->uvs);
+    cr_assert_not_null(s->uvs);
+    /* Mitsuba's v grows down the image, ours (pbrt's) up: the file's 0 is our 1 */
+    cr_expect(s->uvs[1] == 1.0f && s->uvs[5] == 0.0f, "v %g %g", s->uvs[1], s->uvs[5]);
     sg_scene_free(s);
     for (int index = 0; index < 2; index++) {
         snprintf(body, sizeof body,
@@ -233,6 +235,8 @@ Test(mitsuba_shapes, ply_serialized_and_obj_meshes)
                            "<boolean name=\"face_normals\" value=\"true\"/></shape>" LIGHT);
     cr_expect_eq(s->triangle_count, 1);
     cr_expect(fabs(total_area(s) - 2) < 1e-9);
+    cr_assert_not_null(s->uvs);
+    cr_expect(s->uvs[5] == 1.0f, "OBJ's v as it is (Mitsuba's flip undone by ours): %g", s->uvs[5]);
     sg_scene_free(s);
 }
 

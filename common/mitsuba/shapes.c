@@ -134,6 +134,15 @@ static bool emit_mesh(MtsParser *p, const XmlNode *shape, const char *what, cons
 
 /* ---- mesh files --------------------------------------------------------- */
 
+/* Mitsuba looks a bitmap up with v growing down the image from its first
+ * row; our textures follow pbrt, whose v grows up from the last row
+ * (render/textures.c): a Mitsuba v is our 1 - v. */
+static void mitsuba_v_to_ours(float *uvs, uint32_t vertex_count)
+{
+    for (uint32_t v = 0; uvs && v < vertex_count; v++)
+        uvs[2 * (size_t)v + 1] = 1.0f - uvs[2 * (size_t)v + 1];
+}
+
 static bool any_material(const SgMeshFileMaterials *rules, const char *file, uint32_t *id, SgError *err)
 {
     (void)file;
@@ -161,15 +170,18 @@ static bool obj(MtsParser *p, XmlNode *shape, const char *path, const SgTransfor
         ok = mts_fail(p, shape, "%s: no triangles", path);
     p->core.dropped_degenerate += tmp.dropped_degenerate; /* counted as every other mesh's */
     float *uvs = NULL;
-    if (ok && s->uvs) { /* Mitsuba flips OBJ's v (flip_tex_coords, true unless told) */
+    if (ok && s->uvs) {
+        /* Mitsuba turns OBJ's v over (flip_tex_coords, true unless told),
+         * which our 1 - v turns back: the file's v as it is */
         bool flip_v;
         ok = mts_bool(p, shape, "flip_tex_coords", true, &flip_v);
         uvs = malloc((size_t)s->vertex_count * 2 * sizeof(float));
         if (ok && !uvs)
             ok = sg_fail(p->err, "%s: out of memory", p->core.path);
-        for (uint32_t v = 0; ok && v < s->vertex_count; v++) {
-            uvs[2 * v] = s->uvs[2 * v];
-            uvs[2 * v + 1] = flip_v ? 1.0f - s->uvs[2 * v + 1] : s->uvs[2 * v + 1];
+        if (ok) {
+            memcpy(uvs, s->uvs, (size_t)s->vertex_count * 2 * sizeof(float));
+            if (!flip_v)
+                mitsuba_v_to_ours(uvs, s->vertex_count);
         }
     }
     ok = ok && (s->triangle_count == 0 || emit_mesh(p, shape, path, s->positions, s->vertex_count, s->indices, s->triangle_count, NULL,
@@ -195,6 +207,7 @@ static bool mesh_file(MtsParser *p, XmlNode *shape, const char *type, const SgTr
         SgPlyMesh mesh;
         if (!sg_ply_mesh_read(&mesh, path, &local))
             return mts_fail(p, shape, "%s", local.message);
+        mitsuba_v_to_ours(mesh.uvs, mesh.vertex_count);
         bool ok = emit_mesh(p, shape, path, mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count,
                             mesh.normals, mesh.uvs, xf, false);
         sg_ply_mesh_release(&mesh);
@@ -206,6 +219,7 @@ static bool mesh_file(MtsParser *p, XmlNode *shape, const char *type, const SgTr
     MtsMesh mesh;
     if (!mts_read_serialized(path, index, &mesh, &local))
         return mts_fail(p, shape, "%s", local.message);
+    mitsuba_v_to_ours(mesh.uvs, mesh.vertex_count);
     bool ok = emit_mesh(p, shape, path, mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count,
                         mesh.normals, mesh.uvs, xf, false);
     mts_mesh_release(&mesh);
@@ -272,7 +286,7 @@ static bool quadric_shape(MtsParser *p, XmlNode *shape, const char *type, const 
 static bool rectangle_or_cube(MtsParser *p, XmlNode *shape, bool cube, const SgTransform *xf)
 {
     static const double square[4][3] = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
-    static const float square_uv[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+    static const float square_uv[8] = {0, 1, 1, 1, 1, 0, 0, 0}; /* Mitsuba's (x + 1) / 2, (y + 1) / 2, in ours */
     uint32_t square_idx[6] = {0, 1, 2, 0, 2, 3};
     static const double corners[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
                                          {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
