@@ -48,7 +48,7 @@ CPPFLAGS += -Icommon -I. -D_GNU_SOURCE -MMD -MP
 CFLAGS += -std=c11 $(OPT) $(DEBUG) $(WARN) $(SANFLAGS) -pthread
 CXXFLAGS += -std=c++17 $(OPT) $(DEBUG) $(WARN) $(SANFLAGS) -pthread -Wno-deprecated-declarations
 LDFLAGS += $(SANFLAGS) -pthread
-LDLIBS := -lembree3 -lopenvdb -ltbb -lassimp -lcjson -ldl \
+LDLIBS := -lembree3 -lopenvdb -ltbb -lassimp -lcjson -lexpat -lz -ldl \
           -lOpenEXR-3_1 -lIex-3_1 -lImath-3_1 \
           -lcriterion -lstdc++ -lm
 

@@ -15,6 +15,8 @@ checks=(
   "libopenexr-dev:/usr/include/OpenEXR/ImfInputFile.h"
   "libassimp-dev:/usr/include/assimp/cimport.h"
   "libcjson-dev:/usr/include/cjson/cJSON.h"
+  "libexpat1-dev:/usr/include/expat.h"
+  "zlib1g-dev:/usr/include/zlib.h"
   "libcriterion-dev:/usr/include/criterion/criterion.h"
   "libopenvdb-tools:/usr/bin/vdb_print"
   "openimageio-tools:/usr/bin/idiff"
