@@ -12,8 +12,9 @@ static int segments_for(double phi_max)
 }
 
 /* A grid of (rows + 1) x (columns + 1) vertices, each row a ring of the
- * shape; `point` places vertex (row, column) and its uv. */
-typedef void (*GridPoint)(const void *shape, int row, int rows, int column, int columns, double p[3], float uv[2]);
+ * shape; `point` places vertex (row, column), whose uv is (column /
+ * columns, row / rows). */
+typedef void (*GridPoint)(const void *shape, int row, int rows, int column, int columns, double p[3]);
 
 static bool grid_mesh(const void *shape, int rows, int columns, GridPoint point, SgQuadricMesh *m, SgError *err)
 {
@@ -30,7 +31,9 @@ static bool grid_mesh(const void *shape, int rows, int columns, GridPoint point,
     for (int r = 0; r <= rows; r++)
         for (int c = 0; c <= columns; c++) {
             size_t v = (size_t)r * (columns + 1) + c;
-            point(shape, r, rows, c, columns, m->positions + 3 * v, m->uvs + 2 * v);
+            point(shape, r, rows, c, columns, m->positions + 3 * v);
+            m->uvs[2 * v] = (float)((double)c / columns);
+            m->uvs[2 * v + 1] = (float)((double)r / rows);
         }
     uint32_t *id = m->indices;
     for (int r = 0; r < rows; r++)
@@ -88,6 +91,17 @@ static void face_outward(SgQuadricMesh *m, bool axis_z, bool radial_xy)
     }
 }
 
+/* The grid mesh of a shape, its triangles facing outward as face_outward
+ * says. */
+static bool shape_mesh(const void *shape, int rows, int columns, GridPoint point, bool axis_z, bool radial_xy,
+                       SgQuadricMesh *m, SgError *err)
+{
+    if (!grid_mesh(shape, rows, columns, point, m, err))
+        return false;
+    face_outward(m, axis_z, radial_xy);
+    return true;
+}
+
 double sg_quadric_mesh_area(const SgQuadricMesh *m)
 {
     double area = 0.0;
@@ -105,13 +119,12 @@ typedef struct Disk {
     double radius, inner, height, phi_max;
 } Disk;
 
-static void disk_point(const void *shape, int row, int rows, int column, int columns, double p[3], float uv[2])
+static void disk_point(const void *shape, int row, int rows, int column, int columns, double p[3])
 {
     const Disk *d = shape;
     double v = (double)row / rows, phi = d->phi_max * column / columns;
     double r = d->radius + (d->inner - d->radius) * v; /* pbrt-v4: v = 0 at the rim */
     p[0] = r * cos(phi), p[1] = r * sin(phi), p[2] = d->height;
-    uv[0] = (float)((double)column / columns), uv[1] = (float)v;
 }
 
 double sg_quadric_disk_area(double radius, double inner_radius, double phi_max)
@@ -128,10 +141,7 @@ bool sg_quadric_disk(double radius, double inner_radius, double height, double p
      * sqrt(a / sin a) gives the true area exactly */
     double a = phi_max / columns, k = sqrt(a / sin(a));
     Disk d = {radius * k, inner_radius * k, height, phi_max};
-    if (!grid_mesh(&d, 1, columns, disk_point, m, err))
-        return false;
-    face_outward(m, true, false);
-    return true;
+    return shape_mesh(&d, 1, columns, disk_point, true, false, m, err);
 }
 
 /* ---- cylinder -------------------------------------------------------------- */
@@ -140,12 +150,11 @@ typedef struct Cylinder {
     double radius, z_min, z_max, phi_max;
 } Cylinder;
 
-static void cylinder_point(const void *shape, int row, int rows, int column, int columns, double p[3], float uv[2])
+static void cylinder_point(const void *shape, int row, int rows, int column, int columns, double p[3])
 {
     const Cylinder *c = shape;
     double v = (double)row / rows, phi = c->phi_max * column / columns;
     p[0] = c->radius * cos(phi), p[1] = c->radius * sin(phi), p[2] = c->z_min + (c->z_max - c->z_min) * v;
-    uv[0] = (float)((double)column / columns), uv[1] = (float)v;
 }
 
 double sg_quadric_cylinder_area(double radius, double z_min, double z_max, double phi_max)
@@ -159,10 +168,7 @@ bool sg_quadric_cylinder(double radius, double z_min, double z_max, double phi_m
     /* a facet is a chord 2 r sin(a / 2) wide where the arc is r a */
     double a = phi_max / columns, k = (0.5 * a) / sin(0.5 * a);
     Cylinder c = {radius * k, fmin(z_min, z_max), fmax(z_min, z_max), phi_max};
-    if (!grid_mesh(&c, 1, columns, cylinder_point, m, err))
-        return false;
-    face_outward(m, false, true);
-    return true;
+    return shape_mesh(&c, 1, columns, cylinder_point, false, true, m, err);
 }
 
 /* ---- sphere ---------------------------------------------------------------- */
@@ -171,7 +177,7 @@ typedef struct Sphere {
     double radius, theta_min, theta_max, phi_max;
 } Sphere;
 
-static void sphere_point(const void *shape, int row, int rows, int column, int columns, double p[3], float uv[2])
+static void sphere_point(const void *shape, int row, int rows, int column, int columns, double p[3])
 {
     const Sphere *s = shape;
     double v = (double)row / rows, phi = s->phi_max * column / columns;
@@ -180,7 +186,6 @@ static void sphere_point(const void *shape, int row, int rows, int column, int c
     double ct = cos(theta), st = sqrt(fmax(0.0, 1.0 - ct * ct));
     p[0] = s->radius * st * cos(phi), p[1] = s->radius * st * sin(phi);
     p[2] = s->radius * ct;
-    uv[0] = (float)((double)column / columns), uv[1] = (float)v;
 }
 
 double sg_quadric_sphere_area(double radius, double z_min, double z_max, double phi_max)
@@ -199,9 +204,8 @@ bool sg_quadric_sphere(double radius, double z_min, double z_max, double phi_max
     int rows = (int)ceil((SG_QUADRIC_SEGMENTS / 2) * fabs(s.theta_max - s.theta_min) / M_PI);
     if (rows < 2)
         rows = 2;
-    if (!grid_mesh(&s, rows, columns, sphere_point, m, err))
+    if (!shape_mesh(&s, rows, columns, sphere_point, false, false, m, err))
         return false;
-    face_outward(m, false, false);
     /* the facets cut inside the sphere: a uniform scale about the centre
      * makes the mesh's area the true one */
     double mesh = sg_quadric_mesh_area(m), want = sg_quadric_sphere_area(radius, z_min, z_max, phi_max);

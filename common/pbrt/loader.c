@@ -158,12 +158,18 @@ static bool option_statement(Parser *p, const Token *t)
     return pbrt_need_string(p, t, &name) && pbrt_need_token(p, t, &value);
 }
 
-static bool named_medium_statement(Parser *p, const Token *t)
+/* A statement read past, with a warning that it is left out. */
+static bool skip_with_warning(Parser *p, const Token *t, const char *warning)
 {
     if (!skip_named_statement(p, t))
         return false;
-    pbrt_warn_at(p, t, "participating media are not supported: left out");
+    pbrt_warn_at(p, t, "%s", warning);
     return true;
+}
+
+static bool named_medium_statement(Parser *p, const Token *t)
+{
+    return skip_with_warning(p, t, "participating media are not supported: left out");
 }
 
 static bool medium_interface_statement(Parser *p, const Token *t)
@@ -178,10 +184,7 @@ static bool medium_interface_statement(Parser *p, const Token *t)
 
 static bool attribute_statement(Parser *p, const Token *t)
 {
-    if (!skip_named_statement(p, t))
-        return false;
-    pbrt_warn_at(p, t, "Attribute statements are ignored");
-    return true;
+    return skip_with_warning(p, t, "Attribute statements are ignored");
 }
 
 static bool active_transform_statement(Parser *p, const Token *t)
