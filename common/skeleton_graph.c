@@ -61,12 +61,9 @@ bool sg_skeleton_write_ply(const SgSkeleton *skeleton, const char *path, SgError
             return sg_fail(err, "%s: edge %u refers to a missing node", path, e);
 
     SgOutputFile out;
-    if (!sg_output_open(&out, path, err))
+    if (!sg_ply_write_begin(&out, path, "skeleton-guided path tracing: curvilinear skeleton graph", err))
         return false;
     fprintf(out.file,
-            "ply\n"
-            "format binary_little_endian 1.0\n"
-            "comment skeleton-guided path tracing: curvilinear skeleton graph\n"
             "element vertex %u\n"
             "property float x\nproperty float y\nproperty float z\n"
             "property int i\nproperty int j\nproperty int k\n"

@@ -12,6 +12,7 @@
 #include "labels.h"
 #include "memory.h"
 #include "output_file.h"
+#include "ply_file.h"
 #include "progress.h"
 #include "threads.h"
 
@@ -238,12 +239,12 @@ static bool write_vectors(const char *path, const SgSkeleton *s, const uint32_t 
     if (edges * 2 > INT32_MAX)
         return sg_fail(err, "%s: too many vectors for a PLY file", path);
     SgOutputFile out;
-    if (!sg_output_open(&out, path, err))
+    if (!sg_ply_write_begin(&out, path,
+                            "importance points (Biri & Chaussard 2012, figure 2): one edge per node and "
+                            "light, from the node to its importance point",
+                            err))
         return false;
     fprintf(out.file,
-            "ply\nformat binary_little_endian 1.0\n"
-            "comment importance points (Biri & Chaussard 2012, figure 2): one edge per node and "
-            "light, from the node to its importance point\n"
             "element vertex %llu\nproperty float x\nproperty float y\nproperty float z\n"
             "element edge %llu\nproperty int vertex1\nproperty int vertex2\nproperty int light\n"
             "end_header\n",
@@ -595,18 +596,18 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
     if (!options)
         options = &defaults;
     const double t0 = sg_seconds();
-    Build *b = calloc(1, sizeof *b);
+    Build *b = malloc(sizeof *b);
     if (!b)
         return sg_fail(err, "%s: out of memory", out_path);
-    b->medium = medium;
-    b->skeleton = skeleton;
-    b->options = options;
-    b->grid = &medium->grid;
-    b->out_path = out_path;
-    b->N = skeleton->node_count;
-    b->L = medium->light_count;
-    b->mname = options->medium_name ? options->medium_name : "medium";
-    b->sname = options->skeleton_name ? options->skeleton_name : "skeleton";
+    *b = (Build){.medium = medium,
+                 .skeleton = skeleton,
+                 .options = options,
+                 .grid = &medium->grid,
+                 .out_path = out_path,
+                 .mname = options->medium_name ? options->medium_name : "medium",
+                 .sname = options->skeleton_name ? options->skeleton_name : "skeleton",
+                 .N = skeleton->node_count,
+                 .L = medium->light_count};
     if (!check_inputs(b, err)) {
         free(b);
         return false;
