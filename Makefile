@@ -186,6 +186,8 @@ $(BENCH_LIB): $(BENCH_LIB_OBJ)
 	rm -f $@
 	$(AR) rcs $@ $^
 $(BUILD)/tests/test_bench_convergence $(BUILD)/tests/test_error_metrics: $(BENCH_LIB)
+# the skeleton benchmark measures on the tests' synthetic media (tests/support_shapes.c)
+$(BUILD)/bench/skeleton_bench: $(BUILD)/libtestsupport.a
 
 $(BUILD)/libtestsupport.a: $(filter-out $(TEST_CRITERION_OBJ),$(TEST_SUPPORT_OBJ))
 	@mkdir -p $(@D)
@@ -203,7 +205,7 @@ $(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_CRITERION_OBJ) $(BUILD)/libtestsuppo
 
 $(BUILD)/bench/%: $(BUILD)/bench/%.o $(BENCH_LIB) $(STEP_LIBS) $(BUILD)/libcommon.a | $(IMAGES_SO)
 	@mkdir -p $(@D)
-	$(CC) $(LDFLAGS) -o $@ $< $(BENCH_LIB) $(STEP_LIBS) $(BUILD)/libcommon.a $(PROG_LDLIBS)
+	$(CC) $(LDFLAGS) -o $@ $< $(filter %/libtestsupport.a,$^) $(BENCH_LIB) $(STEP_LIBS) $(BUILD)/libcommon.a $(PROG_LDLIBS)
 
 # The benchmarks render the peer too: Open PGL is built first (cached), then
 # a sub-make builds the programs, which links it only when this make's parse
