@@ -75,8 +75,9 @@ static int outside_margin(const SgScene *scene)
 
 bool sg_voxelize_grid_for(const SgScene *scene, int resolution, SgGrid *grid, SgError *err)
 {
-    if (resolution < 1 || resolution > 4096)
-        return sg_fail(err, "%s: resolution %d is outside [1, 4096]", scene->path, resolution);
+    if (resolution < 1 || resolution > SG_VOXEL_RESOLUTION_MAX)
+        return sg_fail(err, "%s: resolution %d is outside [1, %d]", scene->path, resolution,
+                       SG_VOXEL_RESOLUTION_MAX);
     double extent[3], longest = 0;
     for (int a = 0; a < 3; a++) {
         extent[a] = scene->bounds_max[a] - scene->bounds_min[a];
