@@ -119,9 +119,12 @@ TEST_CRITERION_OBJ := $(BUILD)/tests/support_criterion.o
 $(TEST_CRITERION_OBJ): SANFLAGS :=
 $(TEST_BIN): $(TEST_CRITERION_OBJ) # named here, so that make keeps it and remakes it
 
-# Benchmarks: each bench/*.c is a program; bench/run.sh drives them.
+# Benchmarks: each bench/*.c is a program; bench/run.sh drives them. Their
+# shared code (bench/lib/) is an archive they link, as do its tests.
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(BENCH_SRC:bench/%.c=$(BUILD)/bench/%)
+BENCH_LIB := $(BUILD)/libbench.a
+BENCH_LIB_OBJ := $(patsubst %.c,$(BUILD)/%.o,$(wildcard bench/lib/*.c))
 
 .PHONY: all test test-programs check-tests demo scene farm bench bench-build bench-quick bench-long deps bench-deps fuzz fuzz-run clean distclean \
         openpgl FORCE
@@ -178,6 +181,14 @@ openpgl:
 	@bash scripts/build-openpgl.sh
 	@$(MAKE) --no-print-directory all
 
+$(BENCH_LIB): $(BENCH_LIB_OBJ)
+	@mkdir -p $(@D)
+	rm -f $@
+	$(AR) rcs $@ $^
+$(BUILD)/tests/test_bench_convergence $(BUILD)/tests/test_error_metrics: $(BENCH_LIB)
+# the skeleton benchmark measures on the tests' synthetic media (tests/support_shapes.c)
+$(BUILD)/bench/skeleton_bench: $(BUILD)/libtestsupport.a
+
 $(BUILD)/libtestsupport.a: $(filter-out $(TEST_CRITERION_OBJ),$(TEST_SUPPORT_OBJ))
 	@mkdir -p $(@D)
 	rm -f $@
@@ -189,12 +200,12 @@ $(BUILD)/libtestsupport.a: $(filter-out $(TEST_CRITERION_OBJ),$(TEST_SUPPORT_OBJ
 # IMAGES_SO).
 $(BUILD)/tests/%: $(BUILD)/tests/%.o $(TEST_CRITERION_OBJ) $(BUILD)/libtestsupport.a $(STEP_LIBS) $(BUILD)/libcommon.a | $(IMAGES_SO)
 	@mkdir -p $(@D)
-	$(CC) $(LDFLAGS) -Wl,--as-needed -o $@ $< $(TEST_CRITERION_OBJ) $(BUILD)/libtestsupport.a $(STEP_LIBS) \
+	$(CC) $(LDFLAGS) -Wl,--as-needed -o $@ $< $(TEST_CRITERION_OBJ) $(BUILD)/libtestsupport.a $(filter $(BENCH_LIB),$^) $(STEP_LIBS) \
 	  $(BUILD)/libcommon.a $(LDLIBS)
 
-$(BUILD)/bench/%: $(BUILD)/bench/%.o $(STEP_LIBS) $(BUILD)/libcommon.a | $(IMAGES_SO)
+$(BUILD)/bench/%: $(BUILD)/bench/%.o $(BENCH_LIB) $(STEP_LIBS) $(BUILD)/libcommon.a | $(IMAGES_SO)
 	@mkdir -p $(@D)
-	$(CC) $(LDFLAGS) -o $@ $< $(STEP_LIBS) $(BUILD)/libcommon.a $(PROG_LDLIBS)
+	$(CC) $(LDFLAGS) -o $@ $< $(filter %/libtestsupport.a,$^) $(BENCH_LIB) $(STEP_LIBS) $(BUILD)/libcommon.a $(PROG_LDLIBS)
 
 # The benchmarks render the peer too: Open PGL is built first (cached), then
 # a sub-make builds the programs, which links it only when this make's parse

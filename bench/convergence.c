@@ -14,7 +14,7 @@
  *       RUNDIR/levels.txt, and appends markdown rows to TABLEDIR/
  *       {table2-relmse,table2-mse8,table2-mse,equal-time,reference,
  *       training}.md (headers in TABLE.head) and one line to
- *       TABLEDIR/headline.tsv: see bench/convergence_analyze.h.
+ *       TABLEDIR/headline.tsv: see bench/lib/convergence_analyze.h.
  *       options: --modes A,B,... --compare X:Y --size WxH --ref-relmse X
  *                --ref-mse8 Y --ref-mse Z --ref-spp N --ref-seconds S
  *                --ref-state TEXT
@@ -30,10 +30,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define SG_CONVERGENCE_MATH_IMPLEMENTATION
-#include "convergence_math.h"
-#define SG_CONVERGENCE_ANALYZE_IMPLEMENTATION
-#include "convergence_analyze.h"
+#include "bench/lib/convergence_math.h"
+#include "bench/lib/convergence_analyze.h"
 
 #include "image_io.h"
 #include "output_file.h"

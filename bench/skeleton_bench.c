@@ -12,7 +12,7 @@
 #include <string.h>
 #include <sys/resource.h>
 
-#include "../skeletonize/shapes.h"
+#include "../tests/support_shapes.h"
 #include "../skeletonize/skeletonize.h"
 
 static double peak_rss_mb(void)

@@ -44,13 +44,12 @@ static bool range_ok(const SgCacheRange *r, uint64_t header_size, uint64_t file_
            r->offset <= file_size && r->size <= file_size - r->offset;
 }
 
-static bool validate(SgImportanceCache *c, const char *name, SgError *err)
+/* The header: magic, version, size, checksum of the whole file (with the
+ * checksum field read as zero). */
+static bool validate_header(SgImportanceCache *c, const char *name, SgError *err)
 {
-    static const char *const section_names[SG_CACHE_SECTION_COUNT] = {
-        "nodes", "lights", "points", "block index", "blocks", "palette", "voxel bits"};
     if (c->size < sizeof(SgCacheHeader))
-        return sg_fail(err, "%s: truncated: %zu bytes, smaller than the cache header", name,
-                       c->size);
+        return sg_fail(err, "%s: truncated: %zu bytes, smaller than the cache header", name, c->size);
     SgCacheHeader *h = &c->header;
     memcpy(h, c->data, sizeof *h);
     if (memcmp(h->magic, SG_CACHE_MAGIC, 8) != 0)
@@ -59,38 +58,48 @@ static bool validate(SgImportanceCache *c, const char *name, SgError *err)
         return sg_fail(err, "%s: cache version %u, this program reads version %u (rebuild it "
                        "with bin/importance)", name, h->version, SG_CACHE_VERSION);
     if (h->header_size != sizeof *h)
-        return sg_fail(err, "%s: header size %u, expected %zu", name, h->header_size,
-                       sizeof *h);
+        return sg_fail(err, "%s: header size %u, expected %zu", name, h->header_size, sizeof *h);
     if (h->file_size != c->size)
         return sg_fail(err, "%s: %s: the header says %llu bytes, the file has %zu", name,
-                       h->file_size > c->size ? "truncated" : "trailing bytes",
-                       (unsigned long long)h->file_size, c->size);
-    /* Checksum of the whole file with the checksum field read as zero. */
+                       h->file_size > c->size ? "truncated" : "trailing bytes", (unsigned long long)h->file_size,
+                       c->size);
     SgCacheHeader zeroed = *h;
     zeroed.checksum = 0;
     uint64_t sum = sg_hash_bytes(SG_HASH_INIT, &zeroed, sizeof zeroed);
     sum = sg_hash_bytes(sum, c->data + sizeof zeroed, c->size - sizeof zeroed);
     if (sum != h->checksum)
         return sg_fail(err, "%s: checksum mismatch (the file is corrupted)", name);
+    return true;
+}
 
-    if (h->nx <= 0 || h->ny <= 0 || h->nz <= 0 || h->nx > (1 << 20) || h->ny > (1 << 20) ||
-        h->nz > (1 << 20) || h->block_size != SG_CACHE_BLOCK)
-        return sg_fail(err, "%s: bad grid size %dx%dx%d (block %d)", name, h->nx, h->ny, h->nz,
-                       h->block_size);
-    if (!(h->voxel_size > 0) || !isfinite(h->voxel_size) || !isfinite(h->origin[0]) ||
-        !isfinite(h->origin[1]) || !isfinite(h->origin[2]))
+/* The grid's size, transform and blocks per axis. */
+static bool validate_grid(SgImportanceCache *c, const char *name, SgError *err)
+{
+    const SgCacheHeader *h = &c->header;
+    if (h->nx <= 0 || h->ny <= 0 || h->nz <= 0 || h->nx > (1 << 20) || h->ny > (1 << 20) || h->nz > (1 << 20) ||
+        h->block_size != SG_CACHE_BLOCK)
+        return sg_fail(err, "%s: bad grid size %dx%dx%d (block %d)", name, h->nx, h->ny, h->nz, h->block_size);
+    if (!(h->voxel_size > 0) || !isfinite(h->voxel_size) || !isfinite(h->origin[0]) || !isfinite(h->origin[1]) ||
+        !isfinite(h->origin[2]))
         return sg_fail(err, "%s: bad grid transform", name);
     c->bx = (h->nx + 7) / 8;
     c->by = (h->ny + 7) / 8;
     c->bz = (h->nz + 7) / 8;
-    const uint64_t grid_blocks = (uint64_t)c->bx * c->by * c->bz;
-    if (grid_blocks > UINT32_MAX)
+    if ((uint64_t)c->bx * c->by * c->bz > UINT32_MAX)
         return sg_fail(err, "%s: grid too large", name);
     if (h->medium_voxels > (uint64_t)h->nx * h->ny * h->nz)
         return sg_fail(err, "%s: more medium voxels than voxels", name);
+    return true;
+}
 
-    /* Expected section sizes; products cannot overflow 64 bits since each
-     * count is at most 32 bits and the sizes are small constants. */
+/* Every section in the file with the size its counts imply; the pointers
+ * into them. Products cannot overflow 64 bits since each count is at most
+ * 32 bits and the sizes are small constants. */
+static bool validate_sections(SgImportanceCache *c, const char *name, SgError *err)
+{
+    static const char *const section_names[SG_CACHE_SECTION_COUNT] = {
+        "nodes", "lights", "points", "block index", "blocks", "palette", "voxel bits"};
+    const SgCacheHeader *h = &c->header;
     uint64_t points = (uint64_t)h->node_count * h->light_count;
     if (h->light_count && points / h->light_count != h->node_count)
         return sg_fail(err, "%s: node and light counts overflow", name);
@@ -98,21 +107,19 @@ static bool validate(SgImportanceCache *c, const char *name, SgError *err)
         [SG_CACHE_NODES] = (uint64_t)h->node_count * sizeof(SgCacheNode),
         [SG_CACHE_LIGHTS] = (uint64_t)h->light_count * sizeof(SgCacheLight),
         [SG_CACHE_POINTS] = points > UINT64_MAX / 12 ? UINT64_MAX : points * 12,
-        [SG_CACHE_BLOCK_INDEX] = grid_blocks * 4,
+        [SG_CACHE_BLOCK_INDEX] = (uint64_t)c->bx * c->by * c->bz * 4,
         [SG_CACHE_BLOCKS] = (uint64_t)h->block_count * sizeof(SgCacheBlock),
-        [SG_CACHE_PALETTE] = h->palette_count > UINT64_MAX / 4 ? UINT64_MAX
-                                                                : h->palette_count * 4,
+        [SG_CACHE_PALETTE] = h->palette_count > UINT64_MAX / 4 ? UINT64_MAX : h->palette_count * 4,
         [SG_CACHE_VOXEL_BITS] = h->sections[SG_CACHE_VOXEL_BITS].size,
     };
     for (int s = 0; s < SG_CACHE_SECTION_COUNT; s++) {
         if (!range_ok(&h->sections[s], sizeof *h, c->size))
-            return sg_fail(err, "%s: %s section out of range (offset %llu, size %llu, file %zu)",
-                           name, section_names[s], (unsigned long long)h->sections[s].offset,
+            return sg_fail(err, "%s: %s section out of range (offset %llu, size %llu, file %zu)", name,
+                           section_names[s], (unsigned long long)h->sections[s].offset,
                            (unsigned long long)h->sections[s].size, c->size);
         if (h->sections[s].size != expected[s])
-            return sg_fail(err, "%s: %s section has %llu bytes, expected %llu", name,
-                           section_names[s], (unsigned long long)h->sections[s].size,
-                           (unsigned long long)expected[s]);
+            return sg_fail(err, "%s: %s section has %llu bytes, expected %llu", name, section_names[s],
+                           (unsigned long long)h->sections[s].size, (unsigned long long)expected[s]);
     }
     if (h->node_count == 0)
         return sg_fail(err, "%s: no skeleton nodes", name);
@@ -124,12 +131,17 @@ static bool validate(SgImportanceCache *c, const char *name, SgError *err)
     c->palette = (const uint32_t *)(c->data + h->sections[SG_CACHE_PALETTE].offset);
     c->voxel_bits = c->data + h->sections[SG_CACHE_VOXEL_BITS].offset;
     c->voxel_bits_size = h->sections[SG_CACHE_VOXEL_BITS].size;
+    return true;
+}
 
-    /* Contents: every index that a lookup follows is checked here once. */
+/* Nodes, lights and importance points: components in range, positions finite. */
+static bool validate_graph(const SgImportanceCache *c, const char *name, SgError *err)
+{
+    const SgCacheHeader *h = &c->header;
     for (uint32_t n = 0; n < h->node_count; n++) {
         const SgCacheNode *v = &c->nodes[n];
-        if (v->component >= h->component_count || !isfinite(v->position[0]) ||
-            !isfinite(v->position[1]) || !isfinite(v->position[2]))
+        if (v->component >= h->component_count || !isfinite(v->position[0]) || !isfinite(v->position[1]) ||
+            !isfinite(v->position[2]))
             return sg_fail(err, "%s: node %u is invalid", name, n);
     }
     for (uint32_t k = 0; k < h->light_count; k++) {
@@ -141,14 +153,21 @@ static bool validate(SgImportanceCache *c, const char *name, SgError *err)
             !isfinite(l->position[0]) || !isfinite(l->position[1]) || !isfinite(l->position[2]))
             return sg_fail(err, "%s: light %u is invalid", name, k);
     }
+    uint64_t points = (uint64_t)h->node_count * h->light_count;
     for (uint64_t i = 0; i < points * 3; i++)
         if (!isfinite(c->points[i]))
-            return sg_fail(err, "%s: importance point %llu is not finite", name,
-                           (unsigned long long)(i / 3));
+            return sg_fail(err, "%s: importance point %llu is not finite", name, (unsigned long long)(i / 3));
+    return true;
+}
+
+/* The nearest-node table: block index, block records, palette. */
+static bool validate_table(const SgImportanceCache *c, const char *name, SgError *err)
+{
+    const SgCacheHeader *h = &c->header;
+    const uint64_t grid_blocks = (uint64_t)c->bx * c->by * c->bz;
     for (uint64_t b = 0; b < grid_blocks; b++)
         if (c->block_index[b] != SG_CACHE_NONE && c->block_index[b] >= h->block_count)
-            return sg_fail(err, "%s: block index entry %llu out of range", name,
-                           (unsigned long long)b);
+            return sg_fail(err, "%s: block index entry %llu out of range", name, (unsigned long long)b);
     for (uint32_t b = 0; b < h->block_count; b++) {
         const SgCacheBlock *r = &c->blocks[b];
         unsigned bits = r->bits;
@@ -161,9 +180,15 @@ static bool validate(SgImportanceCache *c, const char *name, SgError *err)
     }
     for (uint64_t p = 0; p < h->palette_count; p++)
         if (c->palette[p] != SG_CACHE_NONE && c->palette[p] >= h->node_count)
-            return sg_fail(err, "%s: palette entry %llu names a missing node", name,
-                           (unsigned long long)p);
+            return sg_fail(err, "%s: palette entry %llu names a missing node", name, (unsigned long long)p);
     return true;
+}
+
+/* Every index that a lookup follows is checked here once. */
+static bool validate(SgImportanceCache *c, const char *name, SgError *err)
+{
+    return validate_header(c, name, err) && validate_grid(c, name, err) && validate_sections(c, name, err) &&
+           validate_graph(c, name, err) && validate_table(c, name, err);
 }
 
 SgImportanceCache *sg_cache_open_memory(const void *data, size_t size, const char *name,

@@ -164,6 +164,174 @@ extern "C" bool sg_medium_write(const SgMedium *m, const char *path, SgError *er
     return sg_commit_temp(tmp, path, err);
 }
 
+namespace {
+
+// The grid's placement: a uniform linear transform; our files keep voxel
+// (i,j,k) at index (i,j,k) over grid_dims, a foreign file is shifted so
+// that its active box starts at 0 (*shift).
+bool place_grid(SgMedium *m, const openvdb::GridBase &base, const openvdb::MetaMap *meta, const char *path,
+                openvdb::Coord *shift, SgError *err)
+{
+    const openvdb::math::Transform &xf = base.transform();
+    if (!xf.isLinear() || !xf.hasUniformScale())
+        return sg_fail(err, "%s: the medium grid's transform is not a uniform linear scale", path);
+    double h = xf.voxelSize()[0];
+    openvdb::Vec3d centre0 = xf.indexToWorld(openvdb::Vec3d(0, 0, 0));
+    if (!(h > 0) || !std::isfinite(h) || !finite3(centre0))
+        return sg_fail(err, "%s: the medium grid's transform is not finite", path);
+
+    openvdb::CoordBBox active = base.evalActiveVoxelBoundingBox();
+    if (active.empty())
+        return sg_fail(err, "%s: the medium is empty (no active voxel)", path);
+    openvdb::Vec3i dims;
+    *shift = openvdb::Coord(0, 0, 0);
+    if (!meta || !get_meta(*meta, "grid_dims", dims) || active.min().x() < 0 || active.min().y() < 0 ||
+        active.min().z() < 0 || active.max().x() >= dims[0] || active.max().y() >= dims[1] ||
+        active.max().z() >= dims[2]) {
+        *shift = active.min();
+        // in 64 bits: a corrupt file's box may span more than an int
+        std::int64_t ext[3];
+        for (int a = 0; a < 3; a++) {
+            ext[a] = (std::int64_t)active.max()[a] - active.min()[a] + 1;
+            if (ext[a] > (1 << 30))
+                return sg_fail(err, "%s: the medium's active region is implausibly large "
+                               "(%lld voxels along axis %d)", path, (long long)ext[a], a);
+        }
+        dims = openvdb::Vec3i((int)ext[0], (int)ext[1], (int)ext[2]);
+    }
+    double origin[3];
+    for (int a = 0; a < 3; a++)
+        origin[a] = centre0[a] + ((*shift)[a] - 0.5) * h;
+    if (!sg_grid_init(&m->grid, dims[0], dims[1], dims[2], origin, h, err)) {
+        char why[1024];
+        std::snprintf(why, sizeof why, "%s", err ? err->message : "");
+        if (err)
+            err->failed = false;
+        return sg_fail(err, "%s: %s", path, why);
+    }
+    return true;
+}
+
+// Active tiles (our files are pruned: the medium's inside is mostly tiles)
+// row by row, then the leaves' active voxels: far faster than a value
+// iterator over every voxel of the tiles.
+template <typename GridT, typename On> void fill_active(SgGrid *g, const GridT &grid, openvdb::Coord shift, On on)
+{
+    auto set_box = [&](const openvdb::CoordBBox &box) {
+        // 64-bit counters: a box may end at INT_MAX
+        const std::size_t width = (std::size_t)((std::int64_t)box.max().x() - box.min().x() + 1);
+        for (std::int64_t k = box.min().z(); k <= box.max().z(); k++)
+            for (std::int64_t j = box.min().y(); j <= box.max().y(); j++)
+                std::memset(g->voxels + sg_grid_index(g, box.min().x() - shift.x(), j - shift.y(), k - shift.z()),
+                            1, width);
+    };
+    auto tile = grid.cbeginValueOn();
+    tile.setMaxDepth(tile.getLeafDepth() - 1);
+    for (; tile; ++tile)
+        if (on(tile.getValue())) {
+            openvdb::CoordBBox box;
+            tile.getBoundingBox(box);
+            set_box(box);
+        }
+    for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf)
+        for (auto v = leaf->cbeginValueOn(); v; ++v)
+            if (on(*v)) {
+                const openvdb::Coord c = v.getCoord();
+                g->voxels[sg_grid_index(g, c.x() - shift.x(), c.y() - shift.y(), c.z() - shift.z())] = 1;
+            }
+}
+
+// Light k from voxelize's metadata, its seed shifted as the grid is.
+bool read_light(const openvdb::MetaMap &meta, int k, openvdb::Coord shift, SgMediumLight &l, const char *path,
+                SgError *err)
+{
+    openvdb::Vec3d pos, nrm, rad(0, 0, 0);
+    openvdb::Vec3i seed;
+    double power = 0;
+    if (!get_meta(meta, light_key(k, "position").c_str(), pos) || !get_meta(meta, light_key(k, "normal").c_str(), nrm) ||
+        !get_meta(meta, light_key(k, "seed").c_str(), seed) || !finite3(pos) || !finite3(nrm))
+        return sg_fail(err, "%s: metadata of light %d is missing or invalid", path, k);
+    get_meta(meta, light_key(k, "radiance").c_str(), rad);
+    get_meta(meta, light_key(k, "power").c_str(), power);
+    for (int a = 0; a < 3; a++) {
+        l.position[a] = pos[a];
+        l.normal[a] = nrm[a];
+        l.radiance[a] = (float)rad[a];
+        l.seed[a] = seed[a] - (seed[0] >= 0 ? shift[a] : 0);
+    }
+    l.power = std::isfinite(power) ? power : 0;
+    bool outside = false;
+    l.outside = get_meta(meta, light_key(k, "outside").c_str(), outside) && outside;
+    bool sun = false;
+    l.sun = get_meta(meta, light_key(k, "sun").c_str(), sun) && sun;
+    return true;
+}
+
+// Metadata written by voxelize; absent in foreign files (no lights then).
+bool read_metadata(SgMedium *m, const openvdb::MetaMap &meta, openvdb::Coord shift, const char *path, SgError *err)
+{
+    int32_t resolution = 0, count = 0;
+    std::string text;
+    if (get_meta(meta, "resolution", resolution))
+        m->resolution = resolution;
+    int32_t margin = 0;
+    if (get_meta(meta, "outside_margin", margin) && margin > 0 && margin < 1 << 20)
+        m->outside_margin = margin;
+    if (get_meta(meta, "geometry_hash", text))
+        m->geometry_hash = std::strtoull(text.c_str(), nullptr, 16);
+    if (get_meta(meta, "scene", text))
+        std::snprintf(m->scene_path, sizeof m->scene_path, "%s", text.c_str());
+    openvdb::Vec3d cam;
+    if (get_meta(meta, "camera_position", cam) && finite3(cam)) {
+        m->has_camera = true;
+        for (int a = 0; a < 3; a++)
+            m->camera_position[a] = cam[a];
+    }
+    if (!get_meta(meta, "light_count", count) || count <= 0)
+        return true;
+    if (count > 1000000)
+        return sg_fail(err, "%s: implausible light_count %d", path, (int)count);
+    m->lights = static_cast<SgMediumLight *>(std::calloc((size_t)count, sizeof(SgMediumLight)));
+    if (!m->lights)
+        return sg_fail(err, "%s: out of memory", path);
+    m->light_count = (uint32_t)count;
+    for (int k = 0; k < count; k++)
+        if (!read_light(meta, k, shift, m->lights[k], path, err))
+            return false;
+    return true;
+}
+
+// The medium from a stream that throws at the first read past the end.
+bool read_stream(SgMedium *m, std::istream &in, const char *path, SgError *err)
+{
+    openvdb::io::Stream stream(in, false);
+    openvdb::MetaMap::Ptr meta = stream.getMetadata();
+    openvdb::GridPtrVecPtr grids = stream.getGrids();
+    openvdb::GridBase::Ptr base =
+        grids ? openvdb::findGridByName(*grids, SG_MEDIUM_GRID_NAME) : openvdb::GridBase::Ptr();
+    if (!base)
+        return sg_fail(err, "%s: no grid named \"%s\"", path, SG_MEDIUM_GRID_NAME);
+    openvdb::Coord shift;
+    if (!place_grid(m, *base, meta.get(), path, &shift, err))
+        return false;
+    if (auto bgrid = openvdb::gridPtrCast<openvdb::BoolGrid>(base)) {
+        fill_active(&m->grid, *bgrid, shift, [](bool value) { return value; });
+    } else if (auto mgrid = openvdb::gridPtrCast<openvdb::MaskGrid>(base)) {
+        fill_active(&m->grid, *mgrid, shift, [](bool) { return true; });
+    } else {
+        sg_grid_release(&m->grid);
+        return sg_fail(err, "%s: grid \"%s\" is of type %s, not bool or mask", path, SG_MEDIUM_GRID_NAME,
+                       base->type().c_str());
+    }
+    if (meta && !read_metadata(m, *meta, shift, path, err)) {
+        sg_medium_release(m);
+        return false;
+    }
+    return true;
+}
+
+} // namespace
+
 extern "C" bool sg_medium_read(SgMedium *m, const char *path, SgError *err)
 {
     std::memset(m, 0, sizeof *m);
@@ -182,152 +350,7 @@ extern "C" bool sg_medium_read(SgMedium *m, const char *path, SgError *err)
         // (no delayed loading through a memory map that could fault later).
         std::ifstream in(path, std::ios_base::in | std::ios_base::binary);
         in.exceptions(std::ios_base::failbit | std::ios_base::badbit);
-        openvdb::io::Stream stream(in, false);
-        openvdb::MetaMap::Ptr meta = stream.getMetadata();
-        openvdb::GridPtrVecPtr grids = stream.getGrids();
-        openvdb::GridBase::Ptr base =
-            grids ? openvdb::findGridByName(*grids, SG_MEDIUM_GRID_NAME) : openvdb::GridBase::Ptr();
-        if (!base)
-            return sg_fail(err, "%s: no grid named \"%s\"", path, SG_MEDIUM_GRID_NAME);
-
-        const openvdb::math::Transform &xf = base->transform();
-        if (!xf.isLinear() || !xf.hasUniformScale())
-            return sg_fail(err, "%s: the medium grid's transform is not a uniform linear scale",
-                           path);
-        double h = xf.voxelSize()[0];
-        openvdb::Vec3d centre0 = xf.indexToWorld(openvdb::Vec3d(0, 0, 0));
-        if (!(h > 0) || !std::isfinite(h) || !finite3(centre0))
-            return sg_fail(err, "%s: the medium grid's transform is not finite", path);
-
-        openvdb::CoordBBox active = base->evalActiveVoxelBoundingBox();
-        if (active.empty())
-            return sg_fail(err, "%s: the medium is empty (no active voxel)", path);
-        // Our files keep voxel (i,j,k) at index (i,j,k) over grid_dims; a
-        // foreign file is shifted so that its active box starts at 0.
-        openvdb::Vec3i dims;
-        openvdb::Coord shift(0, 0, 0);
-        if (!meta || !get_meta(*meta, "grid_dims", dims) || active.min().x() < 0 ||
-            active.min().y() < 0 || active.min().z() < 0 || active.max().x() >= dims[0] ||
-            active.max().y() >= dims[1] || active.max().z() >= dims[2]) {
-            shift = active.min();
-            // in 64 bits: a corrupt file's box may span more than an int
-            std::int64_t ext[3];
-            for (int a = 0; a < 3; a++) {
-                ext[a] = (std::int64_t)active.max()[a] - active.min()[a] + 1;
-                if (ext[a] > (1 << 30))
-                    return sg_fail(err, "%s: the medium's active region is implausibly large "
-                                   "(%lld voxels along axis %d)", path, (long long)ext[a], a);
-            }
-            dims = openvdb::Vec3i((int)ext[0], (int)ext[1], (int)ext[2]);
-        }
-        double origin[3];
-        for (int a = 0; a < 3; a++)
-            origin[a] = centre0[a] + (shift[a] - 0.5) * h;
-        if (!sg_grid_init(&m->grid, dims[0], dims[1], dims[2], origin, h, err)) {
-            char why[1024];
-            std::snprintf(why, sizeof why, "%s", err ? err->message : "");
-            if (err)
-                err->failed = false;
-            return sg_fail(err, "%s: %s", path, why);
-        }
-        SgGrid *g = &m->grid;
-        // Active tiles (our files are pruned: the medium's inside is mostly
-        // tiles) row by row, then the leaves' active voxels: far faster
-        // than a value iterator over every voxel of the tiles.
-        auto set_box = [&](const openvdb::CoordBBox &box) {
-            // 64-bit counters: a box may end at INT_MAX
-            const std::size_t width = (std::size_t)((std::int64_t)box.max().x() - box.min().x() + 1);
-            for (std::int64_t k = box.min().z(); k <= box.max().z(); k++)
-                for (std::int64_t j = box.min().y(); j <= box.max().y(); j++)
-                    std::memset(g->voxels + sg_grid_index(g, box.min().x() - shift.x(), j - shift.y(),
-                                                          k - shift.z()),
-                                1, width);
-        };
-        auto fill = [&](const auto &grid, auto on) {
-            auto tile = grid.cbeginValueOn();
-            tile.setMaxDepth(tile.getLeafDepth() - 1);
-            for (; tile; ++tile)
-                if (on(tile.getValue())) {
-                    openvdb::CoordBBox box;
-                    tile.getBoundingBox(box);
-                    set_box(box);
-                }
-            for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf)
-                for (auto v = leaf->cbeginValueOn(); v; ++v)
-                    if (on(*v)) {
-                        const openvdb::Coord c = v.getCoord();
-                        g->voxels[sg_grid_index(g, c.x() - shift.x(), c.y() - shift.y(),
-                                                c.z() - shift.z())] = 1;
-                    }
-        };
-        if (auto bgrid = openvdb::gridPtrCast<openvdb::BoolGrid>(base)) {
-            fill(*bgrid, [](bool value) { return value; });
-        } else if (auto mgrid = openvdb::gridPtrCast<openvdb::MaskGrid>(base)) {
-            fill(*mgrid, [](bool) { return true; });
-        } else {
-            sg_grid_release(&m->grid);
-            return sg_fail(err, "%s: grid \"%s\" is of type %s, not bool or mask", path,
-                           SG_MEDIUM_GRID_NAME, base->type().c_str());
-        }
-
-        // Metadata written by voxelize; absent in foreign files (no lights then).
-        if (meta) {
-            int32_t resolution = 0, count = 0;
-            std::string text;
-            if (get_meta(*meta, "resolution", resolution))
-                m->resolution = resolution;
-            int32_t margin = 0;
-            if (get_meta(*meta, "outside_margin", margin) && margin > 0 && margin < 1 << 20)
-                m->outside_margin = margin;
-            if (get_meta(*meta, "geometry_hash", text))
-                m->geometry_hash = std::strtoull(text.c_str(), nullptr, 16);
-            if (get_meta(*meta, "scene", text))
-                std::snprintf(m->scene_path, sizeof m->scene_path, "%s", text.c_str());
-            openvdb::Vec3d cam;
-            if (get_meta(*meta, "camera_position", cam) && finite3(cam)) {
-                m->has_camera = true;
-                for (int a = 0; a < 3; a++)
-                    m->camera_position[a] = cam[a];
-            }
-            if (get_meta(*meta, "light_count", count) && count > 0) {
-                if (count > 1000000) {
-                    sg_medium_release(m);
-                    return sg_fail(err, "%s: implausible light_count %d", path, (int)count);
-                }
-                m->lights = static_cast<SgMediumLight *>(std::calloc((size_t)count, sizeof(SgMediumLight)));
-                if (!m->lights) {
-                    sg_medium_release(m);
-                    return sg_fail(err, "%s: out of memory", path);
-                }
-                m->light_count = (uint32_t)count;
-                for (int k = 0; k < count; k++) {
-                    SgMediumLight &l = m->lights[k];
-                    openvdb::Vec3d pos, nrm, rad(0, 0, 0);
-                    openvdb::Vec3i seed;
-                    double power = 0;
-                    if (!get_meta(*meta, light_key(k, "position").c_str(), pos) ||
-                        !get_meta(*meta, light_key(k, "normal").c_str(), nrm) ||
-                        !get_meta(*meta, light_key(k, "seed").c_str(), seed) || !finite3(pos) ||
-                        !finite3(nrm)) {
-                        sg_medium_release(m);
-                        return sg_fail(err, "%s: metadata of light %d is missing or invalid", path, k);
-                    }
-                    get_meta(*meta, light_key(k, "radiance").c_str(), rad);
-                    get_meta(*meta, light_key(k, "power").c_str(), power);
-                    for (int a = 0; a < 3; a++) {
-                        l.position[a] = pos[a];
-                        l.normal[a] = nrm[a];
-                        l.radiance[a] = (float)rad[a];
-                        l.seed[a] = seed[a] - (seed[0] >= 0 ? shift[a] : 0);
-                    }
-                    l.power = std::isfinite(power) ? power : 0;
-                    bool outside = false;
-                    l.outside = get_meta(*meta, light_key(k, "outside").c_str(), outside) && outside;
-                    bool sun = false;
-                    l.sun = get_meta(*meta, light_key(k, "sun").c_str(), sun) && sun;
-                }
-            }
-        }
+        return read_stream(m, in, path, err);
     } catch (const std::ios_base::failure &) {
         sg_medium_release(m);
         return sg_fail(err, "%s: not a readable VDB file: truncated or corrupt (it ends before "
@@ -339,7 +362,6 @@ extern "C" bool sg_medium_read(SgMedium *m, const char *path, SgError *err)
         sg_medium_release(m);
         return sg_fail(err, "%s: not a readable VDB file", path);
     }
-    return true;
 }
 
 extern "C" void sg_medium_release(SgMedium *m)

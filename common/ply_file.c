@@ -1,6 +1,7 @@
 #include "ply_file.h"
 
 #include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -177,4 +178,12 @@ SgPlyToken sg_ply_read_token(const unsigned char *data, size_t size, size_t *pos
     token[n] = 0;
     *pos = i;
     return n > 0 ? SG_PLY_TOKEN_OK : SG_PLY_TOKEN_BAD;
+}
+
+bool sg_ply_write_begin(SgOutputFile *out, const char *path, const char *comment, SgError *err)
+{
+    if (!sg_output_open(out, path, err))
+        return false;
+    fprintf(out->file, "ply\nformat binary_little_endian 1.0\ncomment %s\n", comment);
+    return true;
 }

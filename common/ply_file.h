@@ -11,6 +11,7 @@
 #include <stdint.h>
 
 #include "error.h"
+#include "output_file.h"
 #include "ply_types.h"
 
 #ifdef __cplusplus
@@ -53,6 +54,12 @@ typedef struct SgPlyHeader {
  * (big_endian: a reader's policy, like its size limit). */
 bool sg_ply_header_parse(SgPlyHeader *header, const void *data, size_t size, bool big_endian,
                          const char *path, SgError *err);
+
+/* Opens `path` for writing (committed or aborted by the caller, as
+ * output_file.h says) and writes the first lines of a binary little-endian
+ * PLY header, with one comment line; the caller writes the elements,
+ * end_header and the data. */
+bool sg_ply_write_begin(SgOutputFile *out, const char *path, const char *comment, SgError *err);
 
 /* One binary value of type t at data[*pos] as a double, *pos moved past
  * it; false when the data end first. Inline: meshes read millions. */

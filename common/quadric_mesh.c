@@ -12,10 +12,12 @@ static int segments_for(double phi_max)
 }
 
 /* A grid of (rows + 1) x (columns + 1) vertices, each row a ring of the
- * shape; `point` places vertex (row, column) and its uv. */
-typedef void (*GridPoint)(const void *shape, int row, int rows, int column, int columns, double p[3], float uv[2]);
+ * shape about z; `point` places the vertex at v = row / rows, angle phi =
+ * phi_max column / columns, whose uv is (column / columns, v). */
+typedef void (*GridPoint)(const void *shape, double v, double phi, double p[3]);
 
-static bool grid_mesh(const void *shape, int rows, int columns, GridPoint point, SgQuadricMesh *m, SgError *err)
+static bool grid_mesh(const void *shape, int rows, int columns, double phi_max, GridPoint point, SgQuadricMesh *m,
+                      SgError *err)
 {
     *m = (SgQuadricMesh){0};
     m->vertex_count = (uint32_t)((rows + 1) * (columns + 1));
@@ -30,7 +32,9 @@ static bool grid_mesh(const void *shape, int rows, int columns, GridPoint point,
     for (int r = 0; r <= rows; r++)
         for (int c = 0; c <= columns; c++) {
             size_t v = (size_t)r * (columns + 1) + c;
-            point(shape, r, rows, c, columns, m->positions + 3 * v, m->uvs + 2 * v);
+            point(shape, (double)r / rows, phi_max * c / columns, m->positions + 3 * v);
+            m->uvs[2 * v] = (float)((double)c / columns);
+            m->uvs[2 * v + 1] = (float)((double)r / rows);
         }
     uint32_t *id = m->indices;
     for (int r = 0; r < rows; r++)
@@ -88,6 +92,17 @@ static void face_outward(SgQuadricMesh *m, bool axis_z, bool radial_xy)
     }
 }
 
+/* The grid mesh of a shape, its triangles facing outward as face_outward
+ * says. */
+static bool shape_mesh(const void *shape, int rows, int columns, double phi_max, GridPoint point, bool axis_z,
+                       bool radial_xy, SgQuadricMesh *m, SgError *err)
+{
+    if (!grid_mesh(shape, rows, columns, phi_max, point, m, err))
+        return false;
+    face_outward(m, axis_z, radial_xy);
+    return true;
+}
+
 double sg_quadric_mesh_area(const SgQuadricMesh *m)
 {
     double area = 0.0;
@@ -102,16 +117,14 @@ double sg_quadric_mesh_area(const SgQuadricMesh *m)
 /* ---- disk ---------------------------------------------------------------- */
 
 typedef struct Disk {
-    double radius, inner, height, phi_max;
+    double radius, inner, height;
 } Disk;
 
-static void disk_point(const void *shape, int row, int rows, int column, int columns, double p[3], float uv[2])
+static void disk_point(const void *shape, double v, double phi, double p[3])
 {
     const Disk *d = shape;
-    double v = (double)row / rows, phi = d->phi_max * column / columns;
     double r = d->radius + (d->inner - d->radius) * v; /* pbrt-v4: v = 0 at the rim */
     p[0] = r * cos(phi), p[1] = r * sin(phi), p[2] = d->height;
-    uv[0] = (float)((double)column / columns), uv[1] = (float)v;
 }
 
 double sg_quadric_disk_area(double radius, double inner_radius, double phi_max)
@@ -127,25 +140,20 @@ bool sg_quadric_disk(double radius, double inner_radius, double height, double p
      * where the true sector has r^2 a / 2: scaling both radii by
      * sqrt(a / sin a) gives the true area exactly */
     double a = phi_max / columns, k = sqrt(a / sin(a));
-    Disk d = {radius * k, inner_radius * k, height, phi_max};
-    if (!grid_mesh(&d, 1, columns, disk_point, m, err))
-        return false;
-    face_outward(m, true, false);
-    return true;
+    Disk d = {radius * k, inner_radius * k, height};
+    return shape_mesh(&d, 1, columns, phi_max, disk_point, true, false, m, err);
 }
 
 /* ---- cylinder -------------------------------------------------------------- */
 
 typedef struct Cylinder {
-    double radius, z_min, z_max, phi_max;
+    double radius, z_min, z_max;
 } Cylinder;
 
-static void cylinder_point(const void *shape, int row, int rows, int column, int columns, double p[3], float uv[2])
+static void cylinder_point(const void *shape, double v, double phi, double p[3])
 {
     const Cylinder *c = shape;
-    double v = (double)row / rows, phi = c->phi_max * column / columns;
     p[0] = c->radius * cos(phi), p[1] = c->radius * sin(phi), p[2] = c->z_min + (c->z_max - c->z_min) * v;
-    uv[0] = (float)((double)column / columns), uv[1] = (float)v;
 }
 
 double sg_quadric_cylinder_area(double radius, double z_min, double z_max, double phi_max)
@@ -158,29 +166,24 @@ bool sg_quadric_cylinder(double radius, double z_min, double z_max, double phi_m
     int columns = segments_for(phi_max);
     /* a facet is a chord 2 r sin(a / 2) wide where the arc is r a */
     double a = phi_max / columns, k = (0.5 * a) / sin(0.5 * a);
-    Cylinder c = {radius * k, fmin(z_min, z_max), fmax(z_min, z_max), phi_max};
-    if (!grid_mesh(&c, 1, columns, cylinder_point, m, err))
-        return false;
-    face_outward(m, false, true);
-    return true;
+    Cylinder c = {radius * k, fmin(z_min, z_max), fmax(z_min, z_max)};
+    return shape_mesh(&c, 1, columns, phi_max, cylinder_point, false, true, m, err);
 }
 
 /* ---- sphere ---------------------------------------------------------------- */
 
 typedef struct Sphere {
-    double radius, theta_min, theta_max, phi_max;
+    double radius, theta_min, theta_max;
 } Sphere;
 
-static void sphere_point(const void *shape, int row, int rows, int column, int columns, double p[3], float uv[2])
+static void sphere_point(const void *shape, double v, double phi, double p[3])
 {
     const Sphere *s = shape;
-    double v = (double)row / rows, phi = s->phi_max * column / columns;
     double theta = s->theta_min + (s->theta_max - s->theta_min) * v;
     /* the sine from the cosine: exactly 0 at both poles (sin(pi) is not) */
     double ct = cos(theta), st = sqrt(fmax(0.0, 1.0 - ct * ct));
     p[0] = s->radius * st * cos(phi), p[1] = s->radius * st * sin(phi);
     p[2] = s->radius * ct;
-    uv[0] = (float)((double)column / columns), uv[1] = (float)v;
 }
 
 double sg_quadric_sphere_area(double radius, double z_min, double z_max, double phi_max)
@@ -193,15 +196,13 @@ bool sg_quadric_sphere(double radius, double z_min, double z_max, double phi_max
 {
     double lo = fmax(fmin(z_min, z_max), -radius), hi = fmin(fmax(z_min, z_max), radius);
     /* pbrt-v4's v runs from z_min to z_max: theta from acos(z_min / r) down */
-    Sphere s = {radius, acos(fmax(fmin(lo / radius, 1.0), -1.0)), acos(fmax(fmin(hi / radius, 1.0), -1.0)),
-                phi_max};
+    Sphere s = {radius, acos(fmax(fmin(lo / radius, 1.0), -1.0)), acos(fmax(fmin(hi / radius, 1.0), -1.0))};
     int columns = segments_for(phi_max);
     int rows = (int)ceil((SG_QUADRIC_SEGMENTS / 2) * fabs(s.theta_max - s.theta_min) / M_PI);
     if (rows < 2)
         rows = 2;
-    if (!grid_mesh(&s, rows, columns, sphere_point, m, err))
+    if (!shape_mesh(&s, rows, columns, phi_max, sphere_point, false, false, m, err))
         return false;
-    face_outward(m, false, false);
     /* the facets cut inside the sphere: a uniform scale about the centre
      * makes the mesh's area the true one */
     double mesh = sg_quadric_mesh_area(m), want = sg_quadric_sphere_area(radius, z_min, z_max, phi_max);

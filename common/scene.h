@@ -158,6 +158,10 @@ typedef struct SgRenderSettings {
     double exposure;  /* PNG exposure in stops */
 } SgRenderSettings;
 
+/* The most voxels along a grid's longest side, wherever a resolution is
+ * given (the scene's "voxel" block, voxelize --resolution). */
+#define SG_VOXEL_RESOLUTION_MAX 4096
+
 typedef struct SgScene {
     char path[4096];          /* the scene file as given */
 
@@ -186,7 +190,7 @@ typedef struct SgScene {
     bool has_camera;
     SgCamera camera;
     SgRenderSettings render;
-    int voxel_resolution;     /* from "voxel": {"resolution"}; 0 if not given */
+    int voxel_resolution;     /* from "voxel": {"resolution"}, 1..SG_VOXEL_RESOLUTION_MAX; 0 if not given */
 
     double bounds_min[3], bounds_max[3]; /* of all triangles */
     uint32_t degenerate_dropped; /* zero-area triangles left out when loading */

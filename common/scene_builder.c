@@ -364,23 +364,18 @@ void sg_scene_free(SgScene *s)
 {
     if (!s)
         return;
-    free(s->positions);
-    free(s->indices);
-    free(s->triangle_material);
-    free(s->triangle_light);
-    free(s->materials);
+    /* the strings the arrays' items own, then the arrays */
     for (uint32_t i = 0; i < s->texture_count; i++)
         free(s->textures[i].path);
-    free(s->textures);
-    free(s->uvs);
-    free(s->lights);
-    free(s->light_triangles);
     for (uint32_t i = 0; i < s->light_source_count; i++)
         free(s->light_sources[i].image_path);
-    free(s->light_sources);
     for (uint32_t i = 0; i < s->warning_count; i++)
         free(s->warnings[i]);
-    free(s->warnings);
+    void *arrays[] = {s->positions, s->indices,        s->triangle_material, s->triangle_light,
+                      s->materials, s->textures,       s->uvs,               s->lights,
+                      s->light_triangles, s->light_sources, s->warnings};
+    for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
+        free(arrays[i]);
     free(s);
 }
 

@@ -689,7 +689,7 @@ static bool load_settings(Builder *b, const cJSON *root, SgError *err)
     if (voxel) {
         if (!cJSON_IsObject(voxel))
             return sg_fail(err, "%s: \"voxel\" must be an object", path);
-        if (!member_int(path, voxel, "voxel", "resolution", 1, 4096, &s->voxel_resolution, err))
+        if (!member_int(path, voxel, "voxel", "resolution", 1, SG_VOXEL_RESOLUTION_MAX, &s->voxel_resolution, err))
             return false;
     }
     return true;

@@ -61,12 +61,9 @@ bool sg_skeleton_write_ply(const SgSkeleton *skeleton, const char *path, SgError
             return sg_fail(err, "%s: edge %u refers to a missing node", path, e);
 
     SgOutputFile out;
-    if (!sg_output_open(&out, path, err))
+    if (!sg_ply_write_begin(&out, path, "skeleton-guided path tracing: curvilinear skeleton graph", err))
         return false;
     fprintf(out.file,
-            "ply\n"
-            "format binary_little_endian 1.0\n"
-            "comment skeleton-guided path tracing: curvilinear skeleton graph\n"
             "element vertex %u\n"
             "property float x\nproperty float y\nproperty float z\n"
             "property int i\nproperty int j\nproperty int k\n"
@@ -240,6 +237,132 @@ static size_t min_row_bytes(const PlyReader *r, const SgPlyElement *e)
 
 static bool in_int_range(double v) { return v >= INT32_MIN && v <= INT32_MAX; }
 
+/* The vertex and edge elements (once each, with rows the file can hold)
+ * and the properties they need. */
+static bool find_elements(PlyReader *r, const SgPlyElement **vertex, const SgPlyElement **edge, SgError *err)
+{
+    const char *path = r->path;
+    *vertex = *edge = NULL;
+    for (int i = 0; i < r->header.element_count; i++) {
+        const SgPlyElement *e = &r->header.elements[i];
+        if (strcmp(e->name, "vertex") == 0 || strcmp(e->name, "edge") == 0) {
+            const SgPlyElement **slot = e->name[0] == 'v' ? vertex : edge;
+            if (*slot)
+                return sg_fail(err, "%s: element %s given twice", path, e->name);
+            *slot = e;
+        }
+        size_t row = min_row_bytes(r, e);
+        if (row > 0 && e->count > (r->size - r->pos) / row)
+            return sg_fail(err, "%s: truncated (element %s declares %llu rows, the file is too "
+                           "short)", path, e->name, (unsigned long long)e->count);
+        if (row == 0 && e->count > 0 && (e == *vertex || e == *edge))
+            return sg_fail(err, "%s: element %s has no properties", path, e->name);
+    }
+    if (!*vertex)
+        return sg_fail(err, "%s: no 'vertex' element", path);
+    bool have[F_COUNT] = {false};
+    for (int i = 0; i < r->header.element_count; i++)
+        for (int p = 0; p < r->header.elements[i].property_count; p++)
+            if (r->field[i][p] != F_UNKNOWN)
+                have[r->field[i][p]] = true;
+    for (int f = F_X; f <= F_LIFESPAN; f++)
+        if (!have[f])
+            return sg_fail(err, "%s: vertex property '%s' is missing", path, field_names[f]);
+    if (*edge && (!have[F_V1] || !have[F_V2]))
+        return sg_fail(err, "%s: edge properties 'vertex1' and 'vertex2' are required", path);
+    return true;
+}
+
+/* Row `row` of element i into v (by field); an unknown list is read past. */
+static bool read_row(PlyReader *r, int i, uint64_t row, double v[F_COUNT], SgError *err)
+{
+    const SgPlyElement *e = &r->header.elements[i];
+    for (int p = 0; p < e->property_count; p++) {
+        const SgPlyProperty *q = &e->properties[p];
+        double value;
+        if (q->count_type == SG_PLY_NONE) {
+            if (!read_value(r, q->type, &value, e, row, err))
+                return false;
+            if (r->field[i][p] != F_UNKNOWN)
+                v[r->field[i][p]] = value;
+            continue;
+        }
+        /* An unknown list: read its length, skip its items. */
+        if (!read_value(r, q->count_type, &value, e, row, err))
+            return false;
+        if (value < 0)
+            return sg_fail(err, "%s: negative list length in %s %llu", r->path, e->name, (unsigned long long)row);
+        for (double item = 0; item < value; item++) {
+            double ignored;
+            if (!read_value(r, q->type, &ignored, e, row, err))
+                return false;
+        }
+    }
+    return true;
+}
+
+static bool store_node(SgSkeletonNode *n, uint64_t row, const double v[F_COUNT], const char *path, SgError *err)
+{
+    for (int a = 0; a < 3; a++) {
+        if (!isfinite(v[F_X + a]) || fabs(v[F_X + a]) > 3.0e38)
+            return sg_fail(err, "%s: vertex %llu has a non-finite position", path, (unsigned long long)row);
+        n->position[a] = (float)v[F_X + a];
+    }
+    if (!isfinite(v[F_RADIUS]) || v[F_RADIUS] < 0 || v[F_RADIUS] > 3.0e38)
+        return sg_fail(err, "%s: vertex %llu has a bad radius", path, (unsigned long long)row);
+    if (v[F_KIND] < 0 || v[F_KIND] > SG_NODE_CAMERA)
+        return sg_fail(err, "%s: vertex %llu has unknown kind %g", path, (unsigned long long)row, v[F_KIND]);
+    if (!in_int_range(v[F_I]) || !in_int_range(v[F_J]) || !in_int_range(v[F_K]) ||
+        !in_int_range(v[F_LIFESPAN]) || !in_int_range(v[F_LIGHT]) || v[F_LIGHT] < -1)
+        return sg_fail(err, "%s: vertex %llu has an out-of-range integer", path, (unsigned long long)row);
+    n->voxel[0] = (int)v[F_I];
+    n->voxel[1] = (int)v[F_J];
+    n->voxel[2] = (int)v[F_K];
+    n->kind = (uint8_t)v[F_KIND];
+    n->radius = (float)v[F_RADIUS];
+    n->lifespan = (int)v[F_LIFESPAN];
+    n->light = n->kind == SG_NODE_LIGHT ? (int)v[F_LIGHT] : -1;
+    return true;
+}
+
+static bool store_edge(uint32_t edge[2], uint64_t row, const double v[F_COUNT], uint64_t vertex_count,
+                       const char *path, SgError *err)
+{
+    for (int a = 0; a < 2; a++)
+        if (v[F_V1 + a] < 0 || v[F_V1 + a] >= (double)vertex_count)
+            return sg_fail(err, "%s: edge %llu refers to vertex %g, which does not exist (%llu vertices)", path,
+                           (unsigned long long)row, v[F_V1 + a], (unsigned long long)vertex_count);
+    if (v[F_V1] == v[F_V2])
+        return sg_fail(err, "%s: edge %llu joins vertex %g to itself", path, (unsigned long long)row, v[F_V1]);
+    edge[0] = (uint32_t)v[F_V1];
+    edge[1] = (uint32_t)v[F_V2];
+    return true;
+}
+
+/* Decode elements in file order. */
+static bool decode_elements(PlyReader *r, const SgPlyElement *vertex, const SgPlyElement *edge,
+                            SgSkeleton *skeleton, SgError *err)
+{
+    for (int i = 0; i < r->header.element_count; i++) {
+        const SgPlyElement *e = &r->header.elements[i];
+        /* Rows without properties hold no data: nothing to decode (and a
+         * count of 4 billion must not take a minute to step through). */
+        if (e->property_count == 0)
+            continue;
+        for (uint64_t row = 0; row < e->count; row++) {
+            double v[F_COUNT] = {0};
+            v[F_LIGHT] = -1;
+            if (!read_row(r, i, row, v, err))
+                return false;
+            if (e == vertex && !store_node(&skeleton->nodes[row], row, v, r->path, err))
+                return false;
+            if (e == edge && !store_edge(skeleton->edges[row], row, v, vertex->count, r->path, err))
+                return false;
+        }
+    }
+    return true;
+}
+
 bool sg_skeleton_parse_ply(SgSkeleton *skeleton, const void *data, size_t size,
                            const char *path, SgError *err)
 {
@@ -250,37 +373,8 @@ bool sg_skeleton_parse_ply(SgSkeleton *skeleton, const void *data, size_t size,
     r->path = path;
     r->data = data;
     r->size = size;
-    bool ok = parse_header(r, err);
-
     const SgPlyElement *vertex = NULL, *edge = NULL;
-    for (int i = 0; ok && i < r->header.element_count; i++) {
-        const SgPlyElement *e = &r->header.elements[i];
-        if (strcmp(e->name, "vertex") == 0 || strcmp(e->name, "edge") == 0) {
-            const SgPlyElement **slot = e->name[0] == 'v' ? &vertex : &edge;
-            if (*slot)
-                ok = sg_fail(err, "%s: element %s given twice", path, e->name);
-            *slot = e;
-        }
-        size_t row = min_row_bytes(r, e);
-        if (ok && row > 0 && e->count > (size - r->pos) / row)
-            ok = sg_fail(err, "%s: truncated (element %s declares %llu rows, the file is too "
-                         "short)", path, e->name, (unsigned long long)e->count);
-        if (ok && row == 0 && e->count > 0 && (e == vertex || e == edge))
-            ok = sg_fail(err, "%s: element %s has no properties", path, e->name);
-    }
-    if (ok && !vertex)
-        ok = sg_fail(err, "%s: no 'vertex' element", path);
-    bool have[F_COUNT] = {false};
-    for (int i = 0; ok && i < r->header.element_count; i++)
-        for (int p = 0; p < r->header.elements[i].property_count; p++)
-            if (r->field[i][p] != F_UNKNOWN)
-                have[r->field[i][p]] = true;
-    for (int f = F_X; ok && f <= F_LIFESPAN; f++)
-        if (!have[f])
-            ok = sg_fail(err, "%s: vertex property '%s' is missing", path, field_names[f]);
-    if (ok && edge && (!have[F_V1] || !have[F_V2]))
-        ok = sg_fail(err, "%s: edge properties 'vertex1' and 'vertex2' are required", path);
-
+    bool ok = parse_header(r, err) && find_elements(r, &vertex, &edge, err);
     if (ok && vertex->count > 0) {
         skeleton->nodes = calloc(vertex->count, sizeof *skeleton->nodes);
         ok = skeleton->nodes || sg_fail(err, "%s: out of memory", path);
@@ -289,82 +383,7 @@ bool sg_skeleton_parse_ply(SgSkeleton *skeleton, const void *data, size_t size,
         skeleton->edges = calloc(edge->count, sizeof *skeleton->edges);
         ok = skeleton->edges || sg_fail(err, "%s: out of memory", path);
     }
-
-    /* Decode elements in file order. */
-    for (int i = 0; ok && i < r->header.element_count; i++) {
-        const SgPlyElement *e = &r->header.elements[i];
-        /* Rows without properties hold no data: nothing to decode (and a
-         * count of 4 billion must not take a minute to step through). */
-        if (e->property_count == 0)
-            continue;
-        for (uint64_t row = 0; ok && row < e->count; row++) {
-            double v[F_COUNT] = {0};
-            v[F_LIGHT] = -1;
-            for (int p = 0; ok && p < e->property_count; p++) {
-                const SgPlyProperty *q = &e->properties[p];
-                double value;
-                if (q->count_type == SG_PLY_NONE) {
-                    ok = read_value(r, q->type, &value, e, row, err);
-                    if (ok && r->field[i][p] != F_UNKNOWN)
-                        v[r->field[i][p]] = value;
-                    continue;
-                }
-                /* An unknown list: read its length, skip its items. */
-                ok = read_value(r, q->count_type, &value, e, row, err);
-                if (ok && value < 0)
-                    ok = sg_fail(err, "%s: negative list length in %s %llu", path, e->name,
-                                 (unsigned long long)row);
-                for (double item = 0; ok && item < value; item++) {
-                    double ignored;
-                    ok = read_value(r, q->type, &ignored, e, row, err);
-                }
-            }
-            if (!ok)
-                break;
-            if (e == vertex) {
-                SgSkeletonNode *n = &skeleton->nodes[row];
-                for (int a = 0; a < 3; a++) {
-                    if (!isfinite(v[F_X + a]) || fabs(v[F_X + a]) > 3.0e38)
-                        ok = sg_fail(err, "%s: vertex %llu has a non-finite position", path,
-                                     (unsigned long long)row);
-                    n->position[a] = (float)v[F_X + a];
-                }
-                if (ok && (!isfinite(v[F_RADIUS]) || v[F_RADIUS] < 0 || v[F_RADIUS] > 3.0e38))
-                    ok = sg_fail(err, "%s: vertex %llu has a bad radius", path,
-                                 (unsigned long long)row);
-                if (ok && (v[F_KIND] < 0 || v[F_KIND] > SG_NODE_CAMERA))
-                    ok = sg_fail(err, "%s: vertex %llu has unknown kind %g", path,
-                                 (unsigned long long)row, v[F_KIND]);
-                if (ok && (!in_int_range(v[F_I]) || !in_int_range(v[F_J]) ||
-                           !in_int_range(v[F_K]) || !in_int_range(v[F_LIFESPAN]) ||
-                           !in_int_range(v[F_LIGHT]) || v[F_LIGHT] < -1))
-                    ok = sg_fail(err, "%s: vertex %llu has an out-of-range integer", path,
-                                 (unsigned long long)row);
-                if (!ok)
-                    break;
-                n->voxel[0] = (int)v[F_I];
-                n->voxel[1] = (int)v[F_J];
-                n->voxel[2] = (int)v[F_K];
-                n->kind = (uint8_t)v[F_KIND];
-                n->radius = (float)v[F_RADIUS];
-                n->lifespan = (int)v[F_LIFESPAN];
-                n->light = n->kind == SG_NODE_LIGHT ? (int)v[F_LIGHT] : -1;
-            } else if (e == edge) {
-                for (int a = 0; a < 2; a++)
-                    if (v[F_V1 + a] < 0 || v[F_V1 + a] >= (double)vertex->count)
-                        ok = sg_fail(err, "%s: edge %llu refers to vertex %g, which does not "
-                                     "exist (%llu vertices)", path, (unsigned long long)row,
-                                     v[F_V1 + a], (unsigned long long)vertex->count);
-                if (ok && v[F_V1] == v[F_V2])
-                    ok = sg_fail(err, "%s: edge %llu joins vertex %g to itself", path,
-                                 (unsigned long long)row, v[F_V1]);
-                if (!ok)
-                    break;
-                skeleton->edges[row][0] = (uint32_t)v[F_V1];
-                skeleton->edges[row][1] = (uint32_t)v[F_V2];
-            }
-        }
-    }
+    ok = ok && decode_elements(r, vertex, edge, skeleton, err);
     if (ok) {
         skeleton->node_count = (uint32_t)vertex->count;
         skeleton->edge_count = edge ? (uint32_t)edge->count : 0;

@@ -12,6 +12,7 @@
 #include "labels.h"
 #include "memory.h"
 #include "output_file.h"
+#include "ply_file.h"
 #include "progress.h"
 #include "threads.h"
 
@@ -238,12 +239,12 @@ static bool write_vectors(const char *path, const SgSkeleton *s, const uint32_t 
     if (edges * 2 > INT32_MAX)
         return sg_fail(err, "%s: too many vectors for a PLY file", path);
     SgOutputFile out;
-    if (!sg_output_open(&out, path, err))
+    if (!sg_ply_write_begin(&out, path,
+                            "importance points (Biri & Chaussard 2012, figure 2): one edge per node and "
+                            "light, from the node to its importance point",
+                            err))
         return false;
     fprintf(out.file,
-            "ply\nformat binary_little_endian 1.0\n"
-            "comment importance points (Biri & Chaussard 2012, figure 2): one edge per node and "
-            "light, from the node to its importance point\n"
             "element vertex %llu\nproperty float x\nproperty float y\nproperty float z\n"
             "element edge %llu\nproperty int vertex1\nproperty int vertex2\nproperty int light\n"
             "end_header\n",
@@ -267,6 +268,326 @@ static bool write_vectors(const char *path, const SgSkeleton *s, const uint32_t 
 
 /* ---- the build ---------------------------------------------------------- */
 
+/* Everything one build holds, from the inputs to the file's bytes. */
+typedef struct Build {
+    const SgMedium *medium;
+    const SgSkeleton *skeleton;
+    const SgImportanceOptions *options;
+    const SgGrid *grid;
+    const char *out_path, *mname, *sname;
+    uint32_t N, L; /* nodes, lights */
+    int threads;
+    SgImportanceStats stats;
+    /* phases 1 and 2 */
+    SgLabelGrid labels;
+    SgGraph graph;
+    uint32_t *component, *scratch, *pred, *sources;
+    double *dist;
+    void *heap;
+    float *points;
+    SgCacheLight *lights;
+    SgVisibility vis;
+    /* phase 3 */
+    BlockPass bp;
+    size_t grid_blocks;
+    uint16_t *palette_size;
+    uint8_t *bits;
+    uint64_t block_count, palette_total, bits_total;
+    /* phase 4 */
+    SgCacheHeader header;
+    uint8_t *file;
+    size_t file_size;
+} Build;
+
+/* Inputs that do not belong together, or that no cache can hold. */
+static bool check_inputs(const Build *b, SgError *err)
+{
+    const SgGrid *grid = b->grid;
+    if (b->N == 0)
+        return sg_fail(err, "%s: the skeleton has no nodes", b->sname);
+    if (grid->nx <= 0 || grid->ny <= 0 || grid->nz <= 0 || !grid->voxels)
+        return sg_fail(err, "%s: the medium grid is empty", b->mname);
+    for (uint32_t n = 0; n < b->N; n++) {
+        const SgSkeletonNode *v = &b->skeleton->nodes[n];
+        if (v->kind == SG_NODE_LIGHT && v->light >= 0 && (uint32_t)v->light >= b->L)
+            return sg_fail(err, "%s: node %u names light %d but %s has %u lights (they do "
+                           "not belong together)", b->sname, n, v->light, b->mname, b->L);
+        for (int a = 0; a < 3; a++)
+            if (!isfinite(v->position[a]))
+                return sg_fail(err, "%s: node %u has a non-finite position", b->sname, n);
+    }
+    if ((uint64_t)b->N * b->L > (uint64_t)1 << 32)
+        return sg_fail(err, "%s: %u nodes x %u lights is too many importance points", b->out_path,
+                       b->N, b->L);
+    return true;
+}
+
+/* 1. Nearest node of every medium voxel. */
+static bool label_voxels(Build *b, SgError *err)
+{
+    bool ok = sg_label_grid_build(b->grid, b->skeleton, b->options->threads, &b->labels, err);
+    if (ok) {
+        b->stats.medium_voxels = b->labels.medium_voxels;
+        b->stats.labelled_voxels = b->labels.labelled_voxels;
+        b->stats.label_rounds = b->labels.rounds;
+        b->stats.label_settled = b->labels.settled;
+    }
+    return ok;
+}
+
+/* 2a. The graph, its components and the arrays of the shortest paths. */
+static bool build_graph(Build *b, SgError *err)
+{
+    uint32_t N = b->N, L = b->L;
+    if (!sg_graph_build(b->skeleton, &b->graph, err))
+        return false;
+    b->component = malloc((size_t)N * sizeof *b->component);
+    b->scratch = malloc((size_t)N * sizeof *b->scratch);
+    b->pred = malloc((size_t)N * sizeof *b->pred);
+    b->sources = malloc((size_t)N * sizeof *b->sources);
+    b->dist = malloc((size_t)N * sizeof *b->dist);
+    b->heap = malloc(sg_graph_heap_bytes(&b->graph));
+    b->lights = calloc(L ? L : 1, sizeof *b->lights);
+    b->points = calloc((size_t)N * L * 3 + 1, sizeof *b->points);
+    if (!(b->component && b->scratch && b->pred && b->sources && b->dist && b->heap && b->lights && b->points))
+        return sg_fail(err, "%s: out of memory for %u nodes x %u lights", b->out_path, N, L);
+    b->stats.components = sg_graph_components(&b->graph, b->component, b->scratch);
+    return true;
+}
+
+/* The light's nodes, into b->sources: those the skeleton marks with it;
+ * failing that, the node nearest to the light's seed voxel. */
+static uint32_t light_sources(Build *b, uint32_t k, const double toward_sun[3])
+{
+    const SgMediumLight *ml = &b->medium->lights[k];
+    const SgGrid *grid = b->grid;
+    const SgSkeleton *skeleton = b->skeleton;
+    uint32_t count = 0;
+    for (uint32_t n = 0; n < b->N; n++)
+        if ((skeleton->nodes[n].kind == SG_NODE_LIGHT && skeleton->nodes[n].light == (int)k) ||
+            (ml->outside && in_margin(grid, b->medium->outside_margin, skeleton->nodes[n].voxel)) ||
+            (ml->sun && sunlit(grid, skeleton->nodes[n].voxel, toward_sun)))
+            b->sources[count++] = n;
+    if (count == 0 && sg_grid_inside(grid, ml->seed[0], ml->seed[1], ml->seed[2])) {
+        uint32_t n = sg_label_at(&b->labels, ml->seed[0], ml->seed[1], ml->seed[2]);
+        if (n != SG_CACHE_NONE)
+            b->sources[count++] = n;
+    }
+    return count;
+}
+
+/* 2b. Light k's entry in the light table and its importance point at every
+ * node of its component (shortest paths from its nodes). False when it
+ * reaches no node. */
+static bool light_points(Build *b, uint32_t k, double tolerance)
+{
+    const SgMediumLight *ml = &b->medium->lights[k];
+    const SgGrid *grid = b->grid;
+    SgCacheLight *cl = &b->lights[k];
+    for (int a = 0; a < 3; a++)
+        cl->position[a] = (float)ml->position[a];
+    cl->node = SG_CACHE_NONE;
+    cl->component = SG_CACHE_NONE;
+    double toward_sun[3] = {-ml->normal[0], -ml->normal[1], -ml->normal[2]};
+    uint32_t count = light_sources(b, k, toward_sun);
+    if (count == 0)
+        return false; /* sealed or outside the medium: reaches no one */
+    cl->node = b->sources[0];
+    cl->component = b->component[b->sources[0]];
+    sg_graph_shortest_paths(&b->graph, b->sources, count, b->dist, b->pred, b->heap);
+    double diagonal = grid->voxel_size * sqrt((double)grid->nx * grid->nx + (double)grid->ny * grid->ny +
+                                              (double)grid->nz * grid->nz);
+    PointPass pp = {&b->vis, b->skeleton, b->component, cl->component, b->pred, b->dist, ml->position,
+                    b->points, k, b->L, tolerance, ml->sun ? toward_sun : NULL, diagonal};
+    sg_parallel_for((b->N + POINT_CHUNK - 1) / POINT_CHUNK, b->threads, point_chunk, &pp);
+    b->stats.lights_reachable++;
+    return true;
+}
+
+/* 2. Graph, components, the light table and the importance points. */
+static bool importance_points(Build *b, bool ok, SgError *err)
+{
+    if (ok)
+        ok = build_graph(b, err);
+    double tolerance = b->options->run_tolerance > 0 ? b->options->run_tolerance : 0;
+    if (ok)
+        ok = sg_visibility_init(&b->vis, b->grid, b->threads, err);
+    SgProgress progress;
+    sg_progress_begin(&progress, "importance points", b->L);
+    for (uint32_t k = 0; ok && k < b->L; k++)
+        if (light_points(b, k, tolerance))
+            sg_progress_update(&progress, k + 1);
+    sg_progress_end(&progress);
+    return ok;
+}
+
+/* 3. The sparse table: each block's palette size and bits, and the totals. */
+static bool count_blocks(Build *b, SgError *err)
+{
+    const SgGrid *grid = b->grid;
+    const int bx = (grid->nx + 7) / 8, by = (grid->ny + 7) / 8, bz = (grid->nz + 7) / 8;
+    b->grid_blocks = (size_t)bx * by * bz;
+    b->bp = (BlockPass){&b->labels, bx, by, bz, NULL, NULL, NULL, NULL, NULL, NULL};
+    b->palette_size = malloc(b->grid_blocks * sizeof *b->palette_size);
+    b->bits = malloc(b->grid_blocks);
+    if (!b->palette_size || !b->bits)
+        return sg_fail(err, "%s: out of memory for the block table", b->out_path);
+    b->bp.palette_size = b->palette_size;
+    b->bp.bits = b->bits;
+    sg_parallel_for((uint64_t)bz, b->threads, block_count_slab, &b->bp);
+    for (size_t k = 0; k < b->grid_blocks; k++)
+        if (b->palette_size[k]) {
+            b->block_count++;
+            b->palette_total += b->palette_size[k];
+            b->bits_total += (uint64_t)64 * b->bits[k];
+        }
+    if (b->palette_total > UINT32_MAX || b->bits_total > UINT32_MAX)
+        return sg_fail(err, "%s: the nearest-node table is too large", b->out_path);
+    return true;
+}
+
+/* 4a. The sections' places in the file, and the zeroed file. */
+static bool lay_out_file(Build *b, SgError *err)
+{
+    size_t N = b->N, L = b->L;
+    size_t sizes[SG_CACHE_SECTION_COUNT] = {
+        [SG_CACHE_NODES] = N * sizeof(SgCacheNode),
+        [SG_CACHE_LIGHTS] = L * sizeof(SgCacheLight),
+        [SG_CACHE_POINTS] = N * L * 3 * sizeof(float),
+        [SG_CACHE_BLOCK_INDEX] = b->grid_blocks * sizeof(uint32_t),
+        [SG_CACHE_BLOCKS] = (size_t)b->block_count * sizeof(SgCacheBlock),
+        [SG_CACHE_PALETTE] = (size_t)b->palette_total * sizeof(uint32_t),
+        [SG_CACHE_VOXEL_BITS] = (size_t)b->bits_total,
+    };
+    size_t at = align_up(sizeof b->header);
+    for (int s = 0; s < SG_CACHE_SECTION_COUNT; s++) {
+        b->header.sections[s].offset = at;
+        b->header.sections[s].size = sizes[s];
+        at = align_up(at + sizes[s]);
+    }
+    b->file_size = at;
+    b->file = calloc(b->file_size, 1);
+    bool ok = b->file != NULL;
+    if (!ok)
+        ok = sg_fail(err, "%s: out of memory for a %zu-byte cache", b->out_path, b->file_size);
+    sg_memory_prefer_huge_pages(b->file, b->file_size); /* fewer first-touch faults */
+    return ok;
+}
+
+/* 4b. The header's fields but the checksum. */
+static void fill_header(Build *b)
+{
+    SgCacheHeader *h = &b->header;
+    const SgGrid *grid = b->grid;
+    memcpy(h->magic, SG_CACHE_MAGIC, 8);
+    h->version = SG_CACHE_VERSION;
+    h->header_size = sizeof *h;
+    h->file_size = b->file_size;
+    h->geometry_hash = b->medium->geometry_hash;
+    h->skeleton_hash = sg_importance_skeleton_hash(b->skeleton);
+    int32_t dims[3] = {grid->nx, grid->ny, grid->nz};
+    uint64_t mh = sg_hash_bytes(SG_HASH_INIT, dims, sizeof dims);
+    h->medium_hash = sg_hash_bytes(mh, grid->voxels, sg_grid_count(grid));
+    h->nx = grid->nx;
+    h->ny = grid->ny;
+    h->nz = grid->nz;
+    h->block_size = SG_CACHE_BLOCK;
+    memcpy(h->origin, grid->origin, sizeof h->origin);
+    h->voxel_size = grid->voxel_size;
+    h->node_count = b->N;
+    h->light_count = b->L;
+    h->component_count = b->stats.components;
+    h->block_count = (uint32_t)b->block_count;
+    h->medium_voxels = b->labels.medium_voxels;
+    h->palette_count = b->palette_total;
+}
+
+/* 4c. The block index and records (prefix sums of the palettes and bits),
+ * then every block's palette and bits, in parallel over slabs. */
+static void fill_block_table(Build *b)
+{
+    uint8_t *file = b->file;
+    const SgCacheHeader *h = &b->header;
+    uint32_t *block_index = (uint32_t *)(file + h->sections[SG_CACHE_BLOCK_INDEX].offset);
+    SgCacheBlock *records = (SgCacheBlock *)(file + h->sections[SG_CACHE_BLOCKS].offset);
+    uint32_t record = 0, pal = 0, data = 0;
+    for (size_t k = 0; k < b->grid_blocks; k++) {
+        if (!b->palette_size[k]) {
+            block_index[k] = SG_CACHE_NONE;
+            continue;
+        }
+        block_index[k] = record;
+        records[record].palette_offset = pal;
+        records[record].data_offset = data;
+        records[record].palette_size = b->palette_size[k];
+        records[record].bits = b->bits[k];
+        pal += b->palette_size[k];
+        data += 64u * b->bits[k];
+        record++;
+    }
+    b->bp.block_index = block_index;
+    b->bp.records = records;
+    b->bp.palette = (uint32_t *)(file + h->sections[SG_CACHE_PALETTE].offset);
+    b->bp.voxel_bits = file + h->sections[SG_CACHE_VOXEL_BITS].offset;
+    sg_parallel_for((uint64_t)b->bp.bz, b->threads, block_encode_slab, &b->bp);
+}
+
+/* 4. Fill the file in memory and checksum it. */
+static void fill_file(Build *b)
+{
+    uint8_t *file = b->file;
+    const SgCacheHeader *h = &b->header;
+    fill_header(b);
+    SgCacheNode *nodes = (SgCacheNode *)(file + h->sections[SG_CACHE_NODES].offset);
+    for (uint32_t n = 0; n < b->N; n++) {
+        memcpy(nodes[n].position, b->skeleton->nodes[n].position, sizeof nodes[n].position);
+        nodes[n].component = b->component[n];
+    }
+    if (b->L) {
+        memcpy(file + h->sections[SG_CACHE_LIGHTS].offset, b->lights, (size_t)b->L * sizeof *b->lights);
+        memcpy(file + h->sections[SG_CACHE_POINTS].offset, b->points, (size_t)b->N * b->L * 3 * sizeof(float));
+    }
+    fill_block_table(b);
+    memcpy(file, &b->header, sizeof b->header); /* checksum field still 0 */
+    b->header.checksum = sg_hash_bytes(SG_HASH_INIT, file, b->file_size);
+    memcpy(file, &b->header, sizeof b->header);
+}
+
+/* The side output first: the cache, the target make waits for, appears
+ * only when everything succeeded. */
+static bool write_outputs(const Build *b, SgError *err)
+{
+    if (b->options->vectors_path &&
+        !write_vectors(b->options->vectors_path, b->skeleton, b->component, b->lights, b->L, b->points, err))
+        return false;
+    SgOutputFile out;
+    if (!sg_output_open(&out, b->out_path, err))
+        return false;
+    if (fwrite(b->file, 1, b->file_size, out.file) != b->file_size) {
+        sg_output_abort(&out);
+        return sg_fail(err, "%s: write failed", b->out_path);
+    }
+    return sg_output_commit(&out, err);
+}
+
+static void release_build(Build *b)
+{
+    free(b->file);
+    free(b->palette_size);
+    free(b->bits);
+    free(b->points);
+    free(b->lights);
+    free(b->heap);
+    free(b->dist);
+    free(b->sources);
+    free(b->pred);
+    free(b->scratch);
+    free(b->component);
+    sg_visibility_release(&b->vis);
+    sg_graph_release(&b->graph);
+    sg_label_grid_release(&b->labels);
+}
+
 bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
                          const SgImportanceOptions *options, const char *out_path,
                          SgImportanceStats *stats_out, SgError *err)
@@ -274,274 +595,48 @@ bool sg_importance_build(const SgMedium *medium, const SgSkeleton *skeleton,
     SgImportanceOptions defaults = {0};
     if (!options)
         options = &defaults;
-    SgImportanceStats stats;
-    memset(&stats, 0, sizeof stats);
-    const SgGrid *grid = &medium->grid;
     const double t0 = sg_seconds();
-    const uint32_t N = skeleton->node_count, L = medium->light_count;
-    const char *mname = options->medium_name ? options->medium_name : "medium";
-    const char *sname = options->skeleton_name ? options->skeleton_name : "skeleton";
-
-    if (N == 0)
-        return sg_fail(err, "%s: the skeleton has no nodes", sname);
-    if (grid->nx <= 0 || grid->ny <= 0 || grid->nz <= 0 || !grid->voxels)
-        return sg_fail(err, "%s: the medium grid is empty", mname);
-    for (uint32_t n = 0; n < N; n++) {
-        const SgSkeletonNode *v = &skeleton->nodes[n];
-        if (v->kind == SG_NODE_LIGHT && v->light >= 0 && (uint32_t)v->light >= L)
-            return sg_fail(err, "%s: node %u names light %d but %s has %u lights (they do "
-                           "not belong together)", sname, n, v->light, mname, L);
-        for (int a = 0; a < 3; a++)
-            if (!isfinite(v->position[a]))
-                return sg_fail(err, "%s: node %u has a non-finite position", sname, n);
+    Build *b = malloc(sizeof *b);
+    if (!b)
+        return sg_fail(err, "%s: out of memory", out_path);
+    *b = (Build){.medium = medium,
+                 .skeleton = skeleton,
+                 .options = options,
+                 .grid = &medium->grid,
+                 .out_path = out_path,
+                 .mname = options->medium_name ? options->medium_name : "medium",
+                 .sname = options->skeleton_name ? options->skeleton_name : "skeleton",
+                 .N = skeleton->node_count,
+                 .L = medium->light_count};
+    if (!check_inputs(b, err)) {
+        free(b);
+        return false;
     }
-    if ((uint64_t)N * L > (uint64_t)1 << 32)
-        return sg_fail(err, "%s: %u nodes x %u lights is too many importance points", out_path,
-                       N, L);
-
-    bool ok = true;
-    SgLabelGrid labels = {0};
-    SgGraph graph = {0};
-    uint32_t *component = NULL, *scratch = NULL, *pred = NULL, *sources = NULL;
-    double *dist = NULL;
-    void *heap = NULL;
-    float *points = NULL;
-    SgCacheLight *lights = NULL;
-    uint16_t *palette_size = NULL;
-    uint8_t *bits = NULL;
-    uint8_t *file = NULL;
-
-    /* 1. Nearest node of every medium voxel. */
-    ok = sg_label_grid_build(grid, skeleton, options->threads, &labels, err);
-    stats.seconds_labels = sg_seconds() - t0;
-    if (ok) {
-        stats.medium_voxels = labels.medium_voxels;
-        stats.labelled_voxels = labels.labelled_voxels;
-        stats.label_rounds = labels.rounds;
-        stats.label_settled = labels.settled;
-    }
-
-    /* 2. Graph, components, the light table. */
+    bool ok = label_voxels(b, err);
+    b->stats.seconds_labels = sg_seconds() - t0;
     double t1 = sg_seconds();
-    if (ok)
-        ok = sg_graph_build(skeleton, &graph, err);
-    if (ok) {
-        component = malloc((size_t)N * sizeof *component);
-        scratch = malloc((size_t)N * sizeof *scratch);
-        pred = malloc((size_t)N * sizeof *pred);
-        sources = malloc((size_t)N * sizeof *sources);
-        dist = malloc((size_t)N * sizeof *dist);
-        heap = malloc(sg_graph_heap_bytes(&graph));
-        lights = calloc(L ? L : 1, sizeof *lights);
-        points = calloc((size_t)N * L * 3 + 1, sizeof *points);
-        ok = component && scratch && pred && sources && dist && heap && lights && points;
-        if (!ok)
-            sg_fail(err, "%s: out of memory for %u nodes x %u lights", out_path, N, L);
-    }
-    if (ok)
-        stats.components = sg_graph_components(&graph, component, scratch);
-
-    int threads = sg_thread_count(options->threads);
-    double tolerance = options->run_tolerance > 0 ? options->run_tolerance : 0;
-    SgVisibility vis = {0};
-    if (ok)
-        ok = sg_visibility_init(&vis, grid, threads, err);
-    SgProgress progress;
-    sg_progress_begin(&progress, "importance points", L);
-    for (uint32_t k = 0; ok && k < L; k++) {
-        const SgMediumLight *ml = &medium->lights[k];
-        SgCacheLight *cl = &lights[k];
-        for (int a = 0; a < 3; a++)
-            cl->position[a] = (float)ml->position[a];
-        cl->node = SG_CACHE_NONE;
-        cl->component = SG_CACHE_NONE;
-        /* The light's nodes: those the skeleton marks with it; failing
-         * that, the node nearest to the light's seed voxel. */
-        uint32_t count = 0;
-        double toward_sun[3] = {-ml->normal[0], -ml->normal[1], -ml->normal[2]};
-        for (uint32_t n = 0; n < N; n++)
-            if ((skeleton->nodes[n].kind == SG_NODE_LIGHT && skeleton->nodes[n].light == (int)k) ||
-                (ml->outside && in_margin(grid, medium->outside_margin, skeleton->nodes[n].voxel)) ||
-                (ml->sun && sunlit(grid, skeleton->nodes[n].voxel, toward_sun)))
-                sources[count++] = n;
-        if (count == 0 && sg_grid_inside(grid, ml->seed[0], ml->seed[1], ml->seed[2])) {
-            uint32_t n = sg_label_at(&labels, ml->seed[0], ml->seed[1], ml->seed[2]);
-            if (n != SG_CACHE_NONE)
-                sources[count++] = n;
-        }
-        if (count == 0)
-            continue; /* sealed or outside the medium: reaches no one */
-        cl->node = sources[0];
-        cl->component = component[sources[0]];
-        sg_graph_shortest_paths(&graph, sources, count, dist, pred, heap);
-        double diagonal = grid->voxel_size * sqrt((double)grid->nx * grid->nx + (double)grid->ny * grid->ny +
-                                                  (double)grid->nz * grid->nz);
-        PointPass pp = {&vis, skeleton, component, cl->component, pred, dist, ml->position,
-                        points, k, L, tolerance, ml->sun ? toward_sun : NULL, diagonal};
-        sg_parallel_for((N + POINT_CHUNK - 1) / POINT_CHUNK, threads, point_chunk, &pp);
-        stats.lights_reachable++;
-        sg_progress_update(&progress, k + 1);
-    }
-    sg_progress_end(&progress);
-    stats.seconds_points = sg_seconds() - t1;
-
-    /* 3. The sparse table. */
+    b->threads = sg_thread_count(options->threads);
+    ok = importance_points(b, ok, err);
+    b->stats.seconds_points = sg_seconds() - t1;
     double t2 = sg_seconds();
-    const int bx = (grid->nx + 7) / 8, by = (grid->ny + 7) / 8, bz = (grid->nz + 7) / 8;
-    const size_t grid_blocks = (size_t)bx * by * bz;
-    BlockPass bp = {&labels, bx, by, bz, NULL, NULL, NULL, NULL, NULL, NULL};
-    uint32_t *block_index = NULL;
-    uint64_t block_count = 0, palette_total = 0, bits_total = 0;
-    if (ok) {
-        palette_size = malloc(grid_blocks * sizeof *palette_size);
-        bits = malloc(grid_blocks);
-        ok = palette_size && bits;
-        if (!ok)
-            sg_fail(err, "%s: out of memory for the block table", out_path);
-    }
-    if (ok) {
-        bp.palette_size = palette_size;
-        bp.bits = bits;
-        sg_parallel_for((uint64_t)bz, threads, block_count_slab, &bp);
-        for (size_t b = 0; b < grid_blocks; b++)
-            if (palette_size[b]) {
-                block_count++;
-                palette_total += palette_size[b];
-                bits_total += (uint64_t)64 * bits[b];
-            }
-        if (palette_total > UINT32_MAX || bits_total > UINT32_MAX)
-            ok = sg_fail(err, "%s: the nearest-node table is too large", out_path);
-    }
-
-    /* 4. Lay out the file in memory, fill, checksum, write. */
-    SgCacheHeader header;
-    memset(&header, 0, sizeof header);
-    size_t file_size = 0;
-    if (ok) {
-        size_t sizes[SG_CACHE_SECTION_COUNT] = {
-            [SG_CACHE_NODES] = (size_t)N * sizeof(SgCacheNode),
-            [SG_CACHE_LIGHTS] = (size_t)L * sizeof(SgCacheLight),
-            [SG_CACHE_POINTS] = (size_t)N * L * 3 * sizeof(float),
-            [SG_CACHE_BLOCK_INDEX] = grid_blocks * sizeof(uint32_t),
-            [SG_CACHE_BLOCKS] = (size_t)block_count * sizeof(SgCacheBlock),
-            [SG_CACHE_PALETTE] = (size_t)palette_total * sizeof(uint32_t),
-            [SG_CACHE_VOXEL_BITS] = (size_t)bits_total,
-        };
-        size_t at = align_up(sizeof header);
-        for (int s = 0; s < SG_CACHE_SECTION_COUNT; s++) {
-            header.sections[s].offset = at;
-            header.sections[s].size = sizes[s];
-            at = align_up(at + sizes[s]);
-        }
-        file_size = at;
-        file = calloc(file_size, 1);
-        if (!file)
-            ok = sg_fail(err, "%s: out of memory for a %zu-byte cache", out_path, file_size);
-        sg_memory_prefer_huge_pages(file, file_size); /* fewer first-touch faults */
-    }
-    if (ok) {
-        memcpy(header.magic, SG_CACHE_MAGIC, 8);
-        header.version = SG_CACHE_VERSION;
-        header.header_size = sizeof header;
-        header.file_size = file_size;
-        header.geometry_hash = medium->geometry_hash;
-        header.skeleton_hash = sg_importance_skeleton_hash(skeleton);
-        int32_t dims[3] = {grid->nx, grid->ny, grid->nz};
-        uint64_t mh = sg_hash_bytes(SG_HASH_INIT, dims, sizeof dims);
-        header.medium_hash = sg_hash_bytes(mh, grid->voxels, sg_grid_count(grid));
-        header.nx = grid->nx;
-        header.ny = grid->ny;
-        header.nz = grid->nz;
-        header.block_size = SG_CACHE_BLOCK;
-        memcpy(header.origin, grid->origin, sizeof header.origin);
-        header.voxel_size = grid->voxel_size;
-        header.node_count = N;
-        header.light_count = L;
-        header.component_count = stats.components;
-        header.block_count = (uint32_t)block_count;
-        header.medium_voxels = labels.medium_voxels;
-        header.palette_count = palette_total;
-
-        SgCacheNode *nodes = (SgCacheNode *)(file + header.sections[SG_CACHE_NODES].offset);
-        for (uint32_t n = 0; n < N; n++) {
-            memcpy(nodes[n].position, skeleton->nodes[n].position, sizeof nodes[n].position);
-            nodes[n].component = component[n];
-        }
-        if (L) {
-            memcpy(file + header.sections[SG_CACHE_LIGHTS].offset, lights,
-                   (size_t)L * sizeof *lights);
-            memcpy(file + header.sections[SG_CACHE_POINTS].offset, points,
-                   (size_t)N * L * 3 * sizeof(float));
-        }
-        block_index = (uint32_t *)(file + header.sections[SG_CACHE_BLOCK_INDEX].offset);
-        SgCacheBlock *records = (SgCacheBlock *)(file + header.sections[SG_CACHE_BLOCKS].offset);
-        uint32_t record = 0, pal = 0, data = 0;
-        for (size_t b = 0; b < grid_blocks; b++) {
-            if (!palette_size[b]) {
-                block_index[b] = SG_CACHE_NONE;
-                continue;
-            }
-            block_index[b] = record;
-            records[record].palette_offset = pal;
-            records[record].data_offset = data;
-            records[record].palette_size = palette_size[b];
-            records[record].bits = bits[b];
-            pal += palette_size[b];
-            data += 64u * bits[b];
-            record++;
-        }
-        bp.block_index = block_index;
-        bp.records = records;
-        bp.palette = (uint32_t *)(file + header.sections[SG_CACHE_PALETTE].offset);
-        bp.voxel_bits = file + header.sections[SG_CACHE_VOXEL_BITS].offset;
-        sg_parallel_for((uint64_t)bz, threads, block_encode_slab, &bp);
-
-        memcpy(file, &header, sizeof header); /* checksum field still 0 */
-        header.checksum = sg_hash_bytes(SG_HASH_INIT, file, file_size);
-        memcpy(file, &header, sizeof header);
-    }
-    stats.seconds_table = sg_seconds() - t2;
+    ok = ok && count_blocks(b, err) && lay_out_file(b, err);
+    if (ok)
+        fill_file(b);
+    b->stats.seconds_table = sg_seconds() - t2;
     double t3 = sg_seconds();
-    /* The side output first: the cache, the target make waits for, appears
-     * only when everything succeeded. */
-    if (ok && options->vectors_path)
-        ok = write_vectors(options->vectors_path, skeleton, component, lights, L, points, err);
-    if (ok) {
-        SgOutputFile out;
-        ok = sg_output_open(&out, out_path, err);
-        if (ok) {
-            if (fwrite(file, 1, file_size, out.file) != file_size) {
-                sg_output_abort(&out);
-                ok = sg_fail(err, "%s: write failed", out_path);
-            } else {
-                ok = sg_output_commit(&out, err);
-            }
-        }
-    }
-    stats.seconds_write = sg_seconds() - t3;
+    ok = ok && write_outputs(b, err);
+    b->stats.seconds_write = sg_seconds() - t3;
 
-    stats.nodes = N;
-    stats.lights = L;
-    stats.blocks = block_count;
-    stats.palette_entries = palette_total;
-    stats.bytes = file_size;
-    stats.seconds_total = sg_seconds() - t0;
+    SgImportanceStats *stats = &b->stats;
+    stats->nodes = b->N;
+    stats->lights = b->L;
+    stats->blocks = b->block_count;
+    stats->palette_entries = b->palette_total;
+    stats->bytes = b->file_size;
+    stats->seconds_total = sg_seconds() - t0;
     if (stats_out)
-        *stats_out = stats;
-
-    free(file);
-    free(palette_size);
-    free(bits);
-    free(points);
-    free(lights);
-    free(heap);
-    free(dist);
-    free(sources);
-    free(pred);
-    free(scratch);
-    free(component);
-    sg_visibility_release(&vis);
-    sg_graph_release(&graph);
-    sg_label_grid_release(&labels);
+        *stats_out = *stats;
+    release_build(b);
+    free(b);
     return ok;
 }

@@ -185,60 +185,68 @@ static int bit_width(uint64_t n)
     return b;
 }
 
-/* One attempt with keys of key_bits (32 or 64). *overflow: a distance did
- * not fit (32 only); the caller tries again wider. */
-static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int threads,
-                          int key_bits, uint32_t distance_limit, SgLabelGrid *out,
-                          bool *overflow, SgError *err)
+static void labeller_free(Labeller *L)
 {
-    memset(out, 0, sizeof *out);
-    *overflow = false;
-    const bool wide = key_bits == 64;
-    /* A one-voxel frame of blocked cells around the grid: no bounds tests
-     * in the inner loop. */
+    for (int t = 0; L->work && t < L->threads; t++) {
+        free(L->work[t].local);
+        free(L->work[t].seeds.items);
+        free(L->work[t].outbox.items);
+        for (int r = 0; r < RING; r++)
+            free(L->work[t].ring[r].items);
+    }
+    free(L->tiles);
+    free(L->phase);
+    free(L->changed);
+    free(L->work);
+    free(L);
+}
+
+/* The labeller's arrays for the grid with a one-voxel frame of blocked
+ * cells around it (no bounds tests in the inner loop), keys of key_size
+ * bytes; its keys in *key. NULL when out of memory. */
+static Labeller *labeller_create(const SgGrid *grid, int threads, size_t key_size, void **key)
+{
     const size_t px = (size_t)grid->nx + 2, py = (size_t)grid->ny + 2, pz = (size_t)grid->nz + 2;
     const size_t total = px * py * pz;
-    const size_t key_size = wide ? sizeof(uint64_t) : sizeof(uint32_t);
     Labeller *L = calloc(1, sizeof *L);
-    void *key = malloc(total * key_size);
-    int tx = (grid->nx + TILE - 1) / TILE, ty = (grid->ny + TILE - 1) / TILE,
-        tz = (grid->nz + TILE - 1) / TILE;
-    size_t tile_count = (size_t)tx * (size_t)ty * (size_t)tz;
-    int threads_used = sg_thread_count(threads);
-    Tile *tiles = L ? calloc(tile_count, sizeof *tiles) : NULL;
-    Tile **phase = L ? malloc(tile_count * sizeof *phase) : NULL;
-    uint32_t *changed = L ? calloc(tile_count * TILE * TILE, sizeof *changed) : NULL;
-    Workspace *work = L ? calloc((size_t)threads_used, sizeof *work) : NULL;
-    uint64_t *plane_count = calloc(pz, sizeof *plane_count); /* per padded z plane */
-    bool ok = L && key && tiles && phase && changed && work && plane_count;
-    for (int t = 0; ok && t < threads_used; t++)
-        ok = (work[t].local = malloc((size_t)TL * TL * TL * key_size)) != NULL;
-    if (!ok) {
-        for (int t = 0; work && t < threads_used; t++)
-            free(work[t].local);
+    *key = malloc(total * key_size);
+    if (!L || !*key) {
         free(L);
-        free(key);
-        free(tiles);
-        free(phase);
-        free(changed);
-        free(work);
-        free(plane_count);
-        return sg_fail(err, "out of memory for the nearest-node labels (%zu voxels)", total);
+        free(*key);
+        *key = NULL;
+        return NULL;
     }
-    L->key = key;
+    L->tx = (grid->nx + TILE - 1) / TILE;
+    L->ty = (grid->ny + TILE - 1) / TILE;
+    L->tz = (grid->nz + TILE - 1) / TILE;
+    size_t tile_count = (size_t)L->tx * (size_t)L->ty * (size_t)L->tz;
+    L->threads = sg_thread_count(threads);
+    L->tiles = calloc(tile_count, sizeof *L->tiles);
+    L->phase = malloc(tile_count * sizeof *L->phase);
+    L->changed = calloc(tile_count * TILE * TILE, sizeof *L->changed);
+    L->work = calloc((size_t)L->threads, sizeof *L->work);
+    bool ok = L->tiles && L->phase && L->changed && L->work;
+    for (int t = 0; ok && t < L->threads; t++)
+        ok = (L->work[t].local = malloc((size_t)TL * TL * TL * key_size)) != NULL;
+    if (!ok) {
+        labeller_free(L);
+        free(*key);
+        *key = NULL;
+        return NULL;
+    }
+    L->key = *key;
     L->px = px;
     L->py = py;
     L->plane = px * py;
-    L->tx = tx;
-    L->ty = ty;
-    L->tz = tz;
-    L->tiles = tiles;
-    L->phase = phase;
-    L->changed = changed;
-    L->work = work;
-    L->threads = threads_used;
-    sg_memory_prefer_huge_pages(key, total * key_size);
-    sg_memory_prefer_huge_pages(changed, tile_count * TILE * TILE * sizeof *changed);
+    sg_memory_prefer_huge_pages(*key, total * key_size);
+    sg_memory_prefer_huge_pages(L->changed, tile_count * TILE * TILE * sizeof *L->changed);
+    return L;
+}
+
+/* How a key splits into distance and node, and the neighbours' offsets in
+ * a tile's local copy and their distances. */
+static void labeller_set_keys(Labeller *L, const SgSkeleton *skeleton, bool wide, uint32_t distance_limit)
+{
     if (wide) {
         L->shift = 32;
         L->node_mask = 0xffffffffu;
@@ -251,8 +259,6 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
         if (distance_limit && distance_limit < L->distance_limit)
             L->distance_limit = distance_limit;
     }
-
-    uint64_t medium = each_plane(L, grid, pz, plane_count, wide ? fill_plane_64 : fill_plane_32);
     int n = 0;
     for (int dz = -1; dz <= 1; dz++)
         for (int dy = -1; dy <= 1; dy++)
@@ -264,10 +270,15 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
                 L->weight[n] = axes == 1 ? W_FACE : axes == 2 ? W_EDGE : W_CORNER;
                 n++;
             }
-    for (int k = 0; k < tz; k++)
-        for (int j = 0; j < ty; j++)
-            for (int i = 0; i < tx; i++) {
-                Tile *t = &tiles[i + (size_t)tx * (j + (size_t)ty * k)];
+}
+
+/* Every tile's corner and extent, then the skeleton's nodes as seeds. */
+static void labeller_seed(Labeller *L, const SgGrid *grid, const SgSkeleton *skeleton, bool wide)
+{
+    for (int k = 0; k < L->tz; k++)
+        for (int j = 0; j < L->ty; j++)
+            for (int i = 0; i < L->tx; i++) {
+                Tile *t = &L->tiles[i + (size_t)L->tx * (j + (size_t)L->ty * k)];
                 t->x0 = i * TILE;
                 t->y0 = j * TILE;
                 t->z0 = k * TILE;
@@ -275,49 +286,60 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
                 t->ey = grid->ny - t->y0 < TILE ? grid->ny - t->y0 : TILE;
                 t->ez = grid->nz - t->z0 < TILE ? grid->nz - t->z0 : TILE;
             }
-
-    for (uint32_t s = 0; ok && s < skeleton->node_count; s++) {
+    for (uint32_t s = 0; s < skeleton->node_count; s++) {
         const int *c = skeleton->nodes[s].voxel;
         if (!sg_grid_inside(grid, c[0], c[1], c[2]) || !sg_grid_get(grid, c[0], c[1], c[2]))
             continue;
-        size_t v = (size_t)(c[0] + 1) + px * ((size_t)(c[1] + 1) + py * (size_t)(c[2] + 1));
+        size_t v = (size_t)(c[0] + 1) + L->px * ((size_t)(c[1] + 1) + L->py * (size_t)(c[2] + 1));
         /* a lower node may already stand on this voxel */
         if (!(wide ? seed_64(L, v, s) : seed_32(L, v, s)))
             continue;
         mark_changed(L, v);
     }
+}
 
-    /* Rounds of 8 phases: the tiles of one parity along each axis run at
-     * once (no two of them touch: each reads its halo, in tiles of other
-     * parities, and writes its own voxels), then their outboxes are
-     * applied in tile order. Which thread runs a tile changes nothing. */
-    SgThreadPool *pool = sg_thread_pool_create(threads_used);
+/* The dirty tiles of one parity along each axis, into L->phase. */
+static size_t phase_tiles(Labeller *L, int parity)
+{
+    size_t count = 0;
+    for (int k = parity >> 2 & 1; k < L->tz; k += 2)
+        for (int j = parity >> 1 & 1; j < L->ty; j += 2)
+            for (int i = parity & 1; i < L->tx; i += 2) {
+                Tile *t = &L->tiles[i + (size_t)L->tx * (j + (size_t)L->ty * k)];
+                if (t->dirty)
+                    L->phase[count++] = t;
+            }
+    return count;
+}
+
+/* Rounds of 8 phases: the tiles of one parity along each axis run at once
+ * (no two of them touch: each reads its halo, in tiles of other parities,
+ * and writes its own voxels), then their outboxes are applied in tile
+ * order. Which thread runs a tile changes nothing. False when out of
+ * memory. */
+static bool labeller_propagate(Labeller *L, bool wide, uint64_t medium, uint32_t *rounds_out,
+                               uint64_t *settled_out, bool *overflow)
+{
+    SgThreadPool *pool = sg_thread_pool_create(L->threads);
     SgProgress progress;
     sg_progress_begin(&progress, "nearest nodes", medium);
     uint32_t rounds = 0;
     uint64_t settled = 0;
-    bool more = true;
+    bool ok = true, more = true;
     while (ok && !*overflow && more) {
         more = false;
         rounds++;
         for (int parity = 0; parity < 8 && ok && !*overflow; parity++) {
-            size_t count = 0;
-            for (int k = parity >> 2 & 1; k < tz; k += 2)
-                for (int j = parity >> 1 & 1; j < ty; j += 2)
-                    for (int i = parity & 1; i < tx; i += 2) {
-                        Tile *t = &tiles[i + (size_t)tx * (j + (size_t)ty * k)];
-                        if (t->dirty)
-                            phase[count++] = t;
-                    }
+            size_t count = phase_tiles(L, parity);
             if (count == 0)
                 continue;
             more = true;
             sg_thread_pool_run(pool, count, wide ? run_tile_64 : run_tile_32, L);
             settled = 0;
-            for (int t = 0; t < threads_used; t++) {
-                ok = ok && !work[t].failed;
-                *overflow |= work[t].overflow;
-                settled += work[t].relaxed;
+            for (int t = 0; t < L->threads; t++) {
+                ok = ok && !L->work[t].failed;
+                *overflow |= L->work[t].overflow;
+                settled += L->work[t].relaxed;
             }
             sg_progress_update(&progress, settled < medium ? settled : medium);
             if (ok && !*overflow) {
@@ -332,24 +354,45 @@ static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int th
     sg_thread_pool_free(pool);
     if (rounds > 0 && !more)
         rounds--; /* the last round found nothing to do */
+    *rounds_out = rounds;
+    *settled_out = settled;
+    return ok;
+}
 
+/* One attempt with keys of key_bits (32 or 64). *overflow: a distance did
+ * not fit (32 only); the caller tries again wider. */
+static bool build_attempt(const SgGrid *grid, const SgSkeleton *skeleton, int threads,
+                          int key_bits, uint32_t distance_limit, SgLabelGrid *out,
+                          bool *overflow, SgError *err)
+{
+    memset(out, 0, sizeof *out);
+    *overflow = false;
+    const bool wide = key_bits == 64;
+    const size_t pz = (size_t)grid->nz + 2;
+    void *key;
+    Labeller *L = labeller_create(grid, threads, wide ? sizeof(uint64_t) : sizeof(uint32_t), &key);
+    uint64_t *plane_count = calloc(pz, sizeof *plane_count); /* per padded z plane */
+    if (!L || !plane_count) {
+        if (L)
+            labeller_free(L);
+        free(key);
+        free(plane_count);
+        return sg_fail(err, "out of memory for the nearest-node labels (%zu voxels)",
+                       ((size_t)grid->nx + 2) * ((size_t)grid->ny + 2) * pz);
+    }
+    labeller_set_keys(L, skeleton, wide, distance_limit);
+    uint64_t medium = each_plane(L, grid, pz, plane_count, wide ? fill_plane_64 : fill_plane_32);
+    labeller_seed(L, grid, skeleton, wide);
+    uint32_t rounds;
+    uint64_t settled;
+    bool ok = labeller_propagate(L, wide, medium, &rounds, &settled, overflow);
     uint64_t labelled = ok && !*overflow
                             ? each_plane(L, grid, pz, plane_count, wide ? count_plane_64 : count_plane_32)
                             : 0;
     free(plane_count);
     uint64_t node_mask = L->node_mask;
-    for (int t = 0; t < threads_used; t++) {
-        free(work[t].local);
-        free(work[t].seeds.items);
-        free(work[t].outbox.items);
-        for (int r = 0; r < RING; r++)
-            free(work[t].ring[r].items);
-    }
-    free(tiles);
-    free(phase);
-    free(changed);
-    free(work);
-    free(L);
+    size_t px = L->px, py = L->py;
+    labeller_free(L);
     if (!ok || *overflow) {
         free(key);
         return ok || sg_fail(err, "out of memory in the nearest-node propagation");

@@ -351,11 +351,10 @@ SgMerged *sg_merge_files(const char *const *paths, int count, bool partial, SgEr
             input_free(&in[i]);
     free(in);
     free(held);
-    if (!ok) {
-        sg_merged_free(m);
-        return NULL;
-    }
-    return m;
+    if (ok)
+        return m;
+    sg_merged_free(m); /* nothing half-merged leaves */
+    return NULL;
 }
 
 void sg_merged_free(SgMerged *m)

@@ -1033,6 +1033,194 @@ static void setup_slab(void *ctx, uint64_t i, int thread)
     count->oom = sk.oom;
 }
 
+/* The constrained cells, which the collapse never removes. */
+static bool collapse_set_constraints(Collapse *c, const uint32_t *constrained, size_t constrained_count)
+{
+    if (!cell_set_init(&c->cons))
+        return false;
+    for (size_t i = 0; i < constrained_count; i++)
+        if (!cell_set_add(&c->cons, constrained[i]))
+            return false;
+    return true;
+}
+
+/* Slabs of z planes (SLAB_MIN_PLANES unless told, no more than the
+ * lattice), the threads that work on them, and their queues. */
+static bool collapse_plan_slabs(Collapse *c, int threads, uint32_t parallel_grain, uint32_t slab_planes,
+                                uint64_t schedule_seed)
+{
+    const SgComplex *cx = c->cx;
+    c->slab_planes = slab_planes;
+    if (c->slab_planes < SLAB_MIN_PLANES)
+        c->slab_planes = SLAB_MIN_PLANES;
+    if (c->slab_planes > (size_t)cx->lz)
+        c->slab_planes = (size_t)cx->lz;
+    c->slab_count = ((size_t)cx->lz + c->slab_planes - 1) / c->slab_planes;
+    c->slab_cells = (uint64_t)c->slab_planes * c->st[2] * 8;
+    c->threads = parallel_grain && !schedule_seed ? sg_thread_count(threads) : 1;
+    c->schedule_state = schedule_seed;
+    if (c->threads > MAX_THREADS)
+        c->threads = MAX_THREADS;
+    if (c->slab_count < 4)
+        c->threads = 1; /* too thin to split */
+    c->slabs = calloc(c->slab_count, sizeof *c->slabs);
+    c->sinks = calloc((size_t)c->threads, sizeof *c->sinks);
+    c->done = malloc(c->slab_count);
+    c->busy = calloc(c->slab_count, 1);
+    c->slab_work = calloc(c->slab_count, sizeof *c->slab_work);
+    if (!c->slabs || !c->sinks || !c->done || !c->busy || !c->slab_work)
+        return false;
+    memset(c->done, KINDS, c->slab_count); /* no step open */
+    for (int t = 0; t < c->threads; t++)
+        c->sinks[t].noted = t == 0 ? &c->live : &c->sinks[t].own_noted;
+    return true;
+}
+
+/* Helper threads 1 .. threads-1 (fewer if some cannot start); returns how
+ * many started. */
+static int start_helpers(Collapse *c, Helper helpers[MAX_THREADS], pthread_t ids[MAX_THREADS])
+{
+    int started = 0;
+    for (int t = 1; t < c->threads; t++) {
+        helpers[t] = (Helper){c, t};
+        if (pthread_create(&ids[t], NULL, helper_main, &helpers[t]) != 0)
+            break;
+        started = t;
+    }
+    c->threads = started + 1;
+    return started;
+}
+
+static void stop_helpers(Collapse *c, const pthread_t ids[MAX_THREADS], int started)
+{
+    if (started == 0)
+        return;
+    pthread_mutex_lock(&c->lock);
+    c->exit = true;
+    pthread_cond_broadcast(&c->changed);
+    pthread_mutex_unlock(&c->lock);
+    for (int t = 1; t <= started; t++)
+        pthread_join(ids[t], NULL);
+}
+
+/* the first free faces: only vertices next to the outside of the medium */
+static void queue_first_free_faces(Collapse *c, int threads)
+{
+    SetupPass setup = {c, calloc(c->slab_count, sizeof *setup.slab)};
+    if (!setup.slab) {
+        c->oom = true;
+        return;
+    }
+    sg_parallel_for(c->slab_count, threads, setup_slab, &setup);
+    for (size_t i = 0; i < c->slab_count; i++) {
+        c->total += setup.slab[i].total;
+        c->squares += setup.slab[i].squares;
+        c->oom |= setup.slab[i].oom;
+    }
+    free(setup.slab);
+}
+
+/* Whether any slab has a cell queued for the next step. */
+static bool any_queued(const Collapse *c)
+{
+    bool any = false;
+    for (size_t i = 0; i < c->slab_count && !any; i++)
+        for (int source = 0; source < SOURCES; source++)
+            for (int k = 0; k < KINDS; k++)
+                any |= c->slabs[i].q[source][!c->cur_side][k].n > 0;
+    return any;
+}
+
+/* Steps until nothing is free and no cavity is left to break. */
+static bool collapse_steps(Collapse *c, SgProgress *progress, SgError *err)
+{
+    if (progress)
+        progress->total = c->total; /* cells removed / cells at the start */
+    for (;;) {
+        if (!any_queued(c)) {
+            if (c->squares == 0)
+                return true;
+            if (!break_cavities(c))
+                return false;
+            continue;
+        }
+        c->step++;
+        c->cur_side = !c->cur_side;
+        run_step(c);
+        if (c->stuck)
+            sg_fail(err, "collapse: internal error: no (slab, sub-step) ready");
+        if (c->oom || c->stuck)
+            return false;
+        apply_lifespan_rule(c);
+        if (c->oom)
+            return false;
+        if (progress)
+            sg_progress_update(progress, c->removed);
+    }
+}
+
+/* every surviving edge: kept ones, and those still waiting that are present */
+static bool collapse_result(Collapse *c, SgCollapseResult *result, SgError *err)
+{
+    size_t total = c->kept.n + c->live.n + c->far.n;
+    for (size_t l = 0; l < c->due_count; l++)
+        total += c->due[l].n;
+    result->edges = malloc((total ? total : 1) * sizeof *result->edges);
+    if (!result->edges) {
+        c->oom = true;
+        return false;
+    }
+    size_t w = 0;
+    for (size_t i = 0; i < c->kept.n; i++)
+        result->edges[w++] = c->kept.a[i];
+    gather_present(c, &c->live, result->edges, &w);
+    gather_present(c, &c->far, result->edges, &w);
+    for (size_t l = 0; l < c->due_count; l++)
+        gather_present(c, &c->due[l], result->edges, &w);
+    qsort(result->edges, w, sizeof *result->edges, compare_edge_cell);
+    result->edge_count = w;
+    for (size_t i = 1; i < w; i++)
+        if (result->edges[i].cell == result->edges[i - 1].cell) {
+            sg_fail(err, "collapse: internal error: edge noted twice");
+            c->oom = true;
+            return false;
+        }
+    result->steps = (uint32_t)c->step;
+    result->cavities_broken = c->cavities_broken_total;
+    result->forced_breaks = c->forced_total;
+    return true;
+}
+
+static void collapse_release(Collapse *c)
+{
+    pthread_mutex_destroy(&c->lock);
+    pthread_cond_destroy(&c->changed);
+    for (size_t i = 0; c->slabs && i < c->slab_count; i++)
+        for (int side = 0; side < 2; side++)
+            for (int source = 0; source < SOURCES; source++)
+                for (int k = 0; k < KINDS; k++)
+                    free(c->slabs[i].q[source][side][k].a);
+    free(c->slabs);
+    for (int side = 0; side < 2; side++)
+        for (int k = 0; k < KINDS; k++)
+            free(c->staged.q[SOURCE_OWN][side][k].a);
+    for (int t = 0; c->sinks && t < c->threads; t++) {
+        free(c->sinks[t].pairs.a);
+        free(c->sinks[t].own_noted.a);
+    }
+    free(c->sinks);
+    free(c->done);
+    free(c->busy);
+    free(c->slab_work);
+    free(c->live.a);
+    for (size_t l = 0; l < c->due_count; l++)
+        free(c->due[l].a);
+    free(c->due);
+    free(c->far.a);
+    free(c->kept.a);
+    free(c->cons.slot);
+}
+
 bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_count,
                  const uint16_t *dist8, const uint16_t *open8, double filter_scale,
                  int threads, uint32_t parallel_grain, uint32_t slab_planes,
@@ -1050,159 +1238,15 @@ bool sg_collapse(SgComplex *cx, const uint32_t *constrained, size_t constrained_
     c.filter256 = filter_scale >= 0 && filter_scale < 1e6 ? (int64_t)(filter_scale * 256 + 0.5) : 256;
     for (int a = 0; a < 3; a++)
         c.st[a] = cx->stride[a];
-    bool ok = false;
-    if (!cell_set_init(&c.cons)) {
-        c.oom = true;
-        goto done;
+    bool ok = collapse_set_constraints(&c, constrained, constrained_count) &&
+              collapse_plan_slabs(&c, threads, parallel_grain, slab_planes, schedule_seed);
+    if (ok) {
+        started = start_helpers(&c, helpers, ids);
+        queue_first_free_faces(&c, threads);
+        ok = !c.oom && collapse_steps(&c, progress, err) && collapse_result(&c, result, err);
     }
-    for (size_t i = 0; i < constrained_count; i++)
-        if (!cell_set_add(&c.cons, constrained[i])) {
-            c.oom = true;
-            goto done;
-        }
-
-    /* slabs: SLAB_MIN_PLANES unless told, no more than the lattice */
-    c.slab_planes = slab_planes;
-    if (c.slab_planes < SLAB_MIN_PLANES)
-        c.slab_planes = SLAB_MIN_PLANES;
-    if (c.slab_planes > (size_t)cx->lz)
-        c.slab_planes = (size_t)cx->lz;
-    c.slab_count = ((size_t)cx->lz + c.slab_planes - 1) / c.slab_planes;
-    c.slab_cells = (uint64_t)c.slab_planes * c.st[2] * 8;
-    c.threads = parallel_grain && !schedule_seed ? sg_thread_count(threads) : 1;
-    c.schedule_state = schedule_seed;
-    if (c.threads > MAX_THREADS)
-        c.threads = MAX_THREADS;
-    if (c.slab_count < 4)
-        c.threads = 1; /* too thin to split */
-    c.slabs = calloc(c.slab_count, sizeof *c.slabs);
-    c.sinks = calloc((size_t)c.threads, sizeof *c.sinks);
-    c.done = malloc(c.slab_count);
-    c.busy = calloc(c.slab_count, 1);
-    c.slab_work = calloc(c.slab_count, sizeof *c.slab_work);
-    if (!c.slabs || !c.sinks || !c.done || !c.busy || !c.slab_work) {
-        c.oom = true;
-        goto done;
-    }
-    memset(c.done, KINDS, c.slab_count); /* no step open */
-    for (int t = 0; t < c.threads; t++)
-        c.sinks[t].noted = t == 0 ? &c.live : &c.sinks[t].own_noted;
-    for (int t = 1; t < c.threads; t++) {
-        helpers[t] = (Helper){&c, t};
-        if (pthread_create(&ids[t], NULL, helper_main, &helpers[t]) != 0)
-            break;
-        started = t;
-    }
-    c.threads = started + 1;
-
-    /* the first free faces: only vertices next to the outside of the medium */
-    SetupPass setup = {&c, calloc(c.slab_count, sizeof *setup.slab)};
-    if (!setup.slab) {
-        c.oom = true;
-    } else {
-        sg_parallel_for(c.slab_count, threads, setup_slab, &setup);
-        for (size_t i = 0; i < c.slab_count; i++) {
-            c.total += setup.slab[i].total;
-            c.squares += setup.slab[i].squares;
-            c.oom |= setup.slab[i].oom;
-        }
-    }
-    free(setup.slab);
-    if (c.oom)
-        goto done;
-
-    if (progress)
-        progress->total = c.total; /* cells removed / cells at the start */
-    for (;;) {
-        bool any = false;
-        for (size_t i = 0; i < c.slab_count && !any; i++)
-            for (int source = 0; source < SOURCES; source++)
-                for (int k = 0; k < KINDS; k++)
-                    any |= c.slabs[i].q[source][!c.cur_side][k].n > 0;
-        if (!any) {
-            if (c.squares == 0)
-                break;
-            if (!break_cavities(&c))
-                goto done;
-            continue;
-        }
-        c.step++;
-        c.cur_side = !c.cur_side;
-        run_step(&c);
-        if (c.stuck)
-            sg_fail(err, "collapse: internal error: no (slab, sub-step) ready");
-        if (c.oom || c.stuck)
-            goto done;
-        apply_lifespan_rule(&c);
-        if (c.oom)
-            goto done;
-        if (progress)
-            sg_progress_update(progress, c.removed);
-    }
-
-    /* every surviving edge: kept ones, and those still waiting that are present */
-    size_t total = c.kept.n + c.live.n + c.far.n;
-    for (size_t l = 0; l < c.due_count; l++)
-        total += c.due[l].n;
-    result->edges = malloc((total ? total : 1) * sizeof *result->edges);
-    if (!result->edges) {
-        c.oom = true;
-        goto done;
-    }
-    size_t w = 0;
-    for (size_t i = 0; i < c.kept.n; i++)
-        result->edges[w++] = c.kept.a[i];
-    gather_present(&c, &c.live, result->edges, &w);
-    gather_present(&c, &c.far, result->edges, &w);
-    for (size_t l = 0; l < c.due_count; l++)
-        gather_present(&c, &c.due[l], result->edges, &w);
-    qsort(result->edges, w, sizeof *result->edges, compare_edge_cell);
-    result->edge_count = w;
-    for (size_t i = 1; i < w; i++)
-        if (result->edges[i].cell == result->edges[i - 1].cell) {
-            sg_fail(err, "collapse: internal error: edge noted twice");
-            c.oom = true;
-            goto done;
-        }
-    result->steps = (uint32_t)c.step;
-    result->cavities_broken = c.cavities_broken_total;
-    result->forced_breaks = c.forced_total;
-    ok = true;
-done:
-    if (started > 0) {
-        pthread_mutex_lock(&c.lock);
-        c.exit = true;
-        pthread_cond_broadcast(&c.changed);
-        pthread_mutex_unlock(&c.lock);
-        for (int t = 1; t <= started; t++)
-            pthread_join(ids[t], NULL);
-    }
-    pthread_mutex_destroy(&c.lock);
-    pthread_cond_destroy(&c.changed);
-    for (size_t i = 0; c.slabs && i < c.slab_count; i++)
-        for (int side = 0; side < 2; side++)
-            for (int source = 0; source < SOURCES; source++)
-                for (int k = 0; k < KINDS; k++)
-                    free(c.slabs[i].q[source][side][k].a);
-    free(c.slabs);
-    for (int side = 0; side < 2; side++)
-        for (int k = 0; k < KINDS; k++)
-            free(c.staged.q[SOURCE_OWN][side][k].a);
-    for (int t = 0; c.sinks && t < c.threads; t++) {
-        free(c.sinks[t].pairs.a);
-        free(c.sinks[t].own_noted.a);
-    }
-    free(c.sinks);
-    free(c.done);
-    free(c.busy);
-    free(c.slab_work);
-    free(c.live.a);
-    for (size_t l = 0; l < c.due_count; l++)
-        free(c.due[l].a);
-    free(c.due);
-    free(c.far.a);
-    free(c.kept.a);
-    free(c.cons.slot);
+    stop_helpers(&c, ids, started);
+    collapse_release(&c);
     if (!ok) {
         sg_collapse_result_release(result);
         return sg_fail(err, "collapse: out of memory");

@@ -445,6 +445,143 @@ static uint16_t *to_layout(EdtContext *c, void *buffer, size_t capacity, size_t 
 }
 
 /* dist8 and open8 in the grid's layout (lattice false) or the lattice's. */
+/* The squared distances, the per-thread line buffers (longest voxels
+ * each) and the table of distances in eighths of a voxel. */
+static bool edt_alloc(EdtContext *c, size_t n, int longest, uint16_t **eighths)
+{
+    const SgGrid *g = c->grid;
+    c->d2 = malloc(n * sizeof *c->d2);
+    c->plane_max = calloc((size_t)g->nz, sizeof *c->plane_max);
+    c->f_buf = calloc((size_t)c->threads, sizeof *c->f_buf);
+    c->out_buf = calloc((size_t)c->threads, sizeof *c->out_buf);
+    c->v_buf = calloc((size_t)c->threads, sizeof *c->v_buf);
+    c->z_buf = calloc((size_t)c->threads, sizeof *c->z_buf);
+    *eighths = malloc(65536 * sizeof **eighths);
+    if (!c->d2 || !c->plane_max || !c->f_buf || !c->out_buf || !c->v_buf || !c->z_buf || !*eighths)
+        return false;
+    for (uint32_t d = 0; d < 65536; d++)
+        (*eighths)[d] = to_eighths(d);
+    c->eighths = *eighths;
+    sg_memory_prefer_huge_pages(c->d2, n * sizeof *c->d2);
+    for (int t = 0; t < c->threads; t++) {
+        c->f_buf[t] = malloc((size_t)longest * sizeof(uint32_t));
+        c->out_buf[t] = malloc((size_t)longest * sizeof(uint32_t));
+        c->v_buf[t] = malloc((size_t)longest * sizeof(int));
+        c->z_buf[t] = malloc(((size_t)longest + 1) * sizeof(double));
+        if (!c->f_buf[t] || !c->out_buf[t] || !c->v_buf[t] || !c->z_buf[t])
+            return false;
+    }
+    return true;
+}
+
+/* The z pass of the distance transform. The opening needs the exact
+ * squared distances at ball centres; the medium test reads the grid (d2 >
+ * 0 exactly on the medium). The z pass only lowers values: when every
+ * value after the y pass fits 16 bits (distances under 256 voxels), the z
+ * pass writes 16-bit values to an array of their own and the 32-bit one
+ * goes. The opening's peak is then 7 bytes a voxel (grid, d2, ball
+ * centres) instead of 9. *d2_16_bytes: the size of the 16-bit array. */
+static bool edt_z_pass(EdtContext *c, size_t n, size_t *d2_16_bytes)
+{
+    const SgGrid *g = c->grid;
+    uint32_t bound = 0;
+    for (int z = 0; z < g->nz; z++)
+        bound = c->plane_max[z] > bound ? c->plane_max[z] : bound;
+    *d2_16_bytes = n * sizeof *c->d2_16;
+    if (bound < 65536) {
+        /* room for dist8 in the output layout, written over it at the end */
+        if (layout_count(c) > n)
+            *d2_16_bytes = layout_count(c) * sizeof *c->d2_16;
+        c->z_out16 = malloc(*d2_16_bytes);
+        if (!c->z_out16)
+            return false;
+        sg_memory_prefer_huge_pages(c->z_out16, *d2_16_bytes);
+        sg_parallel_for((uint64_t)g->ny, c->threads, edt_z, c);
+        /* the 32-bit array, done with, holds the ball centres next: its
+         * pages are the process's already (the kernel clears every page
+         * a fresh array touches: a fifth of this step's time at 1000) */
+        c->cand = (uint32_t *)c->d2;
+        c->d2 = NULL;
+        c->d2_16 = c->z_out16;
+        c->z_out16 = NULL;
+        return true;
+    }
+    sg_parallel_for((uint64_t)g->ny, c->threads, edt_z, c);
+    uint32_t largest = 0;
+    for (size_t i = 0; i < n; i++)
+        largest = c->d2[i] > largest ? c->d2[i] : largest;
+    if (largest < 65536) { /* shrunk in place */
+        uint16_t *d16 = (uint16_t *)(void *)c->d2;
+        for (size_t i = 0; i < n; i++) {
+            uint16_t v = (uint16_t)c->d2[i];
+            memcpy(d16 + i, &v, sizeof v);
+        }
+        void *shrunk = realloc(c->d2, n * sizeof(uint16_t));
+        c->d2_16 = shrunk ? shrunk : (void *)c->d2;
+        c->d2 = NULL;
+    }
+    return true;
+}
+
+/* The opening (radius of the largest ball inside the medium that covers
+ * each voxel), in eighths, in the output layout. */
+static bool opening(EdtContext *c, size_t n, uint16_t **open8_out)
+{
+    const SgGrid *g = c->grid;
+    if (!c->cand) {
+        c->cand = malloc(n * sizeof *c->cand);
+        if (!c->cand)
+            return false;
+        sg_memory_prefer_huge_pages(c->cand, n * sizeof *c->cand);
+    }
+    sg_parallel_for((uint64_t)g->nz, c->threads, cand_init, c);
+    /* one round x, y, z; a second round would lower the mean
+     * underestimate from ~0.56 to ~0.33 voxel (noisy walls) at twice
+     * the cost: not worth it for a threshold counted in whole steps */
+    sg_parallel_for((uint64_t)g->nz, c->threads, open_x, c);
+    sg_parallel_for((uint64_t)g->nz, c->threads, open_y, c);
+    sg_parallel_for((uint64_t)g->ny, c->threads, open_z, c);
+    *open8_out = to_layout(c, c->cand, n * sizeof *c->cand, sizeof *c->cand, opening_plane);
+    if (!*open8_out)
+        return false;
+    c->cand = NULL;
+    return true;
+}
+
+/* The distance in eighths, in the output layout. */
+static bool distance_eighths(EdtContext *c, size_t n, size_t d2_16_bytes, uint16_t **dist8_out)
+{
+    if (c->d2_16) {
+        *dist8_out = to_layout(c, c->d2_16, d2_16_bytes, sizeof *c->d2_16, distance_plane);
+        if (*dist8_out)
+            c->d2_16 = NULL;
+    } else {
+        *dist8_out = to_layout(c, c->d2, n * sizeof *c->d2, sizeof *c->d2, distance_plane);
+        if (*dist8_out)
+            c->d2 = NULL;
+    }
+    return *dist8_out != NULL;
+}
+
+static void edt_release(EdtContext *c)
+{
+    for (int t = 0; t < c->threads && c->f_buf; t++) {
+        free(c->f_buf[t]);
+        free(c->out_buf ? c->out_buf[t] : NULL);
+        free(c->v_buf ? c->v_buf[t] : NULL);
+        free(c->z_buf ? c->z_buf[t] : NULL);
+    }
+    free(c->f_buf);
+    free(c->out_buf);
+    free(c->v_buf);
+    free(c->z_buf);
+    free(c->plane_max);
+    free(c->d2);
+    free(c->d2_16);
+    free(c->z_out16);
+    free(c->cand);
+}
+
 static bool distance_opening(const SgGrid *g, int threads, bool lattice, uint16_t **dist8_out,
                              uint16_t **open8_out, SgError *err)
 {
@@ -463,120 +600,17 @@ static bool distance_opening(const SgGrid *g, int threads, bool lattice, uint16_
     int longest = g->nx > g->ny ? g->nx : g->ny;
     if (g->nz > longest) longest = g->nz;
 
-    bool ok = false;
     uint16_t *eighths = NULL;
-    c.d2 = malloc(n * sizeof *c.d2);
-    c.plane_max = calloc((size_t)g->nz, sizeof *c.plane_max);
-    c.f_buf = calloc((size_t)c.threads, sizeof *c.f_buf);
-    c.out_buf = calloc((size_t)c.threads, sizeof *c.out_buf);
-    c.v_buf = calloc((size_t)c.threads, sizeof *c.v_buf);
-    c.z_buf = calloc((size_t)c.threads, sizeof *c.z_buf);
-    eighths = malloc(65536 * sizeof *eighths);
-    if (!c.d2 || !c.plane_max || !c.f_buf || !c.out_buf || !c.v_buf || !c.z_buf || !eighths)
-        goto done;
-    for (uint32_t d = 0; d < 65536; d++)
-        eighths[d] = to_eighths(d);
-    c.eighths = eighths;
-    sg_memory_prefer_huge_pages(c.d2, n * sizeof *c.d2);
-    for (int t = 0; t < c.threads; t++) {
-        c.f_buf[t] = malloc((size_t)longest * sizeof(uint32_t));
-        c.out_buf[t] = malloc((size_t)longest * sizeof(uint32_t));
-        c.v_buf[t] = malloc((size_t)longest * sizeof(int));
-        c.z_buf[t] = malloc(((size_t)longest + 1) * sizeof(double));
-        if (!c.f_buf[t] || !c.out_buf[t] || !c.v_buf[t] || !c.z_buf[t])
-            goto done;
+    size_t d2_16_bytes = 0;
+    bool ok = edt_alloc(&c, n, longest, &eighths);
+    if (ok) {
+        sg_parallel_for((uint64_t)g->ny * (uint64_t)g->nz, c.threads, edt_x, &c);
+        sg_parallel_for((uint64_t)g->nz, c.threads, edt_y, &c);
+        ok = edt_z_pass(&c, n, &d2_16_bytes) && (!open8_out || opening(&c, n, open8_out)) &&
+             distance_eighths(&c, n, d2_16_bytes, dist8_out);
     }
-    sg_parallel_for((uint64_t)g->ny * (uint64_t)g->nz, c.threads, edt_x, &c);
-    sg_parallel_for((uint64_t)g->nz, c.threads, edt_y, &c);
-
-    /* The opening needs the exact squared distances at ball centres; the
-     * medium test reads the grid (d2 > 0 exactly on the medium). The z
-     * pass only lowers values: when every value after the y pass fits 16
-     * bits (distances under 256 voxels), the z pass writes 16-bit values
-     * to an array of their own and the 32-bit one goes. The opening's peak
-     * is then 7 bytes a voxel (grid, d2, ball centres) instead of 9. */
-    uint32_t bound = 0;
-    for (int z = 0; z < g->nz; z++)
-        bound = c.plane_max[z] > bound ? c.plane_max[z] : bound;
-    size_t d2_16_bytes = n * sizeof *c.d2_16;
-    if (bound < 65536) {
-        /* room for dist8 in the output layout, written over it at the end */
-        if (layout_count(&c) > n)
-            d2_16_bytes = layout_count(&c) * sizeof *c.d2_16;
-        c.z_out16 = malloc(d2_16_bytes);
-        if (!c.z_out16)
-            goto done;
-        sg_memory_prefer_huge_pages(c.z_out16, d2_16_bytes);
-        sg_parallel_for((uint64_t)g->ny, c.threads, edt_z, &c);
-        /* the 32-bit array, done with, holds the ball centres next: its
-         * pages are the process's already (the kernel clears every page
-         * a fresh array touches: a fifth of this step's time at 1000) */
-        c.cand = (uint32_t *)c.d2;
-        c.d2 = NULL;
-        c.d2_16 = c.z_out16;
-        c.z_out16 = NULL;
-    } else {
-        sg_parallel_for((uint64_t)g->ny, c.threads, edt_z, &c);
-        uint32_t largest = 0;
-        for (size_t i = 0; i < n; i++)
-            largest = c.d2[i] > largest ? c.d2[i] : largest;
-        if (largest < 65536) { /* shrunk in place */
-            uint16_t *d16 = (uint16_t *)(void *)c.d2;
-            for (size_t i = 0; i < n; i++) {
-                uint16_t v = (uint16_t)c.d2[i];
-                memcpy(d16 + i, &v, sizeof v);
-            }
-            void *shrunk = realloc(c.d2, n * sizeof(uint16_t));
-            c.d2_16 = shrunk ? shrunk : (void *)c.d2;
-            c.d2 = NULL;
-        }
-    }
-    if (open8_out) {
-        if (!c.cand) {
-            c.cand = malloc(n * sizeof *c.cand);
-            if (!c.cand)
-                goto done;
-            sg_memory_prefer_huge_pages(c.cand, n * sizeof *c.cand);
-        }
-        sg_parallel_for((uint64_t)g->nz, c.threads, cand_init, &c);
-        /* one round x, y, z; a second round would lower the mean
-         * underestimate from ~0.56 to ~0.33 voxel (noisy walls) at twice
-         * the cost: not worth it for a threshold counted in whole steps */
-        sg_parallel_for((uint64_t)g->nz, c.threads, open_x, &c);
-        sg_parallel_for((uint64_t)g->nz, c.threads, open_y, &c);
-        sg_parallel_for((uint64_t)g->ny, c.threads, open_z, &c);
-        *open8_out = to_layout(&c, c.cand, n * sizeof *c.cand, sizeof *c.cand, opening_plane);
-        if (!*open8_out)
-            goto done;
-        c.cand = NULL;
-    }
-    if (c.d2_16) {
-        *dist8_out = to_layout(&c, c.d2_16, d2_16_bytes, sizeof *c.d2_16, distance_plane);
-        if (*dist8_out)
-            c.d2_16 = NULL;
-    } else {
-        *dist8_out = to_layout(&c, c.d2, n * sizeof *c.d2, sizeof *c.d2, distance_plane);
-        if (*dist8_out)
-            c.d2 = NULL;
-    }
-    ok = *dist8_out != NULL;
-done:
-    for (int t = 0; t < c.threads && c.f_buf; t++) {
-        free(c.f_buf[t]);
-        free(c.out_buf ? c.out_buf[t] : NULL);
-        free(c.v_buf ? c.v_buf[t] : NULL);
-        free(c.z_buf ? c.z_buf[t] : NULL);
-    }
-    free(c.f_buf);
-    free(c.out_buf);
-    free(c.v_buf);
-    free(c.z_buf);
-    free(c.plane_max);
+    edt_release(&c);
     free(eighths);
-    free(c.d2);
-    free(c.d2_16);
-    free(c.z_out16);
-    free(c.cand);
     if (!ok) {
         if (open8_out) {
             free(*open8_out);

@@ -1,5 +1,5 @@
-/* The convergence benchmark's arithmetic (bench/convergence_math.h) and its
- * tables (bench/convergence_analyze.h) on synthetic curves whose answers are
+/* The convergence benchmark's arithmetic (bench/lib/convergence_math.h) and its
+ * tables (bench/lib/convergence_analyze.h) on synthetic curves whose answers are
  * known in closed form: error = C / t (unbiased Monte Carlo), a biased curve
  * that flattens, seeds with different pass times, a reference made of two
  * noisy halves, and four modes' logs and images run through `analyze`. */
@@ -11,10 +11,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#define SG_CONVERGENCE_MATH_IMPLEMENTATION
-#include "bench/convergence_math.h"
-#define SG_CONVERGENCE_ANALYZE_IMPLEMENTATION
-#include "bench/convergence_analyze.h"
+#include "bench/lib/convergence_math.h"
+#include "bench/lib/convergence_analyze.h"
 #include "image_io.h"
 #include "rng.h"
 

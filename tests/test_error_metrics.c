@@ -1,11 +1,10 @@
 /* common/error_metrics.h: relMSE's epsilon and per-value term, shared by
- * render --log and the benchmarks' reference error (bench/convergence_math.h). */
+ * render --log and the benchmarks' reference error (bench/lib/convergence_math.h). */
 #include <criterion/criterion.h>
 #include <math.h>
 
 #include "error_metrics.h"
-#define SG_CONVERGENCE_MATH_IMPLEMENTATION
-#include "bench/convergence_math.h"
+#include "bench/lib/convergence_math.h"
 
 Test(relmse, epsilon_is_one_hundredth_on_the_exposed_image)
 {

@@ -8,9 +8,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../skeletonize/shapes.h"
+#include "support_shapes.h"
 #include "../skeletonize/skeletonize.h"
-#include "../skeletonize/topology.h"
+#include "support_topology.h"
 
 static SgSkeletonOptions quiet_options(int threads)
 {

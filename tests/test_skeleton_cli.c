@@ -9,7 +9,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "../skeletonize/shapes.h"
+#include "support_shapes.h"
 #include "../skeletonize/skeletonize.h"
 #include "medium.h"
 #include "skeleton_graph.h"

@@ -42,9 +42,9 @@ static SgCliArg own_option(void *ctx, int argc, char **argv, int *i)
     OwnOptions *own = ctx;
     const char *a = argv[*i];
     if (!strcmp(a, "--resolution") && *i + 1 < argc) {
-        if (sg_parse_int(argv[++*i], 1, 4096, &own->options->resolution))
+        if (sg_parse_int(argv[++*i], 1, SG_VOXEL_RESOLUTION_MAX, &own->options->resolution))
             return SG_CLI_TAKEN;
-        fprintf(stderr, "voxelize: --resolution takes a whole number in [1, 4096]\n");
+        fprintf(stderr, "voxelize: --resolution takes a whole number in [1, %d]\n", SG_VOXEL_RESOLUTION_MAX);
         return SG_CLI_BAD;
     }
     if (!strcmp(a, "--key")) {

@@ -75,8 +75,9 @@ static int outside_margin(const SgScene *scene)
 
 bool sg_voxelize_grid_for(const SgScene *scene, int resolution, SgGrid *grid, SgError *err)
 {
-    if (resolution < 1 || resolution > 4096)
-        return sg_fail(err, "%s: resolution %d is outside [1, 4096]", scene->path, resolution);
+    if (resolution < 1 || resolution > SG_VOXEL_RESOLUTION_MAX)
+        return sg_fail(err, "%s: resolution %d is outside [1, %d]", scene->path, resolution,
+                       SG_VOXEL_RESOLUTION_MAX);
     double extent[3], longest = 0;
     for (int a = 0; a < 3; a++) {
         extent[a] = scene->bounds_max[a] - scene->bounds_min[a];
@@ -314,6 +315,158 @@ static bool find_seed(const SgGrid *solid, const double p[3], const double n[3],
 
 /* ---- the whole step ----------------------------------------------------- */
 
+/* The medium's light table: each guide light's position, power and the
+ * air voxel it seeds (-1: sealed, so far). */
+static bool medium_lights(const SgScene *scene, uint32_t light_count, SgMedium *medium, SgError *err)
+{
+    const SgGrid *g = &medium->grid;
+    medium->lights = calloc(light_count, sizeof *medium->lights);
+    if (!medium->lights)
+        return sg_fail(err, "%s: out of memory", scene->path);
+    medium->light_count = light_count;
+    medium->outside_margin = outside_margin(scene);
+    for (uint32_t k = 0; k < light_count; k++) {
+        SgGuideLight l = sg_scene_guide_light(scene, k);
+        SgMediumLight *ml = &medium->lights[k];
+        memcpy(ml->position, l.position, sizeof ml->position);
+        memcpy(ml->normal, l.normal, sizeof ml->normal);
+        if (l.kind == SG_GUIDE_LIGHT_AREA)
+            memcpy(ml->radiance, scene->lights[l.index].radiance, sizeof ml->radiance);
+        else if (l.kind == SG_GUIDE_LIGHT_POINT)
+            memcpy(ml->radiance, scene->light_sources[l.index].rgb, sizeof ml->radiance);
+        ml->power = l.power;
+        if (l.kind == SG_GUIDE_LIGHT_OUTSIDE || l.kind == SG_GUIDE_LIGHT_SUN) {
+            /* a corner of the margin: air, joined to all the outside */
+            ml->outside = l.kind == SG_GUIDE_LIGHT_OUTSIDE;
+            ml->sun = l.kind == SG_GUIDE_LIGHT_SUN;
+            if (ml->sun)
+                memcpy(ml->radiance, scene->light_sources[l.index].rgb, sizeof ml->radiance);
+            ml->seed[0] = ml->seed[1] = ml->seed[2] = 0;
+            sg_grid_voxel_center(g, 0, 0, 0, ml->position);
+        } else if (!find_seed(g, l.position, l.normal, ml->seed)) {
+            ml->seed[0] = ml->seed[1] = ml->seed[2] = -1;
+        }
+    }
+    return true;
+}
+
+/* Marks the component of the air voxel at seed as kept. */
+static void keep_component_at(const SgGrid *g, const SgRowRuns *runs, const int seed[3], uint8_t *keep)
+{
+    uint32_t run = run_of(g, runs, seed[0], seed[1], seed[2]);
+    if (run != UINT32_MAX)
+        keep[sg_set_find(runs->parent, run)] = 1;
+}
+
+/* Keeps the air in front of each triangle of area light k (a long emitter
+ * may face two rooms); returns whether the light is still sealed. */
+static bool keep_in_front_of_triangles(const SgScene *scene, const SgGrid *g, const SgRowRuns *runs,
+                                       uint32_t k, bool sealed, SgMediumLight *ml, uint8_t *keep)
+{
+    const SgLight *l = &scene->lights[k];
+    for (uint32_t t = 0; t < l->triangle_count; t++) {
+        uint32_t tri = scene->light_triangles[l->first_triangle + t];
+        double n[3], c[3] = {0, 0, 0};
+        sg_scene_triangle_normal(scene, tri, n);
+        double len = d3_length(n);
+        for (int a = 0; a < 3; a++) {
+            n[a] /= len;
+            for (int v = 0; v < 3; v++)
+                c[a] += scene->positions[3 * (size_t)scene->indices[3 * (size_t)tri + v] + a] / 3;
+        }
+        int seed[3];
+        if (find_seed(g, c, n, seed)) {
+            keep_component_at(g, runs, seed, keep);
+            if (sealed) {
+                /* The centroid had no air in front (a ring-shaped lamp):
+                 * any triangle's seed stands for the light. */
+                memcpy(ml->seed, seed, sizeof seed);
+                sealed = false;
+            }
+        }
+    }
+    return sealed;
+}
+
+/* Keep the components of every seed: the light's own, and the air in
+ * front of each of its triangles. */
+static void keep_lit_components(const SgScene *scene, const SgRowRuns *runs, SgMedium *medium, uint8_t *keep,
+                                SgVoxelizeStats *stats)
+{
+    const SgGrid *g = &medium->grid;
+    for (uint32_t k = 0; k < medium->light_count; k++) {
+        SgMediumLight *ml = &medium->lights[k];
+        bool sealed = ml->seed[0] < 0;
+        if (!sealed)
+            keep_component_at(g, runs, ml->seed, keep);
+        if (k < scene->light_count) /* else a point light or the outside: its seed is all */
+            sealed = keep_in_front_of_triangles(scene, g, runs, k, sealed, ml, keep);
+        stats->sealed_lights += sealed;
+    }
+    for (uint32_t r = 0; r < runs->count; r++)
+        if (runs->parent[r] == r) {
+            stats->air_components++;
+            stats->medium_components += keep[r];
+        }
+}
+
+/* Camera state, judged on the solid grid before it is overwritten. */
+static void camera_state(const SgScene *scene, const SgGrid *g, const SgRowRuns *runs, const uint8_t *keep,
+                         SgVoxelizeStats *stats)
+{
+    if (!scene->has_camera)
+        return;
+    int c[3];
+    sg_grid_world_to_voxel(g, scene->camera.position, c);
+    stats->camera_in_grid = sg_grid_inside(g, c[0], c[1], c[2]);
+    if (!stats->camera_in_grid)
+        return;
+    if (g->voxels[sg_grid_index(g, c[0], c[1], c[2])])
+        stats->camera_voxel_state = 1;
+    else {
+        uint32_t run = run_of(g, runs, c[0], c[1], c[2]);
+        stats->camera_voxel_state = keep[sg_set_find(runs->parent, run)] ? 2 : 0;
+    }
+}
+
+/* The grid becomes the medium: 1 on kept runs, 0 elsewhere. */
+static void fill_medium(SgGrid *g, const SgRowRuns *runs, const uint8_t *keep, SgVoxelizeStats *stats)
+{
+    memset(g->voxels, 0, sg_grid_count(g));
+    size_t rows = (size_t)g->ny * g->nz;
+    for (size_t row = 0; row < rows; row++) {
+        uint8_t *v = g->voxels + row * (size_t)g->nx;
+        for (uint32_t r = runs->row_first[row]; r < runs->row_first[row + 1]; r++)
+            if (keep[sg_set_find(runs->parent, r)]) {
+                uint32_t length = runs->run[r].end - runs->run[r].start + 1;
+                memset(v + runs->run[r].start, 1, length);
+                stats->medium_voxels += length;
+            }
+    }
+}
+
+/* The air connected to the lights, found on the runs of air voxels. */
+static bool keep_lit_air(const SgScene *scene, SgMedium *medium, SgVoxelizeStats *stats, SgError *err)
+{
+    SgGrid *g = &medium->grid;
+    SgRowRuns runs;
+    if (!build_runs(g, &runs, err)) {
+        sg_row_runs_release(&runs);
+        return false;
+    }
+    uint8_t *keep = calloc(runs.count ? runs.count : 1, 1);
+    if (!keep) {
+        sg_row_runs_release(&runs);
+        return sg_fail(err, "%s: out of memory", scene->path);
+    }
+    keep_lit_components(scene, &runs, medium, keep, stats);
+    camera_state(scene, g, &runs, keep, stats);
+    fill_medium(g, &runs, keep, stats);
+    free(keep);
+    sg_row_runs_release(&runs);
+    return true;
+}
+
 bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMedium *medium,
                  SgVoxelizeStats *stats, SgError *err)
 {
@@ -344,125 +497,12 @@ bool sg_voxelize(const SgScene *scene, const SgVoxelizeOptions *options, SgMediu
     sg_progress_update(&progress, 1);
 
     t0 = sg_seconds();
-    size_t total = sg_grid_count(g);
     stats->solid_voxels = sg_grid_count_nonzero(g);
-    stats->air_voxels = total - stats->solid_voxels;
-
-    medium->lights = calloc(light_count, sizeof *medium->lights);
-    if (!medium->lights) {
-        sg_medium_release(medium);
-        return sg_fail(err, "%s: out of memory", scene->path);
-    }
-    medium->light_count = light_count;
-    medium->outside_margin = outside_margin(scene);
-    for (uint32_t k = 0; k < light_count; k++) {
-        SgGuideLight l = sg_scene_guide_light(scene, k);
-        SgMediumLight *ml = &medium->lights[k];
-        memcpy(ml->position, l.position, sizeof ml->position);
-        memcpy(ml->normal, l.normal, sizeof ml->normal);
-        if (l.kind == SG_GUIDE_LIGHT_AREA)
-            memcpy(ml->radiance, scene->lights[l.index].radiance, sizeof ml->radiance);
-        else if (l.kind == SG_GUIDE_LIGHT_POINT)
-            memcpy(ml->radiance, scene->light_sources[l.index].rgb, sizeof ml->radiance);
-        ml->power = l.power;
-        if (l.kind == SG_GUIDE_LIGHT_OUTSIDE || l.kind == SG_GUIDE_LIGHT_SUN) {
-            /* a corner of the margin: air, joined to all the outside */
-            ml->outside = l.kind == SG_GUIDE_LIGHT_OUTSIDE;
-            ml->sun = l.kind == SG_GUIDE_LIGHT_SUN;
-            if (ml->sun)
-                memcpy(ml->radiance, scene->light_sources[l.index].rgb, sizeof ml->radiance);
-            ml->seed[0] = ml->seed[1] = ml->seed[2] = 0;
-            sg_grid_voxel_center(g, 0, 0, 0, ml->position);
-        } else if (!find_seed(g, l.position, l.normal, ml->seed)) {
-            ml->seed[0] = ml->seed[1] = ml->seed[2] = -1;
-        }
-    }
-
-    SgRowRuns runs;
-    if (!build_runs(g, &runs, err)) {
-        sg_row_runs_release(&runs);
+    stats->air_voxels = sg_grid_count(g) - stats->solid_voxels;
+    if (!medium_lights(scene, light_count, medium, err) || !keep_lit_air(scene, medium, stats, err)) {
         sg_medium_release(medium);
         return false;
     }
-    /* Keep the components of every seed: the light's own, and the air in
-     * front of each of its triangles (a long emitter may face two rooms). */
-    uint8_t *keep = calloc(runs.count ? runs.count : 1, 1);
-    if (!keep) {
-        sg_row_runs_release(&runs);
-        sg_medium_release(medium);
-        return sg_fail(err, "%s: out of memory", scene->path);
-    }
-    for (uint32_t k = 0; k < light_count; k++) {
-        const SgMediumLight *ml = &medium->lights[k];
-        bool sealed = ml->seed[0] < 0;
-        if (!sealed) {
-            uint32_t run = run_of(g, &runs, ml->seed[0], ml->seed[1], ml->seed[2]);
-            if (run != UINT32_MAX)
-                keep[sg_set_find(runs.parent, run)] = 1;
-        }
-        if (k >= scene->light_count) { /* a point light or the outside: its seed is all */
-            stats->sealed_lights += sealed;
-            continue;
-        }
-        const SgLight *l = &scene->lights[k];
-        for (uint32_t t = 0; t < l->triangle_count; t++) {
-            uint32_t tri = scene->light_triangles[l->first_triangle + t];
-            double n[3], c[3] = {0, 0, 0};
-            sg_scene_triangle_normal(scene, tri, n);
-            double len = d3_length(n);
-            for (int a = 0; a < 3; a++) {
-                n[a] /= len;
-                for (int v = 0; v < 3; v++)
-                    c[a] += scene->positions[3 * (size_t)scene->indices[3 * (size_t)tri + v] + a] / 3;
-            }
-            int seed[3];
-            if (find_seed(g, c, n, seed)) {
-                uint32_t run = run_of(g, &runs, seed[0], seed[1], seed[2]);
-                if (run != UINT32_MAX)
-                    keep[sg_set_find(runs.parent, run)] = 1;
-                if (sealed) {
-                    /* The centroid had no air in front (a ring-shaped lamp):
-                     * any triangle's seed stands for the light. */
-                    memcpy(medium->lights[k].seed, seed, sizeof seed);
-                    sealed = false;
-                }
-            }
-        }
-        stats->sealed_lights += sealed;
-    }
-    for (uint32_t r = 0; r < runs.count; r++)
-        if (runs.parent[r] == r) {
-            stats->air_components++;
-            stats->medium_components += keep[r];
-        }
-    /* Camera state, judged on the solid grid before it is overwritten. */
-    if (scene->has_camera) {
-        int c[3];
-        sg_grid_world_to_voxel(g, scene->camera.position, c);
-        stats->camera_in_grid = sg_grid_inside(g, c[0], c[1], c[2]);
-        if (stats->camera_in_grid) {
-            if (g->voxels[sg_grid_index(g, c[0], c[1], c[2])])
-                stats->camera_voxel_state = 1;
-            else {
-                uint32_t run = run_of(g, &runs, c[0], c[1], c[2]);
-                stats->camera_voxel_state = keep[sg_set_find(runs.parent, run)] ? 2 : 0;
-            }
-        }
-    }
-    /* The grid becomes the medium: 1 on kept runs, 0 elsewhere. */
-    memset(g->voxels, 0, total);
-    size_t rows = (size_t)g->ny * g->nz;
-    for (size_t row = 0; row < rows; row++) {
-        uint8_t *v = g->voxels + row * (size_t)g->nx;
-        for (uint32_t r = runs.row_first[row]; r < runs.row_first[row + 1]; r++)
-            if (keep[sg_set_find(runs.parent, r)]) {
-                uint32_t length = runs.run[r].end - runs.run[r].start + 1;
-                memset(v + runs.run[r].start, 1, length);
-                stats->medium_voxels += length;
-            }
-    }
-    free(keep);
-    sg_row_runs_release(&runs);
     stats->seconds_fill = sg_seconds() - t0;
     sg_progress_end(&progress);
 

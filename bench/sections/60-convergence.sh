@@ -28,32 +28,21 @@ tool=${SG_BENCH_BIN:-build/release/bench}/convergence
 # Bump when the references' recipe changes (it is part of their key).
 REFERENCE_VERSION=1
 
-if [ "${SG_QUICK:-0}" = 1 ]; then
-  setting=quick pixels=9600 seconds=4 seeds=1 ref_seconds=15
-elif [ "${SG_LONG:-0}" = 1 ]; then
-  setting=long pixels=921600 seconds=240 seeds=3 ref_seconds=1800
-else
-  setting=default pixels=76800 seconds=20 seeds=3 ref_seconds=120
-fi
-pixels=${SG_CONV_PIXELS:-$pixels}
-seconds=${SG_CONV_SECONDS:-$seconds}
-seeds=${SG_CONV_SEEDS:-$seeds}
-ref_seconds=${SG_REF_SECONDS:-$ref_seconds}
-report_dir=${SG_REPORT_DIR:-bench/out/report-$setting}
-report_link=${SG_REPORT_LINK:-$report_dir}
-mkdir -p "$report_dir"
-
-# the scenes and the columns' options (shared with 65-previous.sh)
+# the scenes, the columns' options and the setting (shared with 62, 64, 65)
 source bench/scenes.sh
 source bench/precompute_steps.sh
 scenes=("${bench_scenes[@]}")
 modes=("${bench_modes[@]}")
 
+seconds=${SG_CONV_SECONDS:-$(by_setting 4 240 20)}
+seeds=${SG_CONV_SEEDS:-$(by_setting 1 3 3)}
+ref_seconds=${SG_REF_SECONDS:-$(by_setting 15 1800 120)}
+report_dir=${SG_REPORT_DIR:-bench/out/report-$setting}
+report_link=${SG_REPORT_LINK:-$report_dir}
+mkdir -p "$report_dir"
+
 note() { [ -t 2 ] && printf '\r\033[Kconvergence: %s' "$*" >&2; return 0; }
-for p in voxelize skeletonize importance render; do
-  [ -x "$bin/$p" ] || { echo "(needs $bin/$p: run make)"; exit 0; }
-done
-[ -x "$tool" ] || { echo "(needs $tool: run make bench)"; exit 0; }
+bench_needs voxelize skeletonize importance render
 
 tables=$(mktemp -d)
 trap 'rm -rf "$tables"' EXIT
@@ -63,7 +52,7 @@ notes=()
 # make bench builds it first): one pixel of the corridor tells.
 if ! probe=$("$bin/render" data/corridor/corridor.json --sampling openpgl --spp 1 --size 4x3 \
                -o "$tables/probe.exr" --quiet 2>&1); then
-  modes=(bsdf skeleton guided guided-albedo)
+  mapfile -t modes < <(for column in "${modes[@]}"; do [ "$(mode_of "$column")" != openpgl ] && echo "$column"; done)
   notes+=("openpgl: not run, this build of render cannot: ${probe##*$'\n'} (make bench builds the peer first with scripts/build-openpgl.sh; it needs ../shared/peers/openpgl-0.7.1.tar.gz)")
 fi
 rm -f "$tables/probe.exr"

@@ -12,20 +12,11 @@ bin=${SG_BIN:-bin}
 tool=${SG_BENCH_BIN:-build/release/bench}/convergence
 source bench/scenes.sh
 
-if [ "${SG_QUICK:-0}" = 1 ]; then
-  setting=quick pixels=9600 seconds=3 seeds=1
-elif [ "${SG_LONG:-0}" = 1 ]; then
-  setting=long pixels=921600 seconds=60 seeds=3
-else
-  setting=default pixels=76800 seconds=10 seeds=3
-fi
-pixels=${SG_CONV_PIXELS:-$pixels}
-seconds=${SG_PORTAL_SECONDS:-$seconds}
-seeds=${SG_PORTAL_SEEDS:-$seeds}
+seconds=${SG_PORTAL_SECONDS:-$(by_setting 3 60 10)}
+seeds=${SG_PORTAL_SEEDS:-$(by_setting 1 3 3)}
 
 note() { [ -t 2 ] && printf '\r\033[Kportals: %s' "$*" >&2; return 0; }
-[ -x "$bin/render" ] || { echo "(needs $bin/render: run make)"; exit 0; }
-[ -x "$tool" ] || { echo "(needs $tool: run make bench)"; exit 0; }
+bench_needs render
 
 runs=$(mktemp -d)
 trap 'rm -rf "$runs"' EXIT
@@ -104,9 +95,6 @@ echo
 echo "| scene | openings | relMSE sphere | relMSE openings | gain | gain less the reference's own error | MSE sphere | MSE openings | gain | mse8 sphere | mse8 openings | gain |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
 [ ${#rows[@]} -gt 0 ] || echo "| (no scene with a sky) | | | | | | | | | | | |"
-for row in "${rows[@]}"; do echo "$row"; done
-if [ ${#notes[@]} -gt 0 ]; then
-  echo
-  for n in "${notes[@]}"; do echo "- $n"; done
-fi
+print_rows
+print_notes
 exit 0

@@ -15,24 +15,16 @@ bin=${SG_BIN:-bin}
 tool=${SG_BENCH_BIN:-build/release/bench}/convergence
 source bench/scenes.sh
 
-if [ "${SG_QUICK:-0}" = 1 ]; then
-  setting=quick pixels=9600 spp=32 seeds=1
-elif [ "${SG_LONG:-0}" = 1 ]; then
-  setting=long pixels=921600 spp=256 seeds=2
-else
-  setting=default pixels=76800 spp=128 seeds=2
-fi
-pixels=${SG_CONV_PIXELS:-$pixels}
+spp=$(by_setting 32 256 128) seeds=$(by_setting 1 2 2)
 shards=16
 # more than this ratio of one process's relMSE misses the target
 WITHIN=1.10
-modes=(bsdf guided guided-albedo openpgl)
+# the baseline, which learns nothing, and every column whose mode learns
+modes=("$bench_baseline")
+for column in "${bench_modes[@]}"; do mode_says "$(mode_of "$column")" learns && modes+=("$column"); done
 
 note() { [ -t 2 ] && printf '\r\033[Kshards: %s' "$*" >&2; return 0; }
-for p in render merge; do
-  [ -x "$bin/$p" ] || { echo "(needs $bin/$p: run make)"; exit 0; }
-done
-[ -x "$tool" ] || { echo "(needs $tool: run make bench)"; exit 0; }
+bench_needs render merge
 
 runs=$(mktemp -d)
 trap 'rm -rf "$runs"' EXIT
@@ -47,7 +39,7 @@ for entry in "${bench_scenes[@]}"; do
   fi
   for mode in "${modes[@]}"; do
     field=()
-    if [ "$mode" != bsdf ]; then
+    if mode_says "$(mode_of "$mode")" learns; then
       [ -e "$dir/fields-$size/$mode.field" ] || { notes+=("$name: no $mode field from section 60: skipped"); continue; }
       field=(--field "$dir/fields-$size/$mode.field")
     fi
@@ -94,7 +86,7 @@ echo "$(awk -v w=$WITHIN 'BEGIN{printf "%d", 100 * (w - 1) + 0.5}')% of one proc
 echo
 echo "| scene | mode | seed | relMSE one process | relMSE $shards shards | relMSE change | mse8 change | MSE change | target |"
 echo "|---|---|---|---|---|---|---|---|---|"
-for row in "${rows[@]}"; do echo "$row"; done
+print_rows
 echo
 if [ ${#rows[@]} -eq 0 ]; then
   echo "Nothing measured."
@@ -103,8 +95,5 @@ elif [ $missed -gt 0 ]; then
 else
   echo "Every row within the target."
 fi
-if [ ${#notes[@]} -gt 0 ]; then
-  echo
-  for n in "${notes[@]}"; do echo "- $n"; done
-fi
+print_notes
 exit 0

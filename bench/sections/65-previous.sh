@@ -16,24 +16,13 @@ tool=${SG_BENCH_BIN:-build/release/bench}/convergence
 source bench/scenes.sh
 source bench/precompute_steps.sh
 
-if [ "${SG_QUICK:-0}" = 1 ]; then
-  setting=quick pixels=9600 seconds=3 seeds=1
-elif [ "${SG_LONG:-0}" = 1 ]; then
-  setting=long pixels=921600 seconds=60 seeds=2
-else
-  setting=default pixels=76800 seconds=6 seeds=2
-fi
-pixels=${SG_CONV_PIXELS:-$pixels}
-seconds=${SG_PREVIOUS_SECONDS:-$seconds}
-seeds=${SG_PREVIOUS_SEEDS:-$seeds}
+seconds=${SG_PREVIOUS_SECONDS:-$(by_setting 3 60 6)}
+seeds=${SG_PREVIOUS_SEEDS:-$(by_setting 1 2 2)}
 # worse beyond this ratio of errors (the runs' own noise is some 10 %)
 WORSE=1.2
 
 note() { [ -t 2 ] && printf '\r\033[Kprevious: %s' "$*" >&2; return 0; }
-for p in voxelize skeletonize importance render; do
-  [ -x "$bin/$p" ] || { echo "(needs $bin/$p: run make)"; exit 0; }
-done
-[ -x "$tool" ] || { echo "(needs $tool: run make bench)"; exit 0; }
+bench_needs voxelize skeletonize importance render
 
 rev=${SG_PREVIOUS:-$(sed -nE 's/^\| code \| commit ([0-9a-f]+).*/\1/p' bench/report.md 2>/dev/null | head -1)}
 if [ -z "$rev" ] || ! full=$(git rev-parse --verify --quiet "$rev^{commit}" 2>/dev/null); then
@@ -124,15 +113,12 @@ echo "better: both below 1/${WORSE}."
 echo
 echo "| scene | mode | relMSE then | relMSE now | ratio | MSE then | MSE now | ratio | verdict |"
 echo "|---|---|---|---|---|---|---|---|---|"
-for row in "${rows[@]}"; do echo "$row"; done
+print_rows
 echo
 if [ $worse -gt 0 ]; then
   echo "**$worse row(s) WORSE than the previous build.**"
 else
   echo "No row worse than the previous build."
 fi
-if [ ${#notes[@]} -gt 0 ]; then
-  echo
-  for n in "${notes[@]}"; do echo "- $n"; done
-fi
+print_notes
 exit 0

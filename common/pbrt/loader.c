@@ -80,6 +80,178 @@ static bool include_statement(Parser *p, const Token *statement)
     return pbrt_push_file(p, path, statement);
 }
 
+/* ---- statements with no file of their own -------------------------------- */
+
+static bool attribute_end_statement(Parser *p, const Token *t) { return pbrt_pop_state(p, t, false); }
+
+static bool transform_end_statement(Parser *p, const Token *t) { return pbrt_pop_state(p, t, true); }
+
+static bool identity_statement(Parser *p, const Token *t)
+{
+    (void)t;
+    sg_transform_identity(&p->state.ctm);
+    return true;
+}
+
+static bool reverse_orientation_statement(Parser *p, const Token *t)
+{
+    (void)t;
+    p->state.reverse_orientation = !p->state.reverse_orientation;
+    return true;
+}
+
+static bool world_begin_statement(Parser *p, const Token *t)
+{
+    if (p->in_world)
+        return pbrt_fail_at(p, t, "WorldBegin twice");
+    p->in_world = true;
+    sg_transform_identity(&p->state.ctm);
+    Token world = {.s = "world", .len = 5, .quoted = true};
+    return pbrt_set_coordinate_system(p, &world, &p->state.ctm);
+}
+
+/* pbrt-v3's WorldEnd: nothing to do */
+static bool world_end_statement(Parser *p, const Token *t)
+{
+    (void)p, (void)t;
+    return true;
+}
+
+/* Sampler and Integrator: of theirs, only the samples per pixel and the
+ * path depth */
+static bool sampler_integrator_statement(Parser *p, const Token *t)
+{
+    Token name;
+    if (!pbrt_need_string(p, t, &name) || !pbrt_parse_params(p))
+        return false;
+    double v;
+    if (pbrt_token_is(t, "Sampler") && pbrt_find_param(p, "pixelsamples")) {
+        if (!pbrt_param_float(p, "pixelsamples", 16, &v))
+            return false;
+        if (v >= 1 && v <= (1 << 24))
+            p->core.scene->render.spp = (int)v;
+    }
+    /* pbrt-v4's maxdepth counts bounces after the camera ray (0: only
+     * what the camera sees); ours counts segments, one more */
+    if (pbrt_token_is(t, "Integrator")) {
+        if (!pbrt_param_float(p, "maxdepth", 5, &v))
+            return false;
+        if (v >= 0 && v <= 1024)
+            p->core.scene->render.max_depth = (int)v + 1;
+    }
+    return true;
+}
+
+static bool color_space_statement(Parser *p, const Token *t)
+{
+    Token name;
+    if (!pbrt_need_string(p, t, &name))
+        return false;
+    if (!pbrt_string_is(&name, "srgb"))
+        pbrt_warn_at(p, t, "ColorSpace \"%.*s\" is ignored: colours are taken as sRGB", (int)name.len, name.s);
+    return true;
+}
+
+static bool option_statement(Parser *p, const Token *t)
+{
+    Token name, value;
+    return pbrt_need_string(p, t, &name) && pbrt_need_token(p, t, &value);
+}
+
+/* A statement read past, with a warning that it is left out. */
+static bool skip_with_warning(Parser *p, const Token *t, const char *warning)
+{
+    if (!skip_named_statement(p, t))
+        return false;
+    pbrt_warn_at(p, t, "%s", warning);
+    return true;
+}
+
+static bool named_medium_statement(Parser *p, const Token *t)
+{
+    return skip_with_warning(p, t, "participating media are not supported: left out");
+}
+
+static bool medium_interface_statement(Parser *p, const Token *t)
+{
+    Token inside, outside;
+    if (!pbrt_need_string(p, t, &inside))
+        return false;
+    if (pbrt_next_token(p, &outside) && !outside.quoted)
+        pbrt_unget_token(p, &outside);
+    return !p->err->failed;
+}
+
+static bool attribute_statement(Parser *p, const Token *t)
+{
+    return skip_with_warning(p, t, "Attribute statements are ignored");
+}
+
+static bool active_transform_statement(Parser *p, const Token *t)
+{
+    Token which;
+    if (!pbrt_need_token(p, t, &which))
+        return false;
+    if (!pbrt_token_is(&which, "All") && !pbrt_token_is(&which, "StartTime") && !pbrt_token_is(&which, "EndTime"))
+        return pbrt_fail_at(p, &which, "ActiveTransform takes All, StartTime or EndTime");
+    pbrt_warn_at(p, t, "motion (ActiveTransform) is ignored: every transform applies");
+    return true;
+}
+
+static bool transform_times_statement(Parser *p, const Token *t)
+{
+    double a, b;
+    return pbrt_need_number(p, t, &a) && pbrt_need_number(p, t, &b);
+}
+
+/* Every statement's keyword and what reads it. */
+static const struct {
+    const char *keyword;
+    bool (*read)(Parser *p, const Token *t);
+} statements[] = {
+    {"AttributeBegin", pbrt_push_state},
+    {"TransformBegin", pbrt_push_state},
+    {"AttributeEnd", attribute_end_statement},
+    {"TransformEnd", transform_end_statement},
+    {"Translate", pbrt_transform_statement},
+    {"Scale", pbrt_transform_statement},
+    {"Rotate", pbrt_transform_statement},
+    {"LookAt", pbrt_transform_statement},
+    {"Transform", pbrt_transform_statement},
+    {"ConcatTransform", pbrt_transform_statement},
+    {"Identity", identity_statement},
+    {"CoordinateSystem", pbrt_coordinate_system_statement},
+    {"CoordSysTransform", pbrt_coordinate_system_statement},
+    {"ReverseOrientation", reverse_orientation_statement},
+    {"WorldBegin", world_begin_statement},
+    {"WorldEnd", world_end_statement},
+    {"Camera", camera_statement},
+    {"Film", film_statement},
+    {"Sampler", sampler_integrator_statement},
+    {"Integrator", sampler_integrator_statement},
+    {"PixelFilter", skip_named_statement},
+    {"Accelerator", skip_named_statement},
+    {"ColorSpace", color_space_statement},
+    {"Option", option_statement},
+    {"Shape", pbrt_shape_statement},
+    {"Material", pbrt_material_statement},
+    {"MakeNamedMaterial", pbrt_make_named_material_statement},
+    {"NamedMaterial", pbrt_named_material_statement},
+    {"Texture", pbrt_texture_statement},
+    {"AreaLightSource", pbrt_area_light_statement},
+    {"LightSource", pbrt_light_source_statement},
+    {"MakeNamedMedium", named_medium_statement},
+    {"MediumInterface", medium_interface_statement},
+    {"Attribute", attribute_statement},
+    {"ActiveTransform", active_transform_statement},
+    {"TransformTimes", transform_times_statement},
+    {"ObjectBegin", pbrt_object_begin},
+    {"ObjectEnd", pbrt_object_end},
+    {"ObjectInstance", pbrt_object_instance},
+    {"Include", include_statement},
+    {"Import", include_statement},
+};
+
 static bool statement(Parser *p, const Token *t)
 {
     if (t->quoted)
@@ -87,132 +259,9 @@ static bool statement(Parser *p, const Token *t)
                             (int)(t->len > 40 ? 40 : t->len), t->s);
     if (pbrt_token_is(t, "[") || pbrt_token_is(t, "]"))
         return pbrt_fail_at(p, t, "'%c' outside a parameter list", t->s[0]);
-    if (pbrt_token_is(t, "AttributeBegin") || pbrt_token_is(t, "TransformBegin"))
-        return pbrt_push_state(p, t);
-    if (pbrt_token_is(t, "AttributeEnd"))
-        return pbrt_pop_state(p, t, false);
-    if (pbrt_token_is(t, "TransformEnd"))
-        return pbrt_pop_state(p, t, true);
-    if (pbrt_token_is(t, "Translate") || pbrt_token_is(t, "Scale") || pbrt_token_is(t, "Rotate") ||
-        pbrt_token_is(t, "LookAt") || pbrt_token_is(t, "Transform") ||
-        pbrt_token_is(t, "ConcatTransform"))
-        return pbrt_transform_statement(p, t);
-    if (pbrt_token_is(t, "Identity")) {
-        sg_transform_identity(&p->state.ctm);
-        return true;
-    }
-    if (pbrt_token_is(t, "CoordinateSystem") || pbrt_token_is(t, "CoordSysTransform"))
-        return pbrt_coordinate_system_statement(p, t);
-    if (pbrt_token_is(t, "ReverseOrientation")) {
-        p->state.reverse_orientation = !p->state.reverse_orientation;
-        return true;
-    }
-    if (pbrt_token_is(t, "WorldBegin")) {
-        if (p->in_world)
-            return pbrt_fail_at(p, t, "WorldBegin twice");
-        p->in_world = true;
-        sg_transform_identity(&p->state.ctm);
-        Token world = {.s = "world", .len = 5, .quoted = true};
-        return pbrt_set_coordinate_system(p, &world, &p->state.ctm);
-    }
-    if (pbrt_token_is(t, "WorldEnd")) /* pbrt-v3 */
-        return true;
-    if (pbrt_token_is(t, "Camera"))
-        return camera_statement(p, t);
-    if (pbrt_token_is(t, "Film"))
-        return film_statement(p, t);
-    if (pbrt_token_is(t, "Sampler") || pbrt_token_is(t, "Integrator")) {
-        Token name;
-        if (!pbrt_need_string(p, t, &name) || !pbrt_parse_params(p))
-            return false;
-        double v;
-        if (pbrt_token_is(t, "Sampler") && pbrt_find_param(p, "pixelsamples")) {
-            if (!pbrt_param_float(p, "pixelsamples", 16, &v))
-                return false;
-            if (v >= 1 && v <= (1 << 24))
-                p->core.scene->render.spp = (int)v;
-        }
-        /* pbrt-v4's maxdepth counts bounces after the camera ray (0: only
-         * what the camera sees); ours counts segments, one more */
-        if (pbrt_token_is(t, "Integrator")) {
-            if (!pbrt_param_float(p, "maxdepth", 5, &v))
-                return false;
-            if (v >= 0 && v <= 1024)
-                p->core.scene->render.max_depth = (int)v + 1;
-        }
-        return true;
-    }
-    if (pbrt_token_is(t, "PixelFilter") || pbrt_token_is(t, "Accelerator"))
-        return skip_named_statement(p, t);
-    if (pbrt_token_is(t, "ColorSpace")) {
-        Token name;
-        if (!pbrt_need_string(p, t, &name))
-            return false;
-        if (!pbrt_string_is(&name, "srgb"))
-            pbrt_warn_at(p, t, "ColorSpace \"%.*s\" is ignored: colours are taken as sRGB",
-                         (int)name.len, name.s);
-        return true;
-    }
-    if (pbrt_token_is(t, "Option")) {
-        Token name, value;
-        return pbrt_need_string(p, t, &name) && pbrt_need_token(p, t, &value);
-    }
-    if (pbrt_token_is(t, "Shape"))
-        return pbrt_shape_statement(p, t);
-    if (pbrt_token_is(t, "Material"))
-        return pbrt_material_statement(p, t);
-    if (pbrt_token_is(t, "MakeNamedMaterial"))
-        return pbrt_make_named_material_statement(p, t);
-    if (pbrt_token_is(t, "NamedMaterial"))
-        return pbrt_named_material_statement(p, t);
-    if (pbrt_token_is(t, "Texture"))
-        return pbrt_texture_statement(p, t);
-    if (pbrt_token_is(t, "AreaLightSource"))
-        return pbrt_area_light_statement(p, t);
-    if (pbrt_token_is(t, "LightSource"))
-        return pbrt_light_source_statement(p, t);
-    if (pbrt_token_is(t, "MakeNamedMedium")) {
-        if (!skip_named_statement(p, t))
-            return false;
-        pbrt_warn_at(p, t, "participating media are not supported: left out");
-        return true;
-    }
-    if (pbrt_token_is(t, "MediumInterface")) {
-        Token inside, outside;
-        if (!pbrt_need_string(p, t, &inside))
-            return false;
-        if (pbrt_next_token(p, &outside) && !outside.quoted)
-            pbrt_unget_token(p, &outside);
-        return !p->err->failed;
-    }
-    if (pbrt_token_is(t, "Attribute")) {
-        if (!skip_named_statement(p, t))
-            return false;
-        pbrt_warn_at(p, t, "Attribute statements are ignored");
-        return true;
-    }
-    if (pbrt_token_is(t, "ActiveTransform")) {
-        Token which;
-        if (!pbrt_need_token(p, t, &which))
-            return false;
-        if (!pbrt_token_is(&which, "All") && !pbrt_token_is(&which, "StartTime") &&
-            !pbrt_token_is(&which, "EndTime"))
-            return pbrt_fail_at(p, &which, "ActiveTransform takes All, StartTime or EndTime");
-        pbrt_warn_at(p, t, "motion (ActiveTransform) is ignored: every transform applies");
-        return true;
-    }
-    if (pbrt_token_is(t, "TransformTimes")) {
-        double a, b;
-        return pbrt_need_number(p, t, &a) && pbrt_need_number(p, t, &b);
-    }
-    if (pbrt_token_is(t, "ObjectBegin"))
-        return pbrt_object_begin(p, t);
-    if (pbrt_token_is(t, "ObjectEnd"))
-        return pbrt_object_end(p, t);
-    if (pbrt_token_is(t, "ObjectInstance"))
-        return pbrt_object_instance(p, t);
-    if (pbrt_token_is(t, "Include") || pbrt_token_is(t, "Import"))
-        return include_statement(p, t);
+    for (size_t i = 0; i < sizeof statements / sizeof statements[0]; i++)
+        if (pbrt_token_is(t, statements[i].keyword))
+            return statements[i].read(p, t);
     return pbrt_fail_at(p, t, "unknown statement \"%.*s\"", (int)(t->len > 40 ? 40 : t->len), t->s);
 }
 

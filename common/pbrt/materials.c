@@ -83,169 +83,237 @@ static bool dielectric(Parser *p, const Token *at, double ior, bool v3, SgMateri
     return true;
 }
 
+/* A material's constructor: reads the statement's parameters into *out,
+ * which holds pbrt's defaults (sg_material_default) named for the
+ * statement. `type` is the name it was called by. */
+typedef bool MaterialMaker(Parser *p, const Token *at, const Token *type, PbrtMaterial *out);
+
+static const float half[3] = {0.5f, 0.5f, 0.5f};
+
+/* diffuse, and the materials taken as diffuse (with a warning) */
+static bool make_diffuse(Parser *p, const Token *at, const Token *type, PbrtMaterial *out)
+{
+    SgMaterial *m = &out->material;
+    if (!pbrt_string_is(type, "diffuse"))
+        pbrt_warn_at(p, at, "Material \"%.*s\" is not supported: diffuse instead", (int)type->len, type->s);
+    if (!pbrt_param_color(p, "reflectance", half, m->diffuse, NULL))
+        return false;
+    clamp_albedo(p, at, m->diffuse, "reflectance");
+    m->diffuse_texture = pbrt_param_texture(p, "reflectance");
+    m->type = SG_MATERIAL_DIFFUSE;
+    return true;
+}
+
+static bool make_coated_diffuse(Parser *p, const Token *at, const Token *type, PbrtMaterial *out)
+{
+    (void)type;
+    SgMaterial *m = &out->material;
+    double eta, thickness, albedo;
+    if (!pbrt_param_color(p, "reflectance", half, m->diffuse, NULL) || !ggx_alphas(p, at, 0, false, m->roughness) ||
+        !pbrt_param_scalar(p, "eta", 1.5, &eta) || !pbrt_param_scalar(p, "albedo", 0, &albedo) ||
+        !pbrt_param_scalar(p, "thickness", 0.01, &thickness))
+        return false;
+    clamp_albedo(p, at, m->diffuse, "reflectance");
+    m->diffuse_texture = pbrt_param_texture(p, "reflectance");
+    if (albedo > 0)
+        pbrt_warn_at(p, at, "coateddiffuse: a medium between coat and base (\"albedo\") is ignored");
+    if (!(eta > 1))
+        eta = 1.5;
+    /* the closed form of a GGX coat over a Lambertian base (render/bsdf.c) */
+    m->type = SG_MATERIAL_COATED_DIFFUSE;
+    m->ior = (float)eta;
+    return true;
+}
+
+/* conductor, coatedconductor (its conductor) and v3's metal */
+static bool make_conductor(Parser *p, const Token *at, const Token *type, PbrtMaterial *out)
+{
+    SgMaterial *m = &out->material;
+    bool coated = pbrt_string_is(type, "coatedconductor"), v3 = pbrt_string_is(type, "metal");
+    if (coated)
+        pbrt_warn_at(p, at, "Material \"coatedconductor\" is approximated by its conductor");
+    float eta[3], k[3], reflectance[3];
+    bool has_reflectance;
+    /* unless told, copper: sg_material_default's, pbrt's default */
+    if (!pbrt_param_color(p, coated ? "conductor.eta" : "eta", m->eta, eta, NULL) ||
+        !pbrt_param_color(p, coated ? "conductor.k" : "k", m->k, k, NULL) ||
+        !pbrt_param_color(p, "reflectance", half, reflectance, &has_reflectance))
+        return false;
+    /* GGX with the complex Fresnel of eta + i k; a reflectance in
+     * their place is pbrt's eta 1 and the k of that reflectance */
+    for (int a = 0; a < 3; a++) {
+        if (has_reflectance) {
+            eta[a] = 1;
+            k[a] = sg_conductor_k_of_reflectance(reflectance[a]);
+            m->diffuse[a] = reflectance[a];
+        } else {
+            m->diffuse[a] = 0;
+        }
+        m->eta[a] = eta[a];
+        m->k[a] = k[a];
+    }
+    if (has_reflectance)
+        m->diffuse_texture = pbrt_param_texture(p, "reflectance");
+    if (!ggx_alphas(p, at, v3 ? 0.01 : 0, v3, m->roughness))
+        return false;
+    m->type = SG_MATERIAL_CONDUCTOR;
+    return true;
+}
+
+/* pbrt-v3 materials: Bitterli's collection first came in v3 syntax. */
+static bool make_matte(Parser *p, const Token *at, const Token *type, PbrtMaterial *out)
+{
+    SgMaterial *m = &out->material;
+    if (pbrt_string_is(type, "translucent"))
+        pbrt_warn_at(p, at, "Material \"translucent\" is taken as diffuse (its Kd)");
+    if (!pbrt_param_color(p, "Kd", half, m->diffuse, NULL))
+        return false;
+    clamp_albedo(p, at, m->diffuse, "Kd");
+    m->type = SG_MATERIAL_DIFFUSE;
+    return true;
+}
+
+/* v3's plastic, substrate and uber: a glossy lobe over a diffuse one */
+static bool make_plastic(Parser *p, const Token *at, const Token *type, PbrtMaterial *out)
+{
+    SgMaterial *m = &out->material;
+    float d = pbrt_string_is(type, "substrate") ? 0.5f : 0.25f;
+    const float kd[3] = {d, d, d};
+    double exponent, alpha, opacity;
+    if (!pbrt_param_color(p, "Kd", kd, m->diffuse, NULL) || !pbrt_param_color(p, "Ks", kd, m->specular, NULL) ||
+        !roughness_exponent_of(p, 0.1, true, &exponent, &alpha) || !pbrt_param_scalar(p, "opacity", 1, &opacity))
+        return false;
+    if (opacity < 1 || pbrt_find_param(p, "Kr") || pbrt_find_param(p, "Kt"))
+        pbrt_warn_at(p, at, "uber opacity, Kr and Kt are ignored");
+    for (int a = 0; a < 3; a++) { /* keep energy: scale the pair down */
+        float sum = m->diffuse[a] + m->specular[a];
+        if (sum > 1) {
+            m->diffuse[a] /= sum;
+            m->specular[a] /= sum;
+        }
+    }
+    m->type = SG_MATERIAL_GLOSSY;
+    m->exponent = (float)exponent;
+    return true;
+}
+
+static bool make_mirror(Parser *p, const Token *at, const Token *type, PbrtMaterial *out)
+{
+    (void)type;
+    SgMaterial *m = &out->material;
+    const float kr[3] = {0.9f, 0.9f, 0.9f};
+    if (!pbrt_param_color(p, "Kr", kr, m->specular, NULL))
+        return false;
+    clamp_albedo(p, at, m->specular, "Kr");
+    m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
+    m->type = SG_MATERIAL_MIRROR;
+    return true;
+}
+
+/* v3's glass */
+static bool make_glass(Parser *p, const Token *at, const Token *type, PbrtMaterial *out)
+{
+    (void)type;
+    double ior;
+    if (!pbrt_param_scalar(p, "index", 1.5, &ior) ||
+        (pbrt_find_param(p, "eta") && !pbrt_param_scalar(p, "eta", 1.5, &ior)))
+        return false;
+    ior = index_above_1(ior);
+    if (!(ior >= 1 && ior <= 10))
+        return pbrt_fail_at(p, at, "glass index %g is out of range", ior);
+    return dielectric(p, at, ior, true, &out->material);
+}
+
+static bool make_dielectric(Parser *p, const Token *at, const Token *type, PbrtMaterial *out)
+{
+    if (pbrt_string_is(type, "thindielectric"))
+        pbrt_warn_at(p, at, "Material \"thindielectric\" is taken as a solid dielectric");
+    float eta[3];
+    if (!pbrt_param_color(p, "eta", (const float[3]){1.5f, 1.5f, 1.5f}, eta, NULL))
+        return false;
+    double ior = index_above_1(eta[1]);
+    if (!(ior >= 1 && ior <= 10))
+        return pbrt_fail_at(p, at, "dielectric eta %g is out of range", (double)eta[1]);
+    return dielectric(p, at, ior, false, &out->material);
+}
+
+/* interface, none, "": a boundary of media, not a surface */
+static bool make_invisible(Parser *p, const Token *at, const Token *type, PbrtMaterial *out)
+{
+    (void)p, (void)at, (void)type;
+    out->invisible = true;
+    return true;
+}
+
+/* mix: the named material with the larger weight, under this name */
+static bool make_mix(Parser *p, const Token *at, const Token *type, PbrtMaterial *out)
+{
+    (void)type;
+    const Param *names = pbrt_find_param(p, "materials");
+    double amount;
+    if (!pbrt_param_scalar(p, "amount", 0.5, &amount))
+        return false;
+    pbrt_warn_at(p, at, "Material \"mix\" is replaced by the material with the larger weight");
+    if (!names || names->kind != PARAM_STRINGS || names->count != 2)
+        return true;
+    const Token *pick = &p->strings[names->first + (amount > 0.5 ? 1 : 0)];
+    char label[sizeof out->material.name];
+    memcpy(label, out->material.name, sizeof label);
+    for (size_t i = p->material_count; i-- > 0;)
+        if (p->materials[i].name && pbrt_string_is(pick, p->materials[i].name)) {
+            *out = p->materials[i];
+            out->name = NULL;
+            out->scene_id = UINT32_MAX;
+            out->pending = false;
+            memcpy(out->material.name, label, sizeof label);
+            return true;
+        }
+    return true;
+}
+
+static const struct {
+    const char *type;
+    MaterialMaker *make;
+} material_makers[] = {
+    {"diffuse", make_diffuse},
+    {"diffusetransmission", make_diffuse},
+    {"subsurface", make_diffuse},
+    {"measured", make_diffuse},
+    {"hair", make_diffuse},
+    {"kdsubsurface", make_diffuse},
+    {"fourier", make_diffuse},
+    {"disney", make_diffuse},
+    {"coateddiffuse", make_coated_diffuse},
+    {"conductor", make_conductor},
+    {"coatedconductor", make_conductor},
+    {"metal", make_conductor},
+    {"matte", make_matte},
+    {"translucent", make_matte},
+    {"plastic", make_plastic},
+    {"substrate", make_plastic},
+    {"uber", make_plastic},
+    {"mirror", make_mirror},
+    {"glass", make_glass},
+    {"dielectric", make_dielectric},
+    {"thindielectric", make_dielectric},
+    {"interface", make_invisible},
+    {"", make_invisible},
+    {"none", make_invisible},
+    {"mix", make_mix},
+};
+
 static bool make_material(Parser *p, const Token *at, const Token *type, const char *label,
                           PbrtMaterial *out)
 {
     memset(out, 0, sizeof *out);
     out->scene_id = UINT32_MAX;
-    SgMaterial *m = &out->material;
-    sg_material_default(m, label);
-    static const float half[3] = {0.5f, 0.5f, 0.5f};
+    sg_material_default(&out->material, label);
     const Param *displacement = pbrt_find_param(p, "displacement");
     if (displacement || pbrt_find_param(p, "normalmap"))
         pbrt_warn_at(p, at, "bump and normal maps (\"displacement\", \"normalmap\") are ignored");
-    if (pbrt_string_is(type, "diffuse") || pbrt_string_is(type, "diffusetransmission") ||
-        pbrt_string_is(type, "subsurface") || pbrt_string_is(type, "measured") ||
-        pbrt_string_is(type, "hair") || pbrt_string_is(type, "kdsubsurface") ||
-        pbrt_string_is(type, "fourier") || pbrt_string_is(type, "disney")) {
-        if (!pbrt_string_is(type, "diffuse"))
-            pbrt_warn_at(p, at, "Material \"%.*s\" is not supported: diffuse instead",
-                         (int)type->len, type->s);
-        if (!pbrt_param_color(p, "reflectance", half, m->diffuse, NULL))
-            return false;
-        clamp_albedo(p, at, m->diffuse, "reflectance");
-        m->diffuse_texture = pbrt_param_texture(p, "reflectance");
-        m->type = SG_MATERIAL_DIFFUSE;
-        return true;
-    }
-    if (pbrt_string_is(type, "coateddiffuse")) {
-        double eta, thickness, albedo;
-        if (!pbrt_param_color(p, "reflectance", half, m->diffuse, NULL) || !ggx_alphas(p, at, 0, false, m->roughness) ||
-            !pbrt_param_scalar(p, "eta", 1.5, &eta) || !pbrt_param_scalar(p, "albedo", 0, &albedo) ||
-            !pbrt_param_scalar(p, "thickness", 0.01, &thickness))
-            return false;
-        clamp_albedo(p, at, m->diffuse, "reflectance");
-        m->diffuse_texture = pbrt_param_texture(p, "reflectance");
-        if (albedo > 0)
-            pbrt_warn_at(p, at, "coateddiffuse: a medium between coat and base (\"albedo\") is ignored");
-        if (!(eta > 1))
-            eta = 1.5;
-        /* the closed form of a GGX coat over a Lambertian base (render/bsdf.c) */
-        m->type = SG_MATERIAL_COATED_DIFFUSE;
-        m->ior = (float)eta;
-        return true;
-    }
-    if (pbrt_string_is(type, "conductor") || pbrt_string_is(type, "coatedconductor") ||
-        pbrt_string_is(type, "metal")) {
-        if (pbrt_string_is(type, "coatedconductor"))
-            pbrt_warn_at(p, at, "Material \"coatedconductor\" is approximated by its conductor");
-        float eta[3], k[3], reflectance[3];
-        bool has_reflectance;
-        bool coated = pbrt_string_is(type, "coatedconductor"), v3 = pbrt_string_is(type, "metal");
-        /* unless told, copper: sg_material_default's, pbrt's default */
-        if (!pbrt_param_color(p, coated ? "conductor.eta" : "eta", m->eta, eta, NULL) ||
-            !pbrt_param_color(p, coated ? "conductor.k" : "k", m->k, k, NULL) ||
-            !pbrt_param_color(p, "reflectance", half, reflectance, &has_reflectance))
-            return false;
-        /* GGX with the complex Fresnel of eta + i k; a reflectance in
-         * their place is pbrt's eta 1 and the k of that reflectance */
-        for (int a = 0; a < 3; a++) {
-            if (has_reflectance) {
-                eta[a] = 1;
-                k[a] = sg_conductor_k_of_reflectance(reflectance[a]);
-                m->diffuse[a] = reflectance[a];
-            } else {
-                m->diffuse[a] = 0;
-            }
-            m->eta[a] = eta[a];
-            m->k[a] = k[a];
-        }
-        if (has_reflectance)
-            m->diffuse_texture = pbrt_param_texture(p, "reflectance");
-        if (!ggx_alphas(p, at, v3 ? 0.01 : 0, v3, m->roughness))
-            return false;
-        m->type = SG_MATERIAL_CONDUCTOR;
-        return true;
-    }
-    /* pbrt-v3 materials: Bitterli's collection first came in v3 syntax. */
-    if (pbrt_string_is(type, "matte") || pbrt_string_is(type, "translucent")) {
-        if (pbrt_string_is(type, "translucent"))
-            pbrt_warn_at(p, at, "Material \"translucent\" is taken as diffuse (its Kd)");
-        if (!pbrt_param_color(p, "Kd", half, m->diffuse, NULL))
-            return false;
-        clamp_albedo(p, at, m->diffuse, "Kd");
-        m->type = SG_MATERIAL_DIFFUSE;
-        return true;
-    }
-    if (pbrt_string_is(type, "plastic") || pbrt_string_is(type, "substrate") ||
-        pbrt_string_is(type, "uber")) {
-        bool substrate = pbrt_string_is(type, "substrate");
-        float d = substrate ? 0.5f : 0.25f;
-        const float kd[3] = {d, d, d};
-        double exponent, alpha, opacity;
-        if (!pbrt_param_color(p, "Kd", kd, m->diffuse, NULL) ||
-            !pbrt_param_color(p, "Ks", kd, m->specular, NULL) ||
-            !roughness_exponent_of(p, 0.1, true, &exponent, &alpha) ||
-            !pbrt_param_scalar(p, "opacity", 1, &opacity))
-            return false;
-        if (opacity < 1 || pbrt_find_param(p, "Kr") || pbrt_find_param(p, "Kt"))
-            pbrt_warn_at(p, at, "uber opacity, Kr and Kt are ignored");
-        for (int a = 0; a < 3; a++) { /* keep energy: scale the pair down */
-            float sum = m->diffuse[a] + m->specular[a];
-            if (sum > 1) {
-                m->diffuse[a] /= sum;
-                m->specular[a] /= sum;
-            }
-        }
-        m->type = SG_MATERIAL_GLOSSY;
-        m->exponent = (float)exponent;
-        return true;
-    }
-    if (pbrt_string_is(type, "mirror")) {
-        const float kr[3] = {0.9f, 0.9f, 0.9f};
-        if (!pbrt_param_color(p, "Kr", kr, m->specular, NULL))
-            return false;
-        clamp_albedo(p, at, m->specular, "Kr");
-        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
-        m->type = SG_MATERIAL_MIRROR;
-        return true;
-    }
-    if (pbrt_string_is(type, "glass")) {
-        double ior;
-        if (!pbrt_param_scalar(p, "index", 1.5, &ior) ||
-            (pbrt_find_param(p, "eta") && !pbrt_param_scalar(p, "eta", 1.5, &ior)))
-            return false;
-        ior = index_above_1(ior);
-        if (!(ior >= 1 && ior <= 10))
-            return pbrt_fail_at(p, at, "glass index %g is out of range", ior);
-        return dielectric(p, at, ior, true, m);
-    }
-    if (pbrt_string_is(type, "dielectric") || pbrt_string_is(type, "thindielectric")) {
-        if (pbrt_string_is(type, "thindielectric"))
-            pbrt_warn_at(p, at, "Material \"thindielectric\" is taken as a solid dielectric");
-        float eta[3];
-        if (!pbrt_param_color(p, "eta", (const float[3]){1.5f, 1.5f, 1.5f}, eta, NULL))
-            return false;
-        double ior = index_above_1(eta[1]);
-        if (!(ior >= 1 && ior <= 10))
-            return pbrt_fail_at(p, at, "dielectric eta %g is out of range", (double)eta[1]);
-        return dielectric(p, at, ior, false, m);
-    }
-    if (pbrt_string_is(type, "interface") || pbrt_string_is(type, "") ||
-        pbrt_string_is(type, "none")) {
-        out->invisible = true;
-        return true;
-    }
-    if (pbrt_string_is(type, "mix")) {
-        const Param *names = pbrt_find_param(p, "materials");
-        double amount;
-        if (!pbrt_param_scalar(p, "amount", 0.5, &amount))
-            return false;
-        pbrt_warn_at(p, at, "Material \"mix\" is replaced by the material with the larger weight");
-        if (names && names->kind == PARAM_STRINGS && names->count == 2) {
-            const Token *pick = &p->strings[names->first + (amount > 0.5 ? 1 : 0)];
-            for (size_t i = p->material_count; i-- > 0;)
-                if (p->materials[i].name && pbrt_string_is(pick, p->materials[i].name)) {
-                    *out = p->materials[i];
-                    out->name = NULL;
-                    out->scene_id = UINT32_MAX;
-                    out->pending = false;
-                    snprintf(out->material.name, sizeof out->material.name, "%s", label);
-                    return true;
-                }
-        }
-        return true;
-    }
+    for (size_t i = 0; i < sizeof material_makers / sizeof material_makers[0]; i++)
+        if (pbrt_string_is(type, material_makers[i].type))
+            return material_makers[i].make(p, at, type, out);
     pbrt_warn_at(p, at, "Material \"%.*s\" is not supported: grey diffuse instead", (int)type->len,
                  type->s);
     return true;

@@ -1,4 +1,4 @@
-#include "shapes.h"
+#include "support_shapes.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,7 +1,7 @@
 /* Betti numbers of a voxel set (closed unit cubes, hence 26-connected) and
  * of a skeleton graph, to check that the skeleton keeps the topology. */
-#ifndef SG_SKELETON_TOPOLOGY_H
-#define SG_SKELETON_TOPOLOGY_H
+#ifndef SG_TESTS_SUPPORT_TOPOLOGY_H
+#define SG_TESTS_SUPPORT_TOPOLOGY_H
 
 #include <stdbool.h>
 #include <stdint.h>

@@ -1,9 +1,9 @@
-#include "topology.h"
+#include "support_topology.h"
 
 #include <stdlib.h>
 #include <string.h>
 
-#include "complex.h"
+#include "../skeletonize/complex.h"
 #include "union_find.h"
 
 /* Components of the voxels whose value (as "inside") is wanted, over a

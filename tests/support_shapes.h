@@ -1,8 +1,8 @@
 /* Synthetic media for the skeleton's tests and benchmark: shapes described
  * in a continuous box (1 unit = 1 voxel at scale 1), voxelized at any
  * scale, with light seeds. World units = description units. */
-#ifndef SG_SKELETON_SHAPES_H
-#define SG_SKELETON_SHAPES_H
+#ifndef SG_TESTS_SUPPORT_SHAPES_H
+#define SG_TESTS_SUPPORT_SHAPES_H
 
 #include <stdbool.h>
 #include <stdint.h>

@@ -1,48 +1,6 @@
-/* `convergence analyze` (bench/convergence.c, for bench/sections/
- * 60-convergence.sh), kept apart so that tests/test_bench_convergence.c can
- * run it on synthetic curves. Single-header library like
- * convergence_math.h: exactly one file of a program defines
- * SG_CONVERGENCE_ANALYZE_IMPLEMENTATION before including it, in a file that
- * also has convergence_math.h's implementation.
- *
- *   analyze NAME RUNDIR SEEDS TABLEDIR [--modes A,B,...] [--compare X:Y]...
- *           [--size WxH] [--ref-relmse X] [--ref-mse8 Y] [--ref-mse Z]
- *           [--ref-spp N] [--ref-seconds S] [--ref-state TEXT]
- *
- * reads RUNDIR/MODE-SEED.csv (render --log) for seeds 1..SEEDS and the modes
- * of --modes, the first of which is the baseline; without --modes, the modes
- * that have such files, bsdf first, then skeleton, guided, openpgl, then any
- * other in name order (bsdf must be among them). A mode whose runs all
- * failed keeps its columns, with "-". Writes each mode's mean curve
- * RUNDIR/MODE.mean.dat (seconds spp relmse mse8 mse) and RUNDIR/levels.txt
- * ("relmse L1 L2 mse8 L1 L2 mse L1 L2"); appends one markdown row per level
- * to TABLEDIR/table2-{relmse,mse8,mse}.md and one row to
- * TABLEDIR/{equal-time,reference}.md, and for every mode whose runs trained
- * a field (the EXR attribute sg:training_passes > 0, i.e. openpgl) one row to
- * TABLEDIR/training.md; each table's header goes to TABLEDIR/TABLE.head
- * (rewritten every time: one table, one list of modes). One line goes to
- * TABLEDIR/headline.tsv: scene, image, relMSE level, bsdf s, guided s,
- * guided speed-up, skeleton speed-up, and where openpgl ran, openpgl s,
- * openpgl speed-up, guided over openpgl.
- *
- * --compare X:Y adds to the time-to-level tables a column with the speed-up
- * of X over Y (Y seconds / X seconds, > 1: X is faster); by default
- * guided:openpgl when both modes are there. With --modes bsdf,skeleton,guided
- * the tables are those of the three-mode benchmark, plus the MSE ones. */
-#ifndef SG_CONVERGENCE_ANALYZE_H
-#define SG_CONVERGENCE_ANALYZE_H
+/* `convergence analyze`: see convergence_analyze.h. */
+#include "convergence_analyze.h"
 
-#include "error.h"
-
-#define SG_ANALYZE_MAX_MODES 8
-#define SG_ANALYZE_MAX_COMPARE 4
-
-/* argv as the program's: argv[1] is "analyze", argv[2] NAME. 0 on success. */
-int sg_convergence_analyze(int argc, char **argv, SgError *err);
-
-#endif
-
-#ifdef SG_CONVERGENCE_ANALYZE_IMPLEMENTATION
 #include <dirent.h>
 #include <math.h>
 #include <stdarg.h>
@@ -50,6 +8,7 @@ int sg_convergence_analyze(int argc, char **argv, SgError *err);
 #include <stdlib.h>
 #include <string.h>
 
+#include "convergence_math.h"
 #include "image_io.h"
 #include "output_file.h"
 #include "render/renderer.h"
@@ -312,171 +271,228 @@ static bool sg_parse_modes(const char *list, char names[][64], int *count, SgErr
     return *count > 0 ? true : sg_fail(err, "analyze: --modes: empty");
 }
 
-int sg_convergence_analyze(int argc, char **argv, SgError *err)
+/* What the command line asks for. */
+typedef struct SgAnalyzeOptions {
+    const char *name, *dir, *tables, *size, *ref_state, *modes_arg;
+    int seeds;
+    const char *compare_arg[SG_ANALYZE_MAX_COMPARE];
+    int compare_args;
+    double ref_err[SG_METRIC_COUNT], ref_spp, ref_seconds;
+} SgAnalyzeOptions;
+
+/* The modes compared, their mean curves and the levels they are timed to. */
+typedef struct SgAnalysis {
+    char names[SG_ANALYZE_MAX_MODES][64];
+    int nm;
+    int cmp[SG_ANALYZE_MAX_COMPARE][2], nc; /* speed-up columns: mode index over mode index */
+    int i_guided, i_pgl, i_skel;
+    SgModeResult res[SG_ANALYZE_MAX_MODES];
+    double levels[SG_METRIC_COUNT][2];
+    SgReach headline[SG_ANALYZE_MAX_MODES]; /* relMSE at the lower level */
+} SgAnalysis;
+
+static bool sg_analyze_parse_options(int argc, char **argv, SgAnalyzeOptions *o, SgError *err)
 {
     if (argc < 6)
-        return sg_fail(err, "analyze: want NAME RUNDIR SEEDS TABLEDIR"), 1;
-    const char *name = argv[2], *dir = argv[3], *tables = argv[5];
-    int seeds = atoi(argv[4]);
-    if (seeds < 1 || seeds > 64)
-        return sg_fail(err, "analyze: SEEDS %s: want 1 to 64", argv[4]), 1;
-    const char *size = "?", *ref_state = "", *modes_arg = NULL;
-    const char *compare_arg[SG_ANALYZE_MAX_COMPARE];
-    int compare_args = 0;
-    double ref_err[SG_METRIC_COUNT], ref_spp = NAN, ref_seconds = NAN;
+        return sg_fail(err, "analyze: want NAME RUNDIR SEEDS TABLEDIR");
+    *o = (SgAnalyzeOptions){.name = argv[2], .dir = argv[3], .tables = argv[5], .size = "?", .ref_state = "",
+                            .ref_spp = NAN, .ref_seconds = NAN};
+    o->seeds = atoi(argv[4]);
+    if (o->seeds < 1 || o->seeds > 64)
+        return sg_fail(err, "analyze: SEEDS %s: want 1 to 64", argv[4]);
     for (int k = 0; k < SG_METRIC_COUNT; k++)
-        ref_err[k] = NAN;
+        o->ref_err[k] = NAN;
     for (int i = 6; i < argc; i++) {
         bool has = i + 1 < argc;
         double *target = NULL;
         if (has && !strcmp(argv[i], "--size"))
-            size = argv[++i];
+            o->size = argv[++i];
         else if (has && !strcmp(argv[i], "--ref-state"))
-            ref_state = argv[++i];
+            o->ref_state = argv[++i];
         else if (has && !strcmp(argv[i], "--modes"))
-            modes_arg = argv[++i];
+            o->modes_arg = argv[++i];
         else if (has && !strcmp(argv[i], "--compare")) {
-            if (compare_args == SG_ANALYZE_MAX_COMPARE)
-                return sg_fail(err, "analyze: at most %d --compare", SG_ANALYZE_MAX_COMPARE), 1;
-            compare_arg[compare_args++] = argv[++i];
+            if (o->compare_args == SG_ANALYZE_MAX_COMPARE)
+                return sg_fail(err, "analyze: at most %d --compare", SG_ANALYZE_MAX_COMPARE);
+            o->compare_arg[o->compare_args++] = argv[++i];
         } else if (has && !strcmp(argv[i], "--ref-relmse"))
-            target = &ref_err[SG_METRIC_RELMSE];
+            target = &o->ref_err[SG_METRIC_RELMSE];
         else if (has && !strcmp(argv[i], "--ref-mse8"))
-            target = &ref_err[SG_METRIC_MSE8];
+            target = &o->ref_err[SG_METRIC_MSE8];
         else if (has && !strcmp(argv[i], "--ref-mse"))
-            target = &ref_err[SG_METRIC_MSE];
+            target = &o->ref_err[SG_METRIC_MSE];
         else if (has && !strcmp(argv[i], "--ref-spp"))
-            target = &ref_spp;
+            target = &o->ref_spp;
         else if (has && !strcmp(argv[i], "--ref-seconds"))
-            target = &ref_seconds;
+            target = &o->ref_seconds;
         else
-            return sg_fail(err, "analyze: unexpected argument %s", argv[i]), 1;
+            return sg_fail(err, "analyze: unexpected argument %s", argv[i]);
         if (target) {
             char *end;
             *target = strtod(argv[++i], &end);
             if (end == argv[i] || *end || !isfinite(*target))
-                return sg_fail(err, "analyze: %s %s: not a number", argv[i - 1], argv[i]), 1;
+                return sg_fail(err, "analyze: %s %s: not a number", argv[i - 1], argv[i]);
         }
     }
+    return true;
+}
 
-    char names[SG_ANALYZE_MAX_MODES][64];
-    int nm = 0;
-    if (modes_arg ? !sg_parse_modes(modes_arg, names, &nm, err) : !sg_discover_modes(dir, seeds, names, &nm, err))
-        return 1;
-    /* the speed-up columns of one mode over another, by index */
-    int cmp[SG_ANALYZE_MAX_COMPARE][2], nc = 0;
-    for (int c = 0; c < compare_args; c++) {
-        char a[64], b[64];
-        const char *colon = strchr(compare_arg[c], ':');
-        size_t la = colon ? (size_t)(colon - compare_arg[c]) : 0;
+/* The modes (named or discovered) and the speed-up columns between them. */
+static bool sg_analyze_choose_modes(const SgAnalyzeOptions *o, SgAnalysis *a, SgError *err)
+{
+    if (o->modes_arg ? !sg_parse_modes(o->modes_arg, a->names, &a->nm, err)
+                     : !sg_discover_modes(o->dir, o->seeds, a->names, &a->nm, err))
+        return false;
+    for (int c = 0; c < o->compare_args; c++) {
+        char x[64], y[64];
+        const char *arg = o->compare_arg[c], *colon = strchr(arg, ':');
+        size_t la = colon ? (size_t)(colon - arg) : 0;
         if (!colon || la == 0 || la >= 64 || strlen(colon + 1) >= 64)
-            return sg_fail(err, "analyze: --compare %s: want MODE:MODE", compare_arg[c]), 1;
-        memcpy(a, compare_arg[c], la);
-        a[la] = '\0';
-        snprintf(b, sizeof b, "%s", colon + 1);
-        cmp[nc][0] = sg_mode_index(names, nm, a);
-        cmp[nc][1] = sg_mode_index(names, nm, b);
-        if (cmp[nc][0] < 0 || cmp[nc][1] < 0 || cmp[nc][0] == cmp[nc][1])
-            return sg_fail(err, "analyze: --compare %s: want two different modes of the run", compare_arg[c]), 1;
-        nc++;
+            return sg_fail(err, "analyze: --compare %s: want MODE:MODE", arg);
+        memcpy(x, arg, la);
+        x[la] = '\0';
+        snprintf(y, sizeof y, "%s", colon + 1);
+        int *pair = a->cmp[a->nc];
+        pair[0] = sg_mode_index(a->names, a->nm, x);
+        pair[1] = sg_mode_index(a->names, a->nm, y);
+        if (pair[0] < 0 || pair[1] < 0 || pair[0] == pair[1])
+            return sg_fail(err, "analyze: --compare %s: want two different modes of the run", arg);
+        a->nc++;
     }
-    int i_guided = sg_mode_index(names, nm, "guided"), i_pgl = sg_mode_index(names, nm, "openpgl"),
-        i_skel = sg_mode_index(names, nm, "skeleton");
-    if (compare_args == 0 && i_guided > 0 && i_pgl > 0) {
-        cmp[0][0] = i_guided;
-        cmp[0][1] = i_pgl;
-        nc = 1;
+    a->i_guided = sg_mode_index(a->names, a->nm, "guided");
+    a->i_pgl = sg_mode_index(a->names, a->nm, "openpgl");
+    a->i_skel = sg_mode_index(a->names, a->nm, "skeleton");
+    if (o->compare_args == 0 && a->i_guided > 0 && a->i_pgl > 0) {
+        a->cmp[0][0] = a->i_guided;
+        a->cmp[0][1] = a->i_pgl;
+        a->nc = 1;
     }
+    return true;
+}
 
-    SgModeResult res[SG_ANALYZE_MAX_MODES];
-    int status = 1;
-    memset(res, 0, sizeof res);
-    char line[4096], head[4096];
-    for (int m = 0; m < nm; m++) {
-        if (!sg_analyze_load_mode(dir, names[m], seeds, &res[m], err))
-            goto done;
-        if (res[m].present && !sg_analyze_write_mean(dir, names[m], &res[m].mean, err))
-            goto done;
+/* Every mode's mean curve, written as RUNDIR/MODE.mean.dat. */
+static bool sg_analyze_load_modes(const SgAnalyzeOptions *o, SgAnalysis *a, SgError *err)
+{
+    for (int m = 0; m < a->nm; m++) {
+        if (!sg_analyze_load_mode(o->dir, a->names[m], o->seeds, &a->res[m], err))
+            return false;
+        if (a->res[m].present && !sg_analyze_write_mean(o->dir, a->names[m], &a->res[m].mean, err))
+            return false;
     }
-    const SgModeResult *base = &res[0];
-    if (!base->present) {
-        sg_fail(err, "%s: no %s curve: nothing to compare with", dir, names[0]);
-        goto done;
-    }
+    if (!a->res[0].present)
+        return sg_fail(err, "%s: no %s curve: nothing to compare with", o->dir, a->names[0]);
+    return true;
+}
 
-    /* Levels from the baseline only, the same for every mode: its mean
-     * error at the end of its run and at an eighth of it, each rounded up
-     * to two significant digits (so the baseline reaches them just before). */
-    double levels[SG_METRIC_COUNT][2];
-    const SgCurve *bc = &base->mean;
+/* Levels from the baseline only, the same for every mode: its mean error at
+ * the end of its run and at an eighth of it, each rounded up to two
+ * significant digits (so the baseline reaches them just before). Written to
+ * RUNDIR/levels.txt. */
+static bool sg_analyze_levels(const SgAnalyzeOptions *o, SgAnalysis *a, SgError *err)
+{
+    const SgCurve *bc = &a->res[0].mean;
     double t_end = bc->seconds[bc->count - 1], t_early = fmax(t_end / 8, bc->seconds[0]);
     for (int k = 0; k < SG_METRIC_COUNT; k++) {
         double end = bc->error[k][bc->count - 1], early;
         if (!sg_curve_at(bc, k, t_early, &early))
             early = end;
-        levels[k][1] = sg_level_at_least(end);
-        levels[k][0] = sg_level_at_least(early);
-        if (!(levels[k][0] > levels[k][1])) /* a flat curve: still two levels */
-            levels[k][0] = sg_level_at_least(1.5 * levels[k][1]);
+        a->levels[k][1] = sg_level_at_least(end);
+        a->levels[k][0] = sg_level_at_least(early);
+        if (!(a->levels[k][0] > a->levels[k][1])) /* a flat curve: still two levels */
+            a->levels[k][0] = sg_level_at_least(1.5 * a->levels[k][1]);
     }
-    line[0] = '\0';
+    char line[4096] = "";
     for (int k = 0; k < SG_METRIC_COUNT; k++)
-        sg_cat(line, sizeof line, "%s%s %.6g %.6g", k ? " " : "", sg_metric_key[k], levels[k][0], levels[k][1]);
+        sg_cat(line, sizeof line, "%s%s %.6g %.6g", k ? " " : "", sg_metric_key[k], a->levels[k][0],
+               a->levels[k][1]);
     sg_cat(line, sizeof line, "\n");
-    {
-        SgOutputFile out;
-        if (!sg_analyze_open(&out, dir, "levels.txt", "", err))
-            goto done;
-        fputs(line, out.file);
-        if (!sg_output_commit(&out, err))
-            goto done;
-    }
+    SgOutputFile out;
+    if (!sg_analyze_open(&out, o->dir, "levels.txt", "", err))
+        return false;
+    fputs(line, out.file);
+    return sg_output_commit(&out, err);
+}
 
-    /* table 2: one row per level */
-    SgReach headline[SG_ANALYZE_MAX_MODES];
+/* One row of table 2: the time each mode takes to reach one level. */
+static bool sg_analyze_level_row(const SgAnalyzeOptions *o, SgAnalysis *a, int k, int l, const char *file,
+                                 SgError *err)
+{
+    SgReach r[SG_ANALYZE_MAX_MODES];
+    for (int m = 0; m < a->nm; m++) {
+        r[m] = a->res[m].present ? sg_curve_time_to_level(&a->res[m].mean, k, a->levels[k][l])
+                                 : (SgReach){SG_REACH_NONE, 0};
+        if (k == SG_METRIC_RELMSE && l == 1)
+            a->headline[m] = r[m];
+    }
+    char line[4096], cell[64];
+    sg_format_error(a->levels[k][l], cell, sizeof cell);
+    snprintf(line, sizeof line, "| %s | %s |", o->name, cell);
+    for (int m = 0; m < a->nm; m++) {
+        sg_reach_format(r[m], cell, sizeof cell);
+        sg_cat(line, sizeof line, " %s |", cell);
+    }
+    for (int m = 1; m < a->nm; m++) {
+        sg_ratio_format(r[0], r[m], cell, sizeof cell);
+        sg_cat(line, sizeof line, " %s |", cell);
+    }
+    for (int c = 0; c < a->nc; c++) {
+        sg_ratio_format(r[a->cmp[c][1]], r[a->cmp[c][0]], cell, sizeof cell);
+        sg_cat(line, sizeof line, " %s |", cell);
+    }
+    sg_cat(line, sizeof line, "\n");
+    return sg_analyze_append(o->tables, file, line, err);
+}
+
+/* table 2: one row per level, a table per metric */
+static bool sg_analyze_time_to_level(const SgAnalyzeOptions *o, SgAnalysis *a, SgError *err)
+{
     for (int k = 0; k < SG_METRIC_COUNT; k++) {
-        char file[64];
+        char head[4096], file[64];
         snprintf(head, sizeof head, "| scene | %s level |", sg_metric_title[k]);
-        for (int m = 0; m < nm; m++)
-            sg_cat(head, sizeof head, " %s s |", names[m]);
-        for (int m = 1; m < nm; m++)
-            sg_cat(head, sizeof head, " %s speed-up |", names[m]);
-        for (int c = 0; c < nc; c++)
-            sg_cat(head, sizeof head, " %s over %s |", names[cmp[c][0]], names[cmp[c][1]]);
+        for (int m = 0; m < a->nm; m++)
+            sg_cat(head, sizeof head, " %s s |", a->names[m]);
+        for (int m = 1; m < a->nm; m++)
+            sg_cat(head, sizeof head, " %s speed-up |", a->names[m]);
+        for (int c = 0; c < a->nc; c++)
+            sg_cat(head, sizeof head, " %s over %s |", a->names[a->cmp[c][0]], a->names[a->cmp[c][1]]);
         snprintf(file, sizeof file, "table2-%s", sg_metric_key[k]);
-        if (!sg_analyze_header(tables, file, head, err))
-            goto done;
+        if (!sg_analyze_header(o->tables, file, head, err))
+            return false;
         snprintf(file, sizeof file, "table2-%s.md", sg_metric_key[k]);
-        for (int l = 0; l < 2; l++) {
-            SgReach r[SG_ANALYZE_MAX_MODES];
-            for (int m = 0; m < nm; m++) {
-                r[m] = res[m].present ? sg_curve_time_to_level(&res[m].mean, k, levels[k][l])
-                                      : (SgReach){SG_REACH_NONE, 0};
-                if (k == SG_METRIC_RELMSE && l == 1)
-                    headline[m] = r[m];
-            }
-            char cell[64];
-            sg_format_error(levels[k][l], cell, sizeof cell);
-            snprintf(line, sizeof line, "| %s | %s |", name, cell);
-            for (int m = 0; m < nm; m++) {
-                sg_reach_format(r[m], cell, sizeof cell);
-                sg_cat(line, sizeof line, " %s |", cell);
-            }
-            for (int m = 1; m < nm; m++) {
-                sg_ratio_format(r[0], r[m], cell, sizeof cell);
-                sg_cat(line, sizeof line, " %s |", cell);
-            }
-            for (int c = 0; c < nc; c++) {
-                sg_ratio_format(r[cmp[c][1]], r[cmp[c][0]], cell, sizeof cell);
-                sg_cat(line, sizeof line, " %s |", cell);
-            }
-            sg_cat(line, sizeof line, "\n");
-            if (!sg_analyze_append(tables, file, line, err))
-                goto done;
-        }
+        for (int l = 0; l < 2; l++)
+            if (!sg_analyze_level_row(o, a, k, l, file, err))
+                return false;
     }
+    return true;
+}
 
-    /* equal time: every mode at the time all of them reached */
+static bool sg_analyze_equal_time_header(const SgAnalyzeOptions *o, const SgAnalysis *a, SgError *err)
+{
+    char head[4096];
+    snprintf(head, sizeof head, "| scene | size | seconds | spp");
+    for (int m = 0; m < a->nm; m++)
+        sg_cat(head, sizeof head, "%s %s", m ? " /" : "", a->names[m]);
+    sg_cat(head, sizeof head, " | µs/sample");
+    for (int m = 0; m < a->nm; m++)
+        sg_cat(head, sizeof head, "%s %s", m ? " /" : "", sg_short_mode(a->names[m]));
+    sg_cat(head, sizeof head, " |");
+    for (int k = 0; k < SG_METRIC_COUNT; k++) {
+        sg_cat(head, sizeof head, " %s %s |", sg_metric_title[k], a->names[0]);
+        for (int m = 1; m < a->nm; m++)
+            sg_cat(head, sizeof head, " %s |", a->names[m]);
+        sg_cat(head, sizeof head, " ratio");
+        for (int m = 1; m < a->nm; m++)
+            sg_cat(head, sizeof head, "%s %s", m > 1 ? " /" : "", sg_short_mode(a->names[m]));
+        sg_cat(head, sizeof head, " |");
+    }
+    return sg_analyze_header(o->tables, "equal-time", head, err);
+}
+
+/* equal time: every mode at the time all of them reached */
+static bool sg_analyze_equal_time(const SgAnalyzeOptions *o, const SgAnalysis *a, SgError *err)
+{
+    const SgModeResult *res = a->res;
+    int nm = a->nm;
     double t_eq = INFINITY;
     for (int m = 0; m < nm; m++)
         if (res[m].present)
@@ -487,26 +503,11 @@ int sg_convergence_analyze(int argc, char **argv, SgError *err)
             if (!res[m].present || !sg_curve_at(&res[m].mean, k, t_eq, &eq[m][k]))
                 eq[m][k] = NAN;
     int w = 0, h = 0;
-    double pixels = sscanf(size, "%dx%d", &w, &h) == 2 ? (double)w * h : NAN;
-    snprintf(head, sizeof head, "| scene | size | seconds | spp");
-    for (int m = 0; m < nm; m++)
-        sg_cat(head, sizeof head, "%s %s", m ? " /" : "", names[m]);
-    sg_cat(head, sizeof head, " | µs/sample");
-    for (int m = 0; m < nm; m++)
-        sg_cat(head, sizeof head, "%s %s", m ? " /" : "", sg_short_mode(names[m]));
-    sg_cat(head, sizeof head, " |");
-    for (int k = 0; k < SG_METRIC_COUNT; k++) {
-        sg_cat(head, sizeof head, " %s %s |", sg_metric_title[k], names[0]);
-        for (int m = 1; m < nm; m++)
-            sg_cat(head, sizeof head, " %s |", names[m]);
-        sg_cat(head, sizeof head, " ratio");
-        for (int m = 1; m < nm; m++)
-            sg_cat(head, sizeof head, "%s %s", m > 1 ? " /" : "", sg_short_mode(names[m]));
-        sg_cat(head, sizeof head, " |");
-    }
-    if (!sg_analyze_header(tables, "equal-time", head, err))
-        goto done;
-    snprintf(line, sizeof line, "| %s | %s | %.1f |", name, size, t_eq);
+    double pixels = sscanf(o->size, "%dx%d", &w, &h) == 2 ? (double)w * h : NAN;
+    if (!sg_analyze_equal_time_header(o, a, err))
+        return false;
+    char line[4096];
+    snprintf(line, sizeof line, "| %s | %s | %.1f |", o->name, o->size, t_eq);
     for (int pass = 0; pass < 2; pass++) { /* spp, then µs per sample */
         for (int m = 0; m < nm; m++) {
             sg_cat(line, sizeof line, "%s", m ? " /" : "");
@@ -536,77 +537,93 @@ int sg_convergence_analyze(int argc, char **argv, SgError *err)
         sg_cat(line, sizeof line, " |");
     }
     sg_cat(line, sizeof line, "\n");
-    if (!sg_analyze_append(tables, "equal-time.md", line, err))
-        goto done;
+    return sg_analyze_append(o->tables, "equal-time.md", line, err);
+}
 
-    /* the reference against the smallest levels it has to resolve */
-    {
-        char own[256] = "", low[256] = "", cell[64];
-        double worst = NAN; /* the worst of the metrics known */
-        for (int k = 0; k < SG_METRIC_COUNT; k++) {
-            sg_format_error(ref_err[k], cell, sizeof cell);
-            sg_cat(own, sizeof own, "%s%s", k ? " / " : "", cell);
-            sg_format_error(levels[k][1], cell, sizeof cell);
-            sg_cat(low, sizeof low, "%s%s", k ? " / " : "", cell);
-            worst = fmax(worst, ref_err[k] / levels[k][1]); /* fmax skips a NaN */
-        }
-        const char *verdict = !isfinite(worst) ? "unknown"
-                              : worst <= 0.25  ? "good (< 1/4 of the lowest level)"
-                              : worst <= 0.5   ? "fair (< 1/2 of the lowest level)"
-                                               : "too noisy: lengthen it (SG_REF_SECONDS)";
-        snprintf(head, sizeof head, "| scene | size | spp | seconds | own relMSE / mse8 / MSE |"
-                                    " lowest level relMSE / mse8 / MSE | own / level (worst) | verdict | this run |");
-        if (!sg_analyze_header(tables, "reference", head, err))
-            goto done;
-        snprintf(line, sizeof line, "| %s | %s | %.0f | %.0f | %s | %s | %.2f | %s | %s |\n", name, size, ref_spp,
-                 ref_seconds, own, low, worst, verdict, ref_state);
-        if (!sg_analyze_append(tables, "reference.md", line, err))
-            goto done;
+/* the reference against the smallest levels it has to resolve */
+static bool sg_analyze_reference(const SgAnalyzeOptions *o, const SgAnalysis *a, SgError *err)
+{
+    char own[256] = "", low[256] = "", cell[64], head[4096], line[4096];
+    double worst = NAN; /* the worst of the metrics known */
+    for (int k = 0; k < SG_METRIC_COUNT; k++) {
+        sg_format_error(o->ref_err[k], cell, sizeof cell);
+        sg_cat(own, sizeof own, "%s%s", k ? " / " : "", cell);
+        sg_format_error(a->levels[k][1], cell, sizeof cell);
+        sg_cat(low, sizeof low, "%s%s", k ? " / " : "", cell);
+        worst = fmax(worst, o->ref_err[k] / a->levels[k][1]); /* fmax skips a NaN */
     }
+    const char *verdict = !isfinite(worst) ? "unknown"
+                          : worst <= 0.25  ? "good (< 1/4 of the lowest level)"
+                          : worst <= 0.5   ? "fair (< 1/2 of the lowest level)"
+                                           : "too noisy: lengthen it (SG_REF_SECONDS)";
+    snprintf(head, sizeof head, "| scene | size | spp | seconds | own relMSE / mse8 / MSE |"
+                                " lowest level relMSE / mse8 / MSE | own / level (worst) | verdict | this run |");
+    if (!sg_analyze_header(o->tables, "reference", head, err))
+        return false;
+    snprintf(line, sizeof line, "| %s | %s | %.0f | %.0f | %s | %s | %.2f | %s | %s |\n", o->name, o->size,
+             o->ref_spp, o->ref_seconds, own, low, worst, verdict, o->ref_state);
+    return sg_analyze_append(o->tables, "reference.md", line, err);
+}
 
-    /* where a learned field's training went (openpgl) */
-    for (int m = 0; m < nm; m++) {
-        const SgModeResult *r = &res[m];
+/* where a learned field's training went (openpgl) */
+static bool sg_analyze_training(const SgAnalyzeOptions *o, const SgAnalysis *a, SgError *err)
+{
+    for (int m = 0; m < a->nm; m++) {
+        const SgModeResult *r = &a->res[m];
         if (!r->present || r->trained_runs == 0)
             continue;
+        char head[4096], line[4096];
         snprintf(head, sizeof head, "| scene | mode | runs | spp | training passes | field updates s | of the run |"
                                     " training passes took s | of the run | guide drew, of bounces |");
-        if (!sg_analyze_header(tables, "training", head, err))
-            goto done;
-        snprintf(line, sizeof line, "| %s | %s | %d | %.0f | %.0f | %.2f | %.1f%% | %.2f | %.1f%% | %.1f%% |\n", name,
-                 names[m], r->trained_runs, r->final_spp, r->training_passes, r->training_seconds,
-                 100 * r->training_seconds / r->run_seconds, r->training_phase, 100 * r->training_phase / r->run_seconds,
-                 100 * r->guide_share);
-        if (!sg_analyze_append(tables, "training.md", line, err))
-            goto done;
+        if (!sg_analyze_header(o->tables, "training", head, err))
+            return false;
+        snprintf(line, sizeof line, "| %s | %s | %d | %.0f | %.0f | %.2f | %.1f%% | %.2f | %.1f%% | %.1f%% |\n",
+                 o->name, a->names[m], r->trained_runs, r->final_spp, r->training_passes, r->training_seconds,
+                 100 * r->training_seconds / r->run_seconds, r->training_phase,
+                 100 * r->training_phase / r->run_seconds, 100 * r->guide_share);
+        if (!sg_analyze_append(o->tables, "training.md", line, err))
+            return false;
     }
-
-    /* README headline: relMSE at the lower level */
-    {
-        const SgReach none = {SG_REACH_NONE, 0};
-        SgReach g = i_guided >= 0 ? headline[i_guided] : none, s = i_skel >= 0 ? headline[i_skel] : none;
-        char lv[64], a[64], b[64], c[64], d[64];
-        sg_format_error(levels[0][1], lv, sizeof lv);
-        sg_reach_format(headline[0], a, sizeof a);
-        sg_reach_format(g, b, sizeof b);
-        sg_ratio_format(headline[0], g, c, sizeof c);
-        sg_ratio_format(headline[0], s, d, sizeof d);
-        snprintf(line, sizeof line, "%s\t%s\t%s\t%s\t%s\t%s\t%s", name, size, lv, a, b, c, d);
-        if (i_pgl >= 0) {
-            SgReach p = headline[i_pgl];
-            sg_reach_format(p, a, sizeof a);
-            sg_ratio_format(headline[0], p, b, sizeof b);
-            sg_ratio_format(p, g, c, sizeof c);
-            sg_cat(line, sizeof line, "\t%s\t%s\t%s", a, b, c);
-        }
-        sg_cat(line, sizeof line, "\n");
-        if (!sg_analyze_append(tables, "headline.tsv", line, err))
-            goto done;
-    }
-    status = 0;
-done:
-    for (int m = 0; m < nm; m++)
-        sg_curve_free(&res[m].mean);
-    return status;
+    return true;
 }
-#endif
+
+/* README headline: relMSE at the lower level */
+static bool sg_analyze_headline(const SgAnalyzeOptions *o, const SgAnalysis *a, SgError *err)
+{
+    const SgReach none = {SG_REACH_NONE, 0}, *headline = a->headline;
+    SgReach g = a->i_guided >= 0 ? headline[a->i_guided] : none, s = a->i_skel >= 0 ? headline[a->i_skel] : none;
+    char line[4096], lv[64], w[64], x[64], y[64], z[64];
+    sg_format_error(a->levels[0][1], lv, sizeof lv);
+    sg_reach_format(headline[0], w, sizeof w);
+    sg_reach_format(g, x, sizeof x);
+    sg_ratio_format(headline[0], g, y, sizeof y);
+    sg_ratio_format(headline[0], s, z, sizeof z);
+    snprintf(line, sizeof line, "%s\t%s\t%s\t%s\t%s\t%s\t%s", o->name, o->size, lv, w, x, y, z);
+    if (a->i_pgl >= 0) {
+        SgReach p = headline[a->i_pgl];
+        sg_reach_format(p, w, sizeof w);
+        sg_ratio_format(headline[0], p, x, sizeof x);
+        sg_ratio_format(p, g, y, sizeof y);
+        sg_cat(line, sizeof line, "\t%s\t%s\t%s", w, x, y);
+    }
+    sg_cat(line, sizeof line, "\n");
+    return sg_analyze_append(o->tables, "headline.tsv", line, err);
+}
+
+int sg_convergence_analyze(int argc, char **argv, SgError *err)
+{
+    SgAnalyzeOptions o;
+    if (!sg_analyze_parse_options(argc, argv, &o, err))
+        return 1;
+    SgAnalysis *a = calloc(1, sizeof *a);
+    if (!a)
+        return sg_fail(err, "analyze: out of memory"), 1;
+    bool ok = sg_analyze_choose_modes(&o, a, err) && sg_analyze_load_modes(&o, a, err) &&
+              sg_analyze_levels(&o, a, err) && sg_analyze_time_to_level(&o, a, err) &&
+              sg_analyze_equal_time(&o, a, err) && sg_analyze_reference(&o, a, err) &&
+              sg_analyze_training(&o, a, err) && sg_analyze_headline(&o, a, err);
+    for (int m = 0; m < a->nm; m++)
+        sg_curve_free(&a->res[m].mean);
+    free(a);
+    return ok ? 0 : 1;
+}
