@@ -36,6 +36,7 @@
 #include "image_io.h"
 #include "output_file.h"
 #include "scene.h"
+#include "shard_format.h"
 
 static const char usage[] =
     "usage: convergence size SCENE PIXELS\n"
