@@ -66,6 +66,8 @@ int sg_shard_pass_count(int shard, int shard_count, int total_passes);
 #define SG_ATTR_CACHE "sg:cache"
 #define SG_ATTR_FIELD "sg:field"
 #define SG_ATTR_TRAINING "sg:training"
+/* the passes a render that learned within itself learned from (0: none) */
+#define SG_ATTR_LEARNED_PASSES "sg:learned_passes"
 /* the benchmarks' reference images say how they were made */
 #define SG_ATTR_REFERENCE "sg:reference"
 

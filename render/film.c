@@ -1,37 +1,264 @@
 #include "film.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 bool film_init(Film *f, int width, int height)
 {
-    size_t values = (size_t)width * height * 3;
+    memset(f, 0, sizeof *f);
+    size_t pixels = (size_t)width * height;
     f->width = width;
     f->height = height;
-    f->sum = calloc(values, sizeof *f->sum);
-    f->last = calloc(values, sizeof *f->last);
-    return f->sum && f->last;
+    f->sum = calloc(pixels * 3, sizeof *f->sum);
+    f->square = calloc(pixels, sizeof *f->square);
+    f->last = calloc(pixels * 3, sizeof *f->last);
+    return f->sum && f->square && f->last;
+}
+
+static void free_groups(Film *f)
+{
+    for (int g = 0; g < f->group_count; g++) {
+        free(f->groups[g].sum);
+        free(f->groups[g].square);
+    }
+    memset(f->groups, 0, sizeof f->groups);
+    f->group_count = 0;
 }
 
 void film_free(Film *f)
 {
+    free_groups(f);
     free(f->sum);
+    free(f->square);
     free(f->last);
     f->sum = NULL;
+    f->square = NULL;
     f->last = NULL;
 }
 
 void film_clear(Film *f)
 {
-    size_t values = (size_t)f->width * f->height * 3;
-    memset(f->sum, 0, values * sizeof *f->sum);
-    memset(f->last, 0, values * sizeof *f->last);
+    size_t pixels = (size_t)f->width * f->height;
+    free_groups(f);
+    memset(f->sum, 0, pixels * 3 * sizeof *f->sum);
+    memset(f->square, 0, pixels * sizeof *f->square);
+    memset(f->last, 0, pixels * 3 * sizeof *f->last);
+    f->passes = 0;
+    f->cost = 0.0;
 }
 
-void film_image(const Film *f, int spp, float *rgb)
+bool film_close_group(Film *f)
 {
-    size_t n = (size_t)f->width * f->height * 3;
-    double inv = spp > 0 ? 1.0 / spp : 0.0;
+    if (f->passes == 0)
+        return true;
+    if (f->group_count == FILM_GROUPS_MAX)
+        return false;
+    size_t pixels = (size_t)f->width * f->height;
+    FilmGroup g = {.sum = malloc(pixels * 3 * sizeof(float)), .square = malloc(pixels * sizeof(float)),
+                   .passes = f->passes, .cost = f->cost};
+    if (!g.sum || !g.square) {
+        free(g.sum);
+        free(g.square);
+        return false;
+    }
+    for (size_t i = 0; i < pixels * 3; i++)
+        g.sum[i] = (float)f->sum[i];
+    for (size_t i = 0; i < pixels; i++)
+        g.square[i] = (float)f->square[i];
+    f->groups[f->group_count++] = g;
+    memset(f->sum, 0, pixels * 3 * sizeof *f->sum);
+    memset(f->square, 0, pixels * sizeof *f->square);
+    f->passes = 0;
+    f->cost = 0.0;
+    return true;
+}
+
+int film_passes(const Film *f)
+{
+    int n = f->passes;
+    for (int g = 0; g < f->group_count; g++)
+        n += f->groups[g].passes;
+    return n;
+}
+
+/* ---- the groups' variances -------------------------------------------------- */
+
+/* One group as the variance estimate reads it: sums in floats or doubles. */
+typedef struct GroupView {
+    const float *sum_f, *square_f;
+    const double *sum_d, *square_d;
+    int passes;
+    double cost;
+} GroupView;
+
+static int group_views(const Film *f, GroupView *v)
+{
+    int n = 0;
+    for (int g = 0; g < f->group_count; g++)
+        v[n++] = (GroupView){.sum_f = f->groups[g].sum, .square_f = f->groups[g].square,
+                             .passes = f->groups[g].passes, .cost = f->groups[g].cost};
+    if (f->passes > 0)
+        v[n++] = (GroupView){.sum_d = f->sum, .square_d = f->square, .passes = f->passes, .cost = f->cost};
+    return n;
+}
+
+static inline double view_luminance_sum(const GroupView *v, size_t pix)
+{
+    if (v->sum_d)
+        return 0.2126 * v->sum_d[3 * pix] + 0.7152 * v->sum_d[3 * pix + 1] + 0.0722 * v->sum_d[3 * pix + 2];
+    return 0.2126 * v->sum_f[3 * pix] + 0.7152 * v->sum_f[3 * pix + 1] + 0.0722 * v->sum_f[3 * pix + 2];
+}
+
+static inline double view_square(const GroupView *v, size_t pix)
+{
+    return v->square_d ? v->square_d[pix] : (double)v->square_f[pix];
+}
+
+/* The k-th smallest of a[0..n-1] (reorders a). */
+static double select_kth(double *a, size_t n, size_t k)
+{
+    size_t lo = 0, hi = n - 1;
+    while (lo < hi) {
+        double pivot = a[lo + (hi - lo) / 2];
+        size_t i = lo, j = hi;
+        while (i <= j) {
+            while (a[i] < pivot)
+                i++;
+            while (a[j] > pivot)
+                j--;
+            if (i <= j) {
+                double t = a[i];
+                a[i] = a[j];
+                a[j] = t;
+                i++;
+                if (j == 0)
+                    break;
+                j--;
+            }
+        }
+        if (k <= j)
+            hi = j;
+        else if (k >= i)
+            lo = i;
+        else
+            return a[k];
+    }
+    return a[k];
+}
+
+/* The mean of a[0..n-1] without its largest n/1000 (reorders a). */
+static double trimmed_mean(double *a, size_t n)
+{
+    size_t drop = n / 1000, keep = n - drop;
+    if (keep == 0)
+        return 0.0;
+    double cut = drop ? select_kth(a, n, keep - 1) : INFINITY;
+    double sum = 0.0;
+    size_t counted = 0;
     for (size_t i = 0; i < n; i++)
-        rgb[i] = (float)(f->sum[i] * inv);
+        if (a[i] < cut) {
+            sum += a[i];
+            counted++;
+        }
+    /* values equal to the cut fill the kept count */
+    return (sum + (double)(keep - counted) * (drop ? cut : 0.0)) / (double)keep;
+}
+
+/* The variances per pass of n groups from their mean squared distances to
+ * the image of all passes at equal weight, m[g]: that image holds each
+ * pass too, so m = s (1 - 2/N) + V, with V the image's own variance,
+ * sum n s / N^2, over N passes in all. Solved for s; fewer than 3 passes
+ * cannot tell s from V (0: unknown). */
+static void variances_from_distances(const GroupView *v, int n, int total, double *m)
+{
+    if (total < 3) {
+        for (int g = 0; g < n; g++)
+            m[g] = 0.0;
+        return;
+    }
+    double a = 1.0 - 2.0 / total, weighted = 0.0;
+    for (int g = 0; g < n; g++)
+        weighted += v[g].passes * m[g];
+    double image = weighted / (a * (double)total * total + total);
+    for (int g = 0; g < n; g++)
+        m[g] = fmax((m[g] - image) / a, 0.0);
+}
+
+int film_group_variances(const Film *f, double *variance, double *cost)
+{
+    GroupView v[FILM_GROUPS_MAX + 1];
+    int n = group_views(f, v);
+    size_t pixels = (size_t)f->width * f->height;
+    int total = film_passes(f);
+    for (int g = 0; g < n; g++) {
+        variance[g] = 0.0; /* unknown: the groups then count by their passes alone */
+        if (cost)
+            cost[g] = v[g].cost / v[g].passes;
+    }
+    double *reference = malloc(pixels * sizeof *reference), *relative = malloc(pixels * sizeof *relative);
+    if (!reference || !relative || total == 0 || pixels == 0) {
+        free(reference);
+        free(relative);
+        return n;
+    }
+    /* the image of every pass at equal weight; pixels far darker than a
+     * hundredth of its brightness (its trimmed mean: a firefly does not
+     * make the image bright) count absolutely */
+    for (size_t p = 0; p < pixels; p++) {
+        double s = 0.0;
+        for (int g = 0; g < n; g++)
+            s += view_luminance_sum(&v[g], p);
+        reference[p] = s / total;
+        relative[p] = reference[p];
+    }
+    double mean = trimmed_mean(relative, pixels);
+    double floor = fmax(0.01 * mean * mean, 1e-30);
+    for (int g = 0; g < n; g++) {
+        for (size_t p = 0; p < pixels; p++) {
+            double r = reference[p];
+            /* the sum over the group's passes of (y - r)^2, from its sums */
+            double d = view_square(&v[g], p) - 2.0 * r * view_luminance_sum(&v[g], p) + v[g].passes * r * r;
+            relative[p] = fmax(d, 0.0) / v[g].passes / (r * r + floor);
+        }
+        variance[g] = trimmed_mean(relative, pixels);
+    }
+    variances_from_distances(v, n, total, variance);
+    free(reference);
+    free(relative);
+    return n;
+}
+
+void film_image(const Film *f, float *rgb)
+{
+    size_t values = (size_t)f->width * f->height * 3;
+    if (f->group_count == 0) { /* one group: the plain mean */
+        double inv = f->passes > 0 ? 1.0 / f->passes : 0.0;
+        for (size_t i = 0; i < values; i++)
+            rgb[i] = (float)(f->sum[i] * inv);
+        return;
+    }
+    GroupView v[FILM_GROUPS_MAX + 1];
+    double variance[FILM_GROUPS_MAX + 1], weight[FILM_GROUPS_MAX + 1];
+    int n = group_views(f, v);
+    film_group_variances(f, variance, NULL);
+    double most = 0.0;
+    for (int g = 0; g < n; g++)
+        most = fmax(most, variance[g]);
+    /* weight per pass: 1 / variance (a group of no variance at all beside
+     * others with some gets the most a billionth of theirs allows; all
+     * without any: equal weights) */
+    double total = 0.0;
+    for (int g = 0; g < n; g++) {
+        weight[g] = most > 0.0 && isfinite(most) ? 1.0 / fmax(variance[g], 1e-9 * most) : 1.0;
+        total += weight[g] * v[g].passes;
+    }
+    for (int g = 0; g < n; g++)
+        weight[g] /= total;
+    for (size_t i = 0; i < values; i++) {
+        double s = 0.0;
+        for (int g = 0; g < n; g++)
+            s += weight[g] * (v[g].sum_d ? v[g].sum_d[i] : (double)v[g].sum_f[i]);
+        rgb[i] = (float)s;
+    }
 }

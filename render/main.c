@@ -73,9 +73,10 @@ static const char *usage_tail =
     "  --texture-cache MB  texels held in memory at most (default 256): image textures\n"
     "                    load tile by tile as paths look them up\n"
     "  --quiet           no summary line\n"
-    "  --field-out FIELD a mode that learns (--describe): run its training alone (its\n"
-    "                    --training-passes, random numbers of their own), write what it\n"
-    "                    learned to FIELD and the training passes' image to -o\n"
+    "  --field-out FIELD a mode that learns (--describe): write what it learned to FIELD. With\n"
+    "                    --spp or --time, when its learning within the render stops (the\n"
+    "                    image keeps every pass); alone, after its training apart (its\n"
+    "                    --training-passes, random numbers of their own), whose image goes to -o\n"
     "  --field FIELD     render with the field FIELD holds, frozen: nothing is learned on the\n"
     "                    clock (refused unless made for this scene, cache, size and options)\n"
     "  --training-passes N  the training's passes (default: the mode's, --describe)\n"
@@ -312,8 +313,10 @@ static bool check_args(Args *a, SgError *err)
         return sg_fail(err, "--reference and --log go together");
     if (a->field && a->field_out)
         return sg_fail(err, "--field and --field-out: a render uses a field or trains one, not both");
-    if (a->field_out && (a->spp > 0 || a->time > 0 || a->reference || a->shard_count > 1))
-        return sg_fail(err, "--field-out trains for --training-passes: no --spp, --time, --reference or --shard");
+    if (a->field_out && a->shard_count > 1)
+        return sg_fail(err, "--field-out: a shard learns from its own passes alone: train the field apart (no --shard)");
+    if (a->field_out && !(a->spp > 0 || a->time > 0) && a->reference)
+        return sg_fail(err, "--field-out without --spp or --time trains alone: no --reference");
     if (a->training_passes && a->field)
         return sg_fail(err, "--training-passes: the field's training is done (it is for --field-out)");
     if (!a->has_sampling)
@@ -480,7 +483,9 @@ static void run_close(Run *run)
         sg_scene_free(run->scene);
 }
 
-/* --field-out: the training alone, its passes the image. */
+/* --field-out without --spp or --time: the training alone, its passes the image. */
+static bool trains_alone(const Args *a) { return a->field_out && !(a->spp > 0 || a->time > 0); }
+
 static bool run_training(Run *run, SgError *err)
 {
     int passes = sg_renderer_train_begin(run->r, err);
@@ -517,12 +522,16 @@ static void after_pass(Run *run, int spp)
     }
 }
 
-/* The passes, to --spp or for --time (with --field: frozen from it). */
+/* The passes, to --spp or for --time (with --field: frozen from it; a
+ * mode that learns, without: learning within them, and with --field-out
+ * the field written when the learning stops). */
 static bool run_passes(Run *run, SgError *err)
 {
     const Args *a = &run->a;
     if (a->field && !sg_renderer_read_field(run->r, a->field, err))
         return false;
+    sg_renderer_set_budget(run->r, a->time > 0 ? 0 : run->spp_target, a->time > 0 ? a->time : 0.0);
+    bool field_written = false;
     SgProgress progress;
     sg_progress_begin(&progress, "render", a->time > 0 ? 0 : (uint64_t)run->spp_target);
     for (;;) {
@@ -532,7 +541,14 @@ static bool run_passes(Run *run, SgError *err)
         int spp = sg_renderer_spp(run->r);
         after_pass(run, spp);
         sg_progress_update(&progress, (uint64_t)spp);
-        if (a->time > 0 ? run->seconds >= a->time : spp >= run->spp_target)
+        bool done = a->time > 0 ? run->seconds >= a->time : spp >= run->spp_target;
+        if (a->field_out && !field_written && (done || !sg_renderer_learning(run->r))) {
+            sg_renderer_stop_learning(run->r);
+            if (!sg_renderer_write_field(run->r, a->field_out, err))
+                return false;
+            field_written = true;
+        }
+        if (done)
             break;
     }
     sg_progress_end(&progress);
@@ -572,9 +588,9 @@ static void shard_identity(const SgScene *scene, const SgRenderOptions *o, const
 /* The EXR's attributes, as text, and the strings they point into. */
 typedef struct Attributes {
     char spp[32], seconds[32], seed[32], nonfinite[32], depth[32], exponent[32], guide_share[32], training[32],
-        training_seconds[32], branches[32], edge_rays[32], shard[32], shard_count[32], exposure[32];
+        training_seconds[32], branches[32], edge_rays[32], shard[32], shard_count[32], exposure[32], learned[32];
     ShardIdentity id;
-    SgImageAttribute list[25];
+    SgImageAttribute list[26];
     int count;
 } Attributes;
 
@@ -598,6 +614,7 @@ static void make_attributes(const Run *run, const SgRenderStats *st, const SgRen
     snprintf(at->guide_share, sizeof at->guide_share, "%.4f", st->lobe_share);
     snprintf(at->training, sizeof at->training, "%d", st->training_passes);
     snprintf(at->training_seconds, sizeof at->training_seconds, "%.3f", st->training_seconds);
+    snprintf(at->learned, sizeof at->learned, "%d", sg_renderer_learned_passes(run->r));
     snprintf(at->branches, sizeof at->branches, "%.3f", st->branches_per_path);
     snprintf(at->edge_rays, sizeof at->edge_rays, "%.4f", st->edge_rays_per_sample);
     snprintf(at->shard, sizeof at->shard, "%d", o->shard);
@@ -622,7 +639,8 @@ static void make_attributes(const Run *run, const SgRenderStats *st, const SgRen
     add_attribute(at, SG_ATTR_SCENE, a->scene);
     add_attribute(at, SG_ATTR_CACHE, run->importance.cache ? a->cache : "");
     add_attribute(at, SG_ATTR_FIELD, a->field ? a->field : a->field_out ? a->field_out : "");
-    add_attribute(at, SG_ATTR_TRAINING, a->field_out ? "yes" : "no");
+    add_attribute(at, SG_ATTR_TRAINING, trains_alone(a) ? "yes" : "no");
+    add_attribute(at, SG_ATTR_LEARNED_PASSES, at->learned);
     add_attribute(at, SG_ATTR_EXPOSURE, at->exposure);
     /* for bin/merge */
     add_attribute(at, SG_ATTR_SHARDS, at->shard);
@@ -716,7 +734,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "render: --sampling %s: %s\n", run.mode->name, err.message);
         return 1;
     }
-    bool ok = run_open(&run, &err) && (run.a.field_out ? run_training(&run, &err) : run_passes(&run, &err)) &&
+    bool ok = run_open(&run, &err) && (trains_alone(&run.a) ? run_training(&run, &err) : run_passes(&run, &err)) &&
               run_outputs(&run, &err);
     if (!ok)
         sg_error_print("render", &err);

@@ -23,6 +23,7 @@
 #include "memory.h"
 #include "pixel_noise.h"
 #include "pixel_sampler.h"
+#include "progress.h"
 #include "roulette.h"
 #include "edge_rays.h"
 #include "textures.h"
@@ -60,6 +61,17 @@ struct SgRenderer {
     uint64_t scene_hash;  /* what the scene was (its text and geometry), for field files */
     int training_passes;  /* a learned mode's training */
     bool training;        /* the passes now are training's */
+    /* learning within the render (no field read, no training apart): the
+     * guide learns from the first pass, the film keeps its passes in groups
+     * that end at each checkpoint (learning_checkpoint), and learning stops
+     * at the mode's training passes or, for a mode that judges it itself,
+     * when it stops paying (learning_pays) */
+    bool learning;
+    bool judges_learning; /* the mode's stops_learning_itself */
+    int budget_passes;    /* the render's passes in all (0: not known) */
+    double budget_seconds;/* its seconds in all (0: not known) */
+    double seconds;       /* the passes' time so far */
+    int learned_passes;   /* the passes whose paths the guide learned from, when it stopped */
 
     Camera camera;
 
@@ -147,8 +159,11 @@ static bool renderable(const SgScene *s, const SgRenderOptions *o, const char *p
      * refuse up front what the machine cannot hold rather than be killed */
     char what[96];
     snprintf(what, sizeof what, "a %dx%d image", o->width, o->height);
-    return sg_memory_check((48.0 + (o->edge_rays ? 44.0 : 0.0)) * o->width * o->height + 150.0 * s->triangle_count,
-                           path, what, err);
+    /* + the square of each sample's luminance (8 bytes), and while a guide
+     * learns within the render, ~10 groups of its passes at 16 bytes each */
+    bool learns_here = sg_sampling_mode(o->sampling) && sg_sampling_mode(o->sampling)->learns;
+    double per_pixel = 56.0 + (o->edge_rays ? 44.0 : 0.0) + (learns_here ? 160.0 : 0.0);
+    return sg_memory_check(per_pixel * o->width * o->height + 150.0 * s->triangle_count, path, what, err);
 }
 
 /* The materials, the lights and (a sky without a portal) the openings. */
@@ -184,6 +199,8 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
     r->scene_hash = sg_hash_bytes(s->source_hash, &s->geometry_hash, sizeof s->geometry_hash);
     const SgSamplingMode *mode = sg_sampling_mode(o->sampling);
     r->training_passes = o->training_passes > 0 ? o->training_passes : mode ? mode->training_passes : 0;
+    r->learning = mode && mode->learns;
+    r->judges_learning = mode && mode->stops_learning_itself && o->training_passes <= 0;
     r->tiles_x = (o->width + TILE - 1) / TILE;
     r->tiles_y = (o->height + TILE - 1) / TILE;
 
@@ -347,6 +364,77 @@ static void survey_views(SgRenderer *r)
     r->surveyed = true;
 }
 
+/* ---- learning within the render ------------------------------------------ */
+
+/* A stretch of learning is worth its passes while it still makes the
+ * passes after it this much more efficient (variance times cost, per pass):
+ * below, what the estimate of the gain can tell from noise. */
+#define LEARNING_GAIN_MIN 1.10
+/* The first judgement compares the passes 2-3 with the passes 4-7: a
+ * group of one pass tells too little. */
+#define LEARNING_JUDGED_FROM 8
+
+/* Whether a further stretch of learning, as long as all the learning so
+ * far (the checkpoints double), still pays: the last group's efficiency
+ * over the one before's, the gain it measures, must reach LEARNING_GAIN_MIN,
+ * and the budget must leave at least as many passes after the stretch as
+ * it takes, to use what it learns. */
+static bool learning_pays(SgRenderer *r)
+{
+    double variance[FILM_GROUPS_MAX + 1], cost[FILM_GROUPS_MAX + 1];
+    int n = film_group_variances(&r->film, variance, cost);
+    if (r->spp < LEARNING_JUDGED_FROM || n < 2)
+        return true;
+    double before = variance[n - 2] * cost[n - 2], now = variance[n - 1] * cost[n - 1];
+    double gain = now > 0.0 ? before / now : (before > 0.0 ? INFINITY : 1.0);
+    int remaining = INT32_MAX;
+    if (r->budget_passes > 0)
+        remaining = r->budget_passes - r->spp;
+    if (r->budget_seconds > 0.0) {
+        double per_pass = r->seconds / r->spp;
+        double left = (r->budget_seconds - r->seconds) / per_pass;
+        remaining = (int)fmin((double)remaining, fmax(left, 0.0));
+    }
+    return gain >= LEARNING_GAIN_MIN && remaining >= 2 * r->spp;
+}
+
+/* After a pass of a render that learns: the film's groups end where the
+ * learner's checkpoints are (passes 1, 2, 4, 8, ...) and where its learning
+ * stops; a mode that judges its learning stops there when a further stretch
+ * would not pay. */
+static void learning_checkpoint(SgRenderer *r)
+{
+    int spp = r->spp;
+    bool checkpoint = !(spp & (spp - 1));
+    bool last = spp >= r->training_passes;
+    if (!checkpoint && !last)
+        return;
+    film_close_group(&r->film);
+    if (last || (r->judges_learning && !learning_pays(r)))
+        sg_renderer_stop_learning(r);
+}
+
+void sg_renderer_set_budget(SgRenderer *r, int passes, double seconds)
+{
+    r->budget_passes = passes > 0 ? passes : 0;
+    r->budget_seconds = seconds > 0.0 ? seconds : 0.0;
+}
+
+bool sg_renderer_learning(const SgRenderer *r) { return r->learning && !r->training; }
+
+void sg_renderer_stop_learning(SgRenderer *r)
+{
+    if (!r->learning || r->training)
+        return;
+    film_close_group(&r->film);
+    if (r->guide->ops->freeze)
+        r->guide->ops->freeze(r->guide);
+    r->learning = false;
+    r->learned_passes = r->spp;
+}
+
+int sg_renderer_learned_passes(const SgRenderer *r) { return r->learned_passes; }
+
 void sg_renderer_pass(SgRenderer *r)
 {
     if (r->seen && !r->surveyed)
@@ -359,6 +447,7 @@ void sg_renderer_pass(SgRenderer *r)
     PassCtx pc = {.r = r, .tiles_x = r->tiles_x, .first_pass = r->spp == 0,
                   .sample_rays = r->path_samples ? (double)r->path_rays / (double)r->path_samples : 1.0};
     uint64_t rays_before = atomic_load(&r->rays), views_before = atomic_load(&r->views);
+    double t0 = sg_seconds();
     pixel_sampler_init(&pc.sampler, r->training ? r->opt.seed ^ TRAINING_SEED_SALT : r->opt.seed, pass);
     const PathGuideOps *gops = r->guide->ops;
     pc.plan.training = r->training;
@@ -373,11 +462,17 @@ void sg_renderer_pass(SgRenderer *r)
     r->spp++;
     if (r->noise)
         r->noise_spp++;
+    r->seconds += sg_seconds() - t0;
+    /* a pass's cost in rays, not seconds: a decision taken on it is the same
+     * whatever the machine's load or thread count */
+    film_end_pass(&r->film, (double)(atomic_load(&r->rays) - rays_before));
+    if (r->learning && !r->training)
+        learning_checkpoint(r);
 }
 
 int sg_renderer_spp(const SgRenderer *r) { return r->spp; }
 
-void sg_renderer_image(const SgRenderer *r, float *rgb) { film_image(&r->film, r->spp, rgb); }
+void sg_renderer_image(const SgRenderer *r, float *rgb) { film_image(&r->film, rgb); }
 
 const float *sg_renderer_last_pass(const SgRenderer *r) { return r->film.last; }
 
@@ -452,6 +547,7 @@ void sg_renderer_freeze(SgRenderer *r)
 {
     if (r->guide->ops->freeze)
         r->guide->ops->freeze(r->guide);
+    r->learning = false;
     film_clear(&r->film);
     r->spp = 0;
     atomic_store(&r->nonfinite, 0);
@@ -523,5 +619,6 @@ bool sg_renderer_read_field(SgRenderer *r, const char *path, SgError *err)
         return false;
     if (r->noise && r->noise_spp > 1)
         pixel_noise_estimate(r->noise, r->noise_spp, r->pool);
+    r->learning = false;
     return true;
 }

@@ -48,6 +48,9 @@ typedef struct SgSamplingMode {
     bool learns;               /* it learns from its own paths while it renders */
     bool learned_roulette;     /* it can run the learned roulette (SgRoulette) */
     int training_passes;       /* its training's passes by default (learns; render --field-out) */
+    /* learning within a render, it stops when a further stretch would no
+     * longer pay (sg_renderer_set_budget), not after training_passes */
+    bool stops_learning_itself;
     bool biased;
     /* NULL: always available; else false, saying why, where this build
      * lacks what it needs */
@@ -229,6 +232,23 @@ void sg_renderer_train_end(SgRenderer *r);
 void sg_renderer_freeze(SgRenderer *r);
 bool sg_renderer_write_field(const SgRenderer *r, const char *path, SgError *err);
 bool sg_renderer_read_field(SgRenderer *r, const char *path, SgError *err);
+
+/* Learning within the render (a learned mode, no field read, no training
+ * apart): the guide learns from the first pass and the image keeps every
+ * pass, each stretch of learning weighted by its estimated variance
+ * (render/film.h). Learning stops after the mode's training passes, or, for
+ * a mode that judges it (SgSamplingMode.stops_learning_itself, unless
+ * --training-passes is given), once a further stretch would not pay within
+ * the render's budget, set here: its passes in all, or its seconds (0: not
+ * known). sg_renderer_learning tells whether the guide still learns (a
+ * caller writes the field when it stops); sg_renderer_learned_passes, the
+ * passes it learned from when it stopped (0: it has not). */
+void sg_renderer_set_budget(SgRenderer *r, int passes, double seconds);
+bool sg_renderer_learning(const SgRenderer *r);
+/* Stops the learning within the render now (the field then holds what it
+ * learned); the passes so far stay in the image. */
+void sg_renderer_stop_learning(SgRenderer *r);
+int sg_renderer_learned_passes(const SgRenderer *r);
 
 /* What the render did, in words, for bin/render's summary line and EXR. */
 typedef struct SgRenderReport {

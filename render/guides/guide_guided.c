@@ -381,6 +381,7 @@ const PathGuideKind guide_guided_kind = {
               * compares guides trained alike (on Sponza 128 passes left
               * guided 1.39x less efficient per sample, the bathroom
               * 1.15x: docs/render.md, "Training as long as the peer") */
-             .training_passes = SG_OPENPGL_TRAINING_PASSES},
+             .training_passes = SG_OPENPGL_TRAINING_PASSES,
+             .stops_learning_itself = true},
     .create = mixture_create,
 };
