@@ -262,3 +262,34 @@ SgScene *sgt_scene_from_text(const char *name, const char *text, SgError *err)
     remove(path);
     return s;
 }
+
+/* ---- two rooms and a window -------------------------------------------------- */
+
+static void add_wall_piece(SgScene *s, double y0, double y1, double z0, double z1, uint32_t m)
+{
+    const double a[4][3] = {{2, y0, z0}, {2, y1, z0}, {2, y1, z1}, {2, y0, z1}};
+    const double b[4][3] = {{2, y0, z0}, {2, y0, z1}, {2, y1, z1}, {2, y1, z0}};
+    sgt_add_quad(s, a, m);
+    sgt_add_quad(s, b, m);
+}
+
+SgScene *sgt_window_rooms(void)
+{
+    SgScene *s = sgt_scene_new();
+    const float white[3] = {0.7f, 0.7f, 0.7f}, em[3] = {20, 20, 20}, black[3] = {0, 0, 0};
+    uint32_t w = sgt_add_material(s, SG_MATERIAL_DIFFUSE, white, NULL);
+    uint32_t lm = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
+    const double lo[3] = {0, 0, 0}, hi[3] = {4, 2, 2};
+    sgt_add_box_inside(s, lo, hi, w);
+    /* partition at x = 2 around a window y, z in [0.75, 1.25] */
+    add_wall_piece(s, 0, 0.75, 0, 2, w);
+    add_wall_piece(s, 1.25, 2, 0, 2, w);
+    add_wall_piece(s, 0.75, 1.25, 0, 0.75, w);
+    add_wall_piece(s, 0.75, 1.25, 1.25, 2, w);
+    const double l[4][3] = {{0.8, 1.99, 0.8}, {1.2, 1.99, 0.8}, {1.2, 1.99, 1.2}, {0.8, 1.99, 1.2}};
+    sgt_add_quad(s, l, lm);
+    const double pos[3] = {2.3, 1.0, 1.0}, at[3] = {4, 0.9, 1.1}, up[3] = {0, 1, 0};
+    sgt_set_camera(s, pos, at, up, 80, 40, 30);
+    sgt_finish(s);
+    return s;
+}

@@ -29,6 +29,11 @@ void sgt_scale_offset(SgScene *s, double scale, const double offset[3]);
  * 0.5, emission 0.5 (L = 0.5 + 0.5 L = 1 everywhere), a 32x24 camera inside. */
 SgScene *sgt_furnace_scene(void);
 
+/* Two rooms, 4x2x2, parted at x = 2 by a wall with a window (y, z in
+ * [0.75, 1.25]): a light on room A's ceiling, out of sight from room B,
+ * which a 40x30 camera looks into; B's light comes through the window. */
+SgScene *sgt_window_rooms(void);
+
 /* A guide stand-in (SgImportanceFn) whose importance point is always the
  * same world position: ctx is an SgtFixedPoint. */
 typedef struct SgtFixedPoint {
