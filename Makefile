@@ -324,26 +324,17 @@ $(OUT)/importance.cache: $(OUT)/medium.vdb $(OUT)/skeleton.ply $(BIN)/importance
 	$(BIN)/importance $(OUT)/medium.vdb $(OUT)/skeleton.ply -o $@ --vectors $(OUT)/vectors.ply
 
 # A sampling mode that learns (render --describe says: guided by default)
-# trains once into out/NAME/field (render --field-out, the render's options
-# less --spp and --time, remade when those change) and the image renders
-# from it frozen. RENDER_FLAGS="--sampling bsdf ..." needs no field.
+# learns within the image's own render, every pass of it kept in the image,
+# and writes what it learned to out/NAME/field (render --save-field): a
+# second render of the scene can start from it (RENDER_FLAGS="--field
+# out/NAME/field ..."). RENDER_FLAGS="--sampling bsdf ..." learns nothing.
 SCENE_MODE := $(shell set -- $(RENDER_FLAGS); while [ $$# -gt 0 ]; do [ "$$1" = --sampling ] && echo "$$2"; shift; done)
 SCENE_DESCRIBE := $(shell [ -x $(BIN)/render ] && $(BIN)/render --describe | \
   grep -F '$(if $(SCENE_MODE),"name": "$(lastword $(SCENE_MODE))","default_with_cache": true)')
-SCENE_FIELD := $(if $(findstring "learns": true,$(SCENE_DESCRIBE)),$(OUT)/field)
-TRAIN_FLAGS := $(shell set -- $(RENDER_FLAGS); while [ $$# -gt 0 ]; do \
-  case $$1 in (--spp|--time) shift ;; (*) printf '%s ' "$$1" ;; esac; shift; done)
+SCENE_SAVES_FIELD := $(if $(findstring "learns": true,$(SCENE_DESCRIBE)),$(if $(findstring --field,$(RENDER_FLAGS)),,yes))
 
-$(OUT)/field.flags: FORCE
-	@mkdir -p $(@D)
-	@echo '$(TRAIN_FLAGS)' > $@.new
-	@if cmp -s $@.new $@; then rm -f $@.new; else mv $@.new $@; fi
-
-$(OUT)/field: $(OUT)/importance.cache $(OUT)/field.flags $(SCENE) $(BIN)/render
-	$(BIN)/render $(SCENE) --cache $(OUT)/importance.cache $(TRAIN_FLAGS) --field-out $@ -o $(OUT)/training.exr
-
-$(OUT)/image.exr: $(SCENE) $(OUT)/importance.cache $(BIN)/render $(SCENE_FIELD)
-	$(BIN)/render $(SCENE) --cache $(OUT)/importance.cache $(if $(SCENE_FIELD),--field $(SCENE_FIELD)) \
+$(OUT)/image.exr: $(SCENE) $(OUT)/importance.cache $(BIN)/render
+	$(BIN)/render $(SCENE) --cache $(OUT)/importance.cache $(if $(SCENE_SAVES_FIELD),--save-field $(OUT)/field) \
 	  -o $@ --png $(OUT)/image.png $(RENDER_FLAGS)
 
 # make farm SCENE=... [SHARDS=4] [FARM_OUT=out/NAME/farm] [RENDER_FLAGS=...]:

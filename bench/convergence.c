@@ -99,7 +99,8 @@ static int compare(const char *a, const char *b, double exposure, const char *re
     } else {
         sg_image_errors(rgb[0], rgb[1], n, (float)exp2(exposure), &relmse, &mse8, &mse);
     }
-    printf("relmse %.6g mse8 %.6g mse %.6g\n", relmse, mse8, mse);
+    printf("relmse %.6g mse8 %.6g mse %.6g relmse_trimmed %.6g\n", relmse, mse8, mse,
+           sg_image_relmse_trimmed(rgb[0], rgb[1], n / 3, (float)exp2(exposure)));
     status = 0;
 done:
     free(rgb[0]);

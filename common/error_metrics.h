@@ -41,4 +41,13 @@ static inline void sg_image_errors(const float *x, const float *ref, size_t n, f
     *mse8 = n ? s8 / (double)n : 0.0;
 }
 
+/* The mean of a[0..n-1] without its largest n/1000 values (reorders a):
+ * what one firefly cannot decide. */
+double sg_trimmed_mean(double *a, size_t n);
+
+/* relMSE over the pixels (RGB, 3 floats each) with the worst 0.1 % of the
+ * pixels' errors left out, as recent guiding papers report it: in a sunlit
+ * room one firefly can be nearly all of the plain relMSE. NaN: out of memory. */
+double sg_image_relmse_trimmed(const float *x, const float *ref, size_t pixels, float scale);
+
 #endif

@@ -71,8 +71,9 @@ int sg_shard_pass_count(int shard, int shard_count, int total_passes);
 /* the benchmarks' reference images say how they were made */
 #define SG_ATTR_REFERENCE "sg:reference"
 
-/* render --reference --log: the error curve's CSV header, one row a pass */
-#define SG_ERROR_LOG_HEADER "seconds,spp,mse,relmse,mse8"
+/* render --reference --log: the error curve's CSV header, one row a pass
+ * (relmse_trimmed: the worst 0.1 % of pixels left out, error_metrics.h) */
+#define SG_ERROR_LOG_HEADER "seconds,spp,mse,relmse,mse8,relmse_trimmed"
 
 #ifdef __cplusplus
 }

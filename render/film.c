@@ -1,5 +1,7 @@
 #include "film.h"
 
+#include "error_metrics.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -115,56 +117,6 @@ static inline double view_square(const GroupView *v, size_t pix)
     return v->square_d ? v->square_d[pix] : (double)v->square_f[pix];
 }
 
-/* The k-th smallest of a[0..n-1] (reorders a). */
-static double select_kth(double *a, size_t n, size_t k)
-{
-    size_t lo = 0, hi = n - 1;
-    while (lo < hi) {
-        double pivot = a[lo + (hi - lo) / 2];
-        size_t i = lo, j = hi;
-        while (i <= j) {
-            while (a[i] < pivot)
-                i++;
-            while (a[j] > pivot)
-                j--;
-            if (i <= j) {
-                double t = a[i];
-                a[i] = a[j];
-                a[j] = t;
-                i++;
-                if (j == 0)
-                    break;
-                j--;
-            }
-        }
-        if (k <= j)
-            hi = j;
-        else if (k >= i)
-            lo = i;
-        else
-            return a[k];
-    }
-    return a[k];
-}
-
-/* The mean of a[0..n-1] without its largest n/1000 (reorders a). */
-static double trimmed_mean(double *a, size_t n)
-{
-    size_t drop = n / 1000, keep = n - drop;
-    if (keep == 0)
-        return 0.0;
-    double cut = drop ? select_kth(a, n, keep - 1) : INFINITY;
-    double sum = 0.0;
-    size_t counted = 0;
-    for (size_t i = 0; i < n; i++)
-        if (a[i] < cut) {
-            sum += a[i];
-            counted++;
-        }
-    /* values equal to the cut fill the kept count */
-    return (sum + (double)(keep - counted) * (drop ? cut : 0.0)) / (double)keep;
-}
-
 /* The variances per pass of n groups from their mean squared distances to
  * the image of all passes at equal weight, m[g]: that image holds each
  * pass too, so m = s (1 - 2/N) + V, with V the image's own variance,
@@ -185,7 +137,29 @@ static void variances_from_distances(const GroupView *v, int n, int total, doubl
         m[g] = fmax((m[g] - image) / a, 0.0);
 }
 
-int film_group_variances(const Film *f, double *variance, double *cost)
+/* The image of every pass at equal weight (luminance) and the floor under
+ * its squares: pixels far darker than a hundredth of its brightness (its
+ * trimmed mean: a firefly does not make the image bright) count absolutely.
+ * `scratch`: pixels doubles. */
+static double equal_weight_image(const GroupView *v, int n, size_t pixels, int total, double *reference,
+                                 double *scratch)
+{
+    for (size_t p = 0; p < pixels; p++) {
+        double s = 0.0;
+        for (int g = 0; g < n; g++)
+            s += view_luminance_sum(&v[g], p);
+        reference[p] = s / total;
+        scratch[p] = reference[p];
+    }
+    double mean = sg_trimmed_mean(scratch, pixels);
+    return fmax(0.01 * mean * mean, 1e-30);
+}
+
+/* Each group's variance per pass, relative to the image of all passes,
+ * trimmed: from the distance of its passes to that image (within = false)
+ * or from their spread about their own mean (within = true: blind to what
+ * the whole group missed, but free of the image's own noise). */
+static int group_variances(const Film *f, bool within, double *variance, double *cost)
 {
     GroupView v[FILM_GROUPS_MAX + 1];
     int n = group_views(f, v);
@@ -202,32 +176,32 @@ int film_group_variances(const Film *f, double *variance, double *cost)
         free(relative);
         return n;
     }
-    /* the image of every pass at equal weight; pixels far darker than a
-     * hundredth of its brightness (its trimmed mean: a firefly does not
-     * make the image bright) count absolutely */
-    for (size_t p = 0; p < pixels; p++) {
-        double s = 0.0;
-        for (int g = 0; g < n; g++)
-            s += view_luminance_sum(&v[g], p);
-        reference[p] = s / total;
-        relative[p] = reference[p];
-    }
-    double mean = trimmed_mean(relative, pixels);
-    double floor = fmax(0.01 * mean * mean, 1e-30);
+    double floor = equal_weight_image(v, n, pixels, total, reference, relative);
     for (int g = 0; g < n; g++) {
+        int k = v[g].passes;
+        if (within && k < 2)
+            continue;
         for (size_t p = 0; p < pixels; p++) {
-            double r = reference[p];
-            /* the sum over the group's passes of (y - r)^2, from its sums */
-            double d = view_square(&v[g], p) - 2.0 * r * view_luminance_sum(&v[g], p) + v[g].passes * r * r;
-            relative[p] = fmax(d, 0.0) / v[g].passes / (r * r + floor);
+            double r = reference[p], sum = view_luminance_sum(&v[g], p), square = view_square(&v[g], p);
+            /* the sum over the group's passes of (y - c)^2, c its own mean or the image */
+            double d = within ? square - sum * sum / k : square - 2.0 * r * sum + k * r * r;
+            relative[p] = fmax(d, 0.0) / (within ? k - 1 : k) / (r * r + floor);
         }
-        variance[g] = trimmed_mean(relative, pixels);
+        variance[g] = sg_trimmed_mean(relative, pixels);
     }
-    variances_from_distances(v, n, total, variance);
+    if (!within)
+        variances_from_distances(v, n, total, variance);
     free(reference);
     free(relative);
     return n;
 }
+
+int film_group_variances(const Film *f, double *variance, double *cost)
+{
+    return group_variances(f, false, variance, cost);
+}
+
+int film_group_spreads(const Film *f, double *variance, double *cost) { return group_variances(f, true, variance, cost); }
 
 void film_image(const Film *f, float *rgb)
 {

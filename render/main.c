@@ -28,7 +28,8 @@ static const char *usage_head =
     "              [--png image.png] [--exposure STOPS] [--reference ref.exr --log curve.csv]\n"
     "              [--max-depth N] [--exponent P] [--alpha A] [--roulette learned|albedo]\n"
     "              [--size WxH] [--shard K/N] [--texture-cache MB] [--quiet]\n"
-    "              [--field FIELD | --field-out FIELD [--training-passes N]] [--openpgl-mode ris|mis]\n"
+    "              [--field FIELD | --field-out FIELD | --save-field FIELD] [--training-passes N]\n"
+    "              [--openpgl-mode ris|mis]\n"
     "              [--no-openings] [--edge-rays N]\n"
     "       render --describe [MODE]\n"
     "\n"
@@ -73,13 +74,18 @@ static const char *usage_tail =
     "  --texture-cache MB  texels held in memory at most (default 256): image textures\n"
     "                    load tile by tile as paths look them up\n"
     "  --quiet           no summary line\n"
-    "  --field-out FIELD a mode that learns (--describe): write what it learned to FIELD. With\n"
-    "                    --spp or --time, when its learning within the render stops (the\n"
-    "                    image keeps every pass); alone, after its training apart (its\n"
-    "                    --training-passes, random numbers of their own), whose image goes to -o\n"
+    "  (a mode that learns, --describe, learns within the render from its first pass: the\n"
+    "   image keeps every pass, each stretch of learning weighted by its variance; guided\n"
+    "   stops learning when a further stretch no longer pays within --spp or --time)\n"
+    "  --save-field FIELD  write what the render learned to FIELD when its learning stops,\n"
+    "                    for the next render of the scene (--field)\n"
+    "  --field-out FIELD a mode that learns: run its training alone (its --training-passes,\n"
+    "                    random numbers of their own), write what it learned to FIELD and the\n"
+    "                    training passes' image to -o (a farm's shards share it)\n"
     "  --field FIELD     render with the field FIELD holds, frozen: nothing is learned on the\n"
     "                    clock (refused unless made for this scene, cache, size and options)\n"
-    "  --training-passes N  the training's passes (default: the mode's, --describe)\n"
+    "  --training-passes N  the passes a mode learns from (default: the mode's, --describe;\n"
+    "                    guided within a render: until learning stops paying)\n"
     "  --describe [MODE] what each sampling mode (or MODE) is, one JSON object per line:\n"
     "                    uses_cache, its defaults, whether it learns, is biased, is built\n";
 
@@ -141,7 +147,7 @@ static void mode_names(char *buf, size_t size)
 }
 
 typedef struct Args {
-    const char *scene, *cache, *output, *png, *reference, *log, *field, *field_out;
+    const char *scene, *cache, *output, *png, *reference, *log, *field, *field_out, *save_field;
     long training_passes;
     bool has_sampling;
     SgSampling sampling; /* sg_sampling_default, unless --sampling says */
@@ -187,6 +193,7 @@ static int parse_path(const char *s, const char *v, Args *a, SgError *err)
                         : !strcmp(s, "--log")                        ? &a->log
                         : !strcmp(s, "--field")                      ? &a->field
                         : !strcmp(s, "--field-out")                  ? &a->field_out
+                        : !strcmp(s, "--save-field")                 ? &a->save_field
                                                                      : NULL;
     if (!path)
         return 0;
@@ -313,10 +320,13 @@ static bool check_args(Args *a, SgError *err)
         return sg_fail(err, "--reference and --log go together");
     if (a->field && a->field_out)
         return sg_fail(err, "--field and --field-out: a render uses a field or trains one, not both");
-    if (a->field_out && a->shard_count > 1)
-        return sg_fail(err, "--field-out: a shard learns from its own passes alone: train the field apart (no --shard)");
-    if (a->field_out && !(a->spp > 0 || a->time > 0) && a->reference)
-        return sg_fail(err, "--field-out without --spp or --time trains alone: no --reference");
+    if (a->field_out && (a->spp > 0 || a->time > 0 || a->reference || a->shard_count > 1))
+        return sg_fail(err, "--field-out trains for --training-passes: no --spp, --time, --reference or --shard "
+                            "(--save-field keeps what a render learns)");
+    if (a->save_field && (a->field || a->field_out))
+        return sg_fail(err, "--save-field: a render that reads or trains a field learns nothing more to save");
+    if (a->save_field && a->shard_count > 1)
+        return sg_fail(err, "--save-field: a shard learns from its own passes alone: train the field apart (--field-out)");
     if (a->training_passes && a->field)
         return sg_fail(err, "--training-passes: the field's training is done (it is for --field-out)");
     if (!a->has_sampling)
@@ -324,7 +334,7 @@ static bool check_args(Args *a, SgError *err)
     const SgSamplingMode *mode = sg_sampling_mode(a->sampling);
     if (mode->uses_cache && !a->cache)
         return sg_fail(err, "--sampling %s needs --cache importance.cache", mode->name);
-    if ((a->field || a->field_out) && !mode->learns)
+    if ((a->field || a->field_out || a->save_field) && !mode->learns)
         return sg_fail(err, "--sampling %s learns nothing: it has no field (--describe)", mode->name);
     return true;
 }
@@ -483,8 +493,8 @@ static void run_close(Run *run)
         sg_scene_free(run->scene);
 }
 
-/* --field-out without --spp or --time: the training alone, its passes the image. */
-static bool trains_alone(const Args *a) { return a->field_out && !(a->spp > 0 || a->time > 0); }
+/* --field-out: the training alone, its passes the image. */
+static bool trains_alone(const Args *a) { return a->field_out != NULL; }
 
 static bool run_training(Run *run, SgError *err)
 {
@@ -517,13 +527,15 @@ static void after_pass(Run *run, int spp)
     if (run->log_open) {
         double mse, relmse, mse8;
         sg_renderer_image(run->r, run->image);
-        sg_image_errors(run->image, run->reference, run->values, (float)exp2(run->exposure), &relmse, &mse8, &mse);
-        fprintf(run->log.file, "%.6f,%d,%.9g,%.9g,%.9g\n", run->seconds, spp, mse, relmse, mse8);
+        float scale = (float)exp2(run->exposure);
+        sg_image_errors(run->image, run->reference, run->values, scale, &relmse, &mse8, &mse);
+        double trimmed = sg_image_relmse_trimmed(run->image, run->reference, run->values / 3, scale);
+        fprintf(run->log.file, "%.6f,%d,%.9g,%.9g,%.9g,%.9g\n", run->seconds, spp, mse, relmse, mse8, trimmed);
     }
 }
 
 /* The passes, to --spp or for --time (with --field: frozen from it; a
- * mode that learns, without: learning within them, and with --field-out
+ * mode that learns, without: learning within them, and with --save-field
  * the field written when the learning stops). */
 static bool run_passes(Run *run, SgError *err)
 {
@@ -542,9 +554,9 @@ static bool run_passes(Run *run, SgError *err)
         after_pass(run, spp);
         sg_progress_update(&progress, (uint64_t)spp);
         bool done = a->time > 0 ? run->seconds >= a->time : spp >= run->spp_target;
-        if (a->field_out && !field_written && (done || !sg_renderer_learning(run->r))) {
+        if (a->save_field && !field_written && (done || !sg_renderer_learning(run->r))) {
             sg_renderer_stop_learning(run->r);
-            if (!sg_renderer_write_field(run->r, a->field_out, err))
+            if (!sg_renderer_write_field(run->r, a->save_field, err))
                 return false;
             field_written = true;
         }
@@ -638,7 +650,7 @@ static void make_attributes(const Run *run, const SgRenderStats *st, const SgRen
     add_attribute(at, SG_ATTR_CLAMPING, "none");
     add_attribute(at, SG_ATTR_SCENE, a->scene);
     add_attribute(at, SG_ATTR_CACHE, run->importance.cache ? a->cache : "");
-    add_attribute(at, SG_ATTR_FIELD, a->field ? a->field : a->field_out ? a->field_out : "");
+    add_attribute(at, SG_ATTR_FIELD, a->field ? a->field : a->field_out ? a->field_out : a->save_field ? a->save_field : "");
     add_attribute(at, SG_ATTR_TRAINING, trains_alone(a) ? "yes" : "no");
     add_attribute(at, SG_ATTR_LEARNED_PASSES, at->learned);
     add_attribute(at, SG_ATTR_EXPOSURE, at->exposure);
@@ -705,8 +717,8 @@ static bool run_outputs(Run *run, SgError *err)
             return false;
     }
     if (!sg_image_write_exr(a->output, o->width, o->height, run->image, at.list, at.count, err)) {
-        if (a->field_out) /* no output of a failed run */
-            remove(a->field_out);
+        if (a->field_out || a->save_field) /* no output of a failed run */
+            remove(a->field_out ? a->field_out : a->save_field);
         return false;
     }
     if (!a->quiet)

@@ -343,6 +343,18 @@ Test(render_field, the_program_trains_renders_and_refuses_what_is_not_its_field,
     /* options that do not go together */
     snprintf(args, sizeof args, "%s --sampling openpgl --field-out %s --spp 4", scene, field);
     refused(dir, args, "--field-out");
+    snprintf(args, sizeof args, "%s --sampling openpgl --save-field %s --spp 4 --shard 0/2", scene, field);
+    refused(dir, args, "--save-field");
+    /* with a budget, one run learns, writes the field when it stops, and
+     * renders on: the field then serves the next render */
+    snprintf(cmd, sizeof cmd,
+             "%s %s --sampling openpgl --save-field %s/within.field --training-passes 2 --spp 4 -o %s/within.exr "
+             "--threads 2 --quiet",
+             render_bin(), scene, dir, dir);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
+    snprintf(cmd, sizeof cmd, "%s %s --sampling openpgl --field %s/within.field --spp 1 -o %s/again.exr --quiet",
+             render_bin(), scene, dir, dir);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "%s", err);
 }
 
 /* The shards of a farm render with one field: merged, they are the one

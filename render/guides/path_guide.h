@@ -119,7 +119,7 @@ typedef struct BounceOutcome {
 
 /* What a guide tells of the coming pass. */
 typedef struct GuidePass {
-    bool training;  /* set by the renderer: a training pass (render --field-out), for learning alone */
+    bool training;  /* set by the renderer: every path learns (a training pass apart, or the learning within a render) */
     bool record;    /* paths call record_* */
     bool side_job;  /* side_job runs once, beside the pass's tiles */
 } GuidePass;
