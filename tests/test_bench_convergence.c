@@ -238,6 +238,14 @@ Test(bench_convergence, csv_reader_takes_render_logs_and_refuses_bad_ones)
     cr_assert_float_eq(c.error[SG_METRIC_MSE][0], 0.5, 1e-12);
     cr_assert_float_eq(c.error[SG_METRIC_MSE][1], 0.25, 1e-12);
     sg_curve_free(&c);
+    /* today's log: relmse_trimmed after the five */
+    f = fopen(path, "w");
+    fprintf(f, "seconds,spp,mse,relmse,mse8,relmse_trimmed\n0.01,1,0.5,0.25,400,0.2\n0.02,2,0.25,0.125,200,0.1\n");
+    fclose(f);
+    cr_assert(sg_curve_read_csv(path, &c, &err), "%s", err.message);
+    cr_assert_eq(c.count, 2);
+    cr_assert_float_eq(c.error[SG_METRIC_MSE8][1], 200, 1e-12);
+    sg_curve_free(&c);
 
     static const char *const bad[][2] = {
         {"", "header"},
@@ -248,6 +256,7 @@ Test(bench_convergence, csv_reader_takes_render_logs_and_refuses_bad_ones)
         {"seconds,spp,mse,relmse,mse8\n0.2,1,0.5,0.2,3\n0.1,2,0.5,0.2,3\n", "does not increase"},
         {"seconds,spp,mse,relmse,mse8\n0.2,1,0.5,-0.2,3\n", "negative"},
         {"seconds,spp,mse,relmse,mse8\n0.2,1,-0.5,0.2,3\n", "negative"},
+        {"seconds,spp,mse,relmse,mse8,relmse_trimmed\n0.1,1,0.5,0.2,3\n", "malformed"},
     };
     for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
         f = fopen(path, "w");

@@ -55,10 +55,15 @@ bool sg_curve_read_csv(const char *path, SgCurve *c, SgError *err)
     if (!f)
         return sg_fail(err, "%s: cannot open: %s", path, strerror(errno));
     char line[512];
-    if (!fgets(line, sizeof line, f) || strncmp(line, SG_ERROR_LOG_HEADER, strlen(SG_ERROR_LOG_HEADER)) != 0) {
+    /* the five columns read here; a log may carry more after them */
+    const char *head = "seconds,spp,mse,relmse,mse8";
+    if (!fgets(line, sizeof line, f) || strncmp(line, head, strlen(head)) != 0) {
         fclose(f);
-        return sg_fail(err, "%s: not an error log (header " SG_ERROR_LOG_HEADER " missing)", path);
+        return sg_fail(err, "%s: not an error log (header %s missing)", path, head);
     }
+    int extra = 0; /* columns after the five */
+    for (const char *q = line + strlen(head); *q; q++)
+        extra += *q == ',';
     size_t capacity = 0, row = 1;
     SgCurve grow = {0};
     bool ok = true;
@@ -70,18 +75,18 @@ bool sg_curve_read_csv(const char *path, SgCurve *c, SgError *err)
             ok = sg_fail(err, "%s:%zu: line too long", path, row);
             break;
         }
-        double v[5];
+        double v[5], ignored;
         const char *p = line;
         bool row_ok = true;
-        for (int k = 0; k < 5 && row_ok; k++) {
-            row_ok = sg_curve_parse_number(&p, &v[k]);
-            if (row_ok && k < 4)
+        for (int k = 0; k < 5 + extra && row_ok; k++) {
+            row_ok = sg_curve_parse_number(&p, k < 5 ? &v[k] : &ignored);
+            if (row_ok && k < 4 + extra)
                 row_ok = *p++ == ',';
         }
         while (row_ok && (*p == '\n' || *p == '\r' || *p == ' '))
             p++;
         if (!row_ok || *p != '\0') {
-            ok = sg_fail(err, "%s:%zu: malformed row (want 5 finite numbers)", path, row);
+            ok = sg_fail(err, "%s:%zu: malformed row (want %d finite numbers)", path, row, 5 + extra);
             break;
         }
         if (v[0] < 0 || v[1] < 0 || v[2] < 0 || v[3] < 0 || v[4] < 0) {
