@@ -681,6 +681,12 @@ static void print_summary(const Run *run, const SgRenderStats *st, const SgRende
     char edges[80] = "";
     if (st->edge_rays_per_sample > 0.0)
         snprintf(edges, sizeof edges, ", %.3g edge rays a sample", st->edge_rays_per_sample);
+    char learned[80] = "";
+    int learned_passes = sg_renderer_learned_passes(run->r);
+    if (learned_passes > 0)
+        snprintf(learned, sizeof learned, ", learned within its first %d passes", learned_passes);
+    else if (sg_renderer_learning(run->r))
+        snprintf(learned, sizeof learned, ", learning to the end");
     char roulette[80];
     if (report->roulette == SG_ROULETTE_LEARNED) /* it also splits paths */
         snprintf(roulette, sizeof roulette, "%s (%.2f branches split off a path)", sg_roulette_name(report->roulette),
@@ -688,11 +694,11 @@ static void print_summary(const Run *run, const SgRenderStats *st, const SgRende
     else
         snprintf(roulette, sizeof roulette, "%s", sg_roulette_name(report->roulette));
     fprintf(stderr,
-            "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s%s, roulette %s, seed "
+            "render: %dx%d, %d spp, %.2f s, %.3f Msamples/s, %.3f Mrays/s, sampling %s%s%s%s%s, roulette %s, seed "
             "%s, %s NaN/inf samples%s\n",
             o->width, o->height, st->spp, run->seconds, paths / run->seconds * 1e-6,
-            (double)st->rays / run->seconds * 1e-6, run->mode->name, report->guide, openings, edges, roulette, seed,
-            nonfinite, shard_line);
+            (double)st->rays / run->seconds * 1e-6, run->mode->name, report->guide, learned, openings, edges, roulette,
+            seed, nonfinite, shard_line);
 }
 
 /* The PNG, the error log and the EXR, then the summary. */
