@@ -11,7 +11,7 @@
 #include "pixel_noise.h"
 
 static const char field_magic[8] = {'S', 'G', 'F', 'I', 'E', 'L', 'D', '\x1a'};
-#define FIELD_VERSION 5u /* 2: openpgl's section counts its passes; 3: guided's learned axes; 4: its histograms; 5: its portal shares */
+#define FIELD_VERSION 6u /* 2: openpgl's section counts its passes; 3: guided's learned axes; 4: its histograms; 5: its portal shares; 6: any view of the scene (the pixel noise kept for its own) */
 /* A field is a few regions' worth of numbers per scene cell: far below this */
 #define FIELD_LIMIT ((size_t)4 << 30)
 
@@ -220,7 +220,7 @@ bool field_identity_check(const char *path, const FieldIdentity *got, const Fiel
 }
 
 bool field_file_save(const char *path, const FieldIdentity *id, const PathGuide *guide, const PixelNoise *noise,
-                     int noise_spp, SgError *err)
+                     int noise_spp, uint64_t view, SgError *err)
 {
     FieldFile f = {0};
     f.id = *id;
@@ -230,7 +230,7 @@ bool field_file_save(const char *path, const FieldIdentity *id, const PathGuide 
         FieldSection *n = field_file_add_section(&f, "pixel-noise");
         size_t pixels = (size_t)noise->width * noise->height;
         int32_t spp = noise_spp;
-        ok = field_bytes_put(&n->bytes, &spp, sizeof spp) &&
+        ok = field_bytes_put(&n->bytes, &view, sizeof view) && field_bytes_put(&n->bytes, &spp, sizeof spp) &&
              field_bytes_put(&n->bytes, noise->sum, pixels * sizeof *noise->sum) &&
              field_bytes_put(&n->bytes, noise->sum_sq, pixels * sizeof *noise->sum_sq);
     }
@@ -244,7 +244,7 @@ bool field_file_save(const char *path, const FieldIdentity *id, const PathGuide 
 }
 
 bool field_file_load(const char *path, const FieldIdentity *want, PathGuide *guide, PixelNoise *noise,
-                     int *noise_spp, SgError *err)
+                     int *noise_spp, uint64_t view, SgError *err)
 {
     FieldFile f;
     if (!field_file_read(path, &f, err))
@@ -253,20 +253,29 @@ bool field_file_load(const char *path, const FieldIdentity *want, PathGuide *gui
     FieldSection *g = field_file_section(&f, "guide");
     FieldSection *n = field_file_section(&f, "pixel-noise");
     size_t pixels = noise ? (size_t)noise->width * noise->height : 0;
-    size_t noise_size = sizeof(int32_t) + 2 * pixels * sizeof(double);
-    if (ok && (!g || (noise != NULL) != (n != NULL) || (n && n->bytes.size != noise_size)))
+    size_t noise_size = sizeof(uint64_t) + sizeof(int32_t) + 2 * pixels * sizeof(double);
+    if (ok && (!g || (noise != NULL) != (n != NULL) || (n && n->bytes.size < sizeof(uint64_t) + sizeof(int32_t))))
         ok = sg_fail(err, "%s: corrupt: its sections are not those of a --sampling %s field", path, f.id.mode);
+    /* the pixels' noise serves the view it was learned for alone (another
+     * camera or size: the learned roulette learns its pixels anew) */
+    uint64_t noise_view = 0;
+    if (ok && n)
+        memcpy(&noise_view, n->bytes.data, sizeof noise_view);
+    bool same_view = ok && n && noise_view == view && n->bytes.size == noise_size;
+    if (ok && n && noise_view == view && n->bytes.size != noise_size)
+        ok = sg_fail(err, "%s: corrupt: its pixel noise is not the size of its view", path);
     if (ok) {
         FieldReader in = {g->bytes.data, g->bytes.size, 0};
         SgError e = {0};
         if (!guide->ops->field_load(guide, &in, &e) || in.at != in.size)
             ok = sg_fail(err, "%s: %s", path, e.message[0] ? e.message : "its guide's part is corrupt");
     }
-    if (ok && n) {
+    if (ok && same_view) {
+        const uint8_t *at = n->bytes.data + sizeof noise_view;
         int32_t spp;
-        memcpy(&spp, n->bytes.data, sizeof spp);
-        memcpy(noise->sum, n->bytes.data + sizeof spp, pixels * sizeof(double));
-        memcpy(noise->sum_sq, n->bytes.data + sizeof spp + pixels * sizeof(double), pixels * sizeof(double));
+        memcpy(&spp, at, sizeof spp);
+        memcpy(noise->sum, at + sizeof spp, pixels * sizeof(double));
+        memcpy(noise->sum_sq, at + sizeof spp + pixels * sizeof(double), pixels * sizeof(double));
         *noise_spp = spp > 0 ? spp : 0;
     }
     field_file_free(&f);

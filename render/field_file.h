@@ -76,17 +76,20 @@ void field_file_free(FieldFile *f);
 
 /* ---- a renderer's field --------------------------------------------------
  * Its sections: "guide", what the guide stores (PathGuideOps.field_store),
- * and with the learned roulette "pixel-noise", the pixels' sums
- * (PixelNoise) after their pass count noise_spp. */
+ * and with the learned roulette "pixel-noise": the view's identity, then
+ * the pixels' sums (PixelNoise) after their pass count noise_spp. */
 struct PathGuide;
 struct PixelNoise;
 
-/* Writes the field of `guide` and `noise` (NULL: none), made for `id`. */
+/* Writes the field of `guide` and `noise` (NULL: none), made for `id`;
+ * the noise is the pixels' of `view` (the camera and image size). */
 bool field_file_save(const char *path, const FieldIdentity *id, const struct PathGuide *guide,
-                     const struct PixelNoise *noise, int noise_spp, SgError *err);
-/* Reads a field made for `want` into `guide` and `noise` (NULL: the render
- * has none, and the file must have none), its pass count into *noise_spp. */
+                     const struct PixelNoise *noise, int noise_spp, uint64_t view, SgError *err);
+/* Reads a field made for `want` into `guide`, and into `noise` (NULL: the
+ * render has none, and the file must have none) with its pass count into
+ * *noise_spp where the file's noise is for the same `view`; for another
+ * view the noise is left as it was (a renderer's then learns anew). */
 bool field_file_load(const char *path, const FieldIdentity *want, struct PathGuide *guide, struct PixelNoise *noise,
-                     int *noise_spp, SgError *err);
+                     int *noise_spp, uint64_t view, SgError *err);
 
 #endif

@@ -589,9 +589,9 @@ static void shard_identity(const SgScene *scene, const SgRenderOptions *o, const
         snprintf(id->cache, sizeof id->cache, "none");
     char summary[256], recipe[4500]; /* the options and a field's path */
     sg_render_options_summary(o, summary, sizeof summary);
-    int n = snprintf(recipe, sizeof recipe, "%s, sampling %s, seed %" PRIu64 ", shards %d%s%s", summary,
-                     sg_sampling_name(o->sampling), o->seed, o->shard_count, field ? ", field " : "",
-                     field ? field : "");
+    int n = snprintf(recipe, sizeof recipe, "%dx%d, %s, sampling %s, seed %" PRIu64 ", shards %d%s%s", o->width,
+                     o->height, summary, sg_sampling_name(o->sampling), o->seed, o->shard_count,
+                     field ? ", field " : "", field ? field : "");
     if (n < 0 || (size_t)n >= sizeof recipe)
         n = (int)strlen(recipe);
     snprintf(id->recipe, sizeof id->recipe, "%016" PRIx64, sg_hash_bytes(SG_HASH_INIT, recipe, (size_t)n));

@@ -58,7 +58,8 @@ struct SgRenderer {
     bool surveyed;        /* seen's survey is done (before the first pass) */
     int seen_passes;      /* the passes in seen's sums (training's included) */
     int tiles_x, tiles_y;
-    uint64_t scene_hash;  /* what the scene was (its text and geometry), for field files */
+    uint64_t scene_hash;  /* what a field learns from: the scene's geometry and lights (not its camera) */
+    uint64_t view_hash;   /* the camera and the image size: what the pixels' noise in a field is for */
     int training_passes;  /* a learned mode's training */
     bool training;        /* the passes now are training's */
     /* learning within the render (no field read, no training apart): the
@@ -186,6 +187,18 @@ static bool shading_init(SgRenderer *r, const SgScene *s, const char *path, SgEr
     return true;
 }
 
+/* The view a field's pixel noise is for: the camera and the image size. */
+static uint64_t view_identity(const SgCamera *c, int width, int height)
+{
+    uint64_t h = SG_HASH_INIT;
+    h = sg_hash_bytes(h, c->position, sizeof c->position);
+    h = sg_hash_bytes(h, c->look_at, sizeof c->look_at);
+    h = sg_hash_bytes(h, c->up, sizeof c->up);
+    h = sg_hash_bytes(h, &c->fov_deg, sizeof c->fov_deg);
+    h = sg_hash_bytes(h, &width, sizeof width);
+    return sg_hash_bytes(h, &height, sizeof height);
+}
+
 /* `create`: the guide's constructor, NULL: the one o->sampling names. */
 static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, PathGuideCreate create, SgError *err)
 {
@@ -196,7 +209,10 @@ static SgRenderer *renderer_create(const SgScene *s, const SgRenderOptions *o, P
     if (!r)
         return sg_fail(err, "%s: out of memory", path), NULL;
     r->opt = *o;
-    r->scene_hash = sg_hash_bytes(s->source_hash, &s->geometry_hash, sizeof s->geometry_hash);
+    /* a field serves any view of the scene: a guide learned elsewhere, or
+     * for other materials, leaves the image unbiased, only less helped */
+    r->scene_hash = s->geometry_hash;
+    r->view_hash = view_identity(&s->camera, o->width, o->height);
     const SgSamplingMode *mode = sg_sampling_mode(o->sampling);
     r->training_passes = o->training_passes > 0 ? o->training_passes : mode ? mode->training_passes : 0;
     r->learning = mode && mode->learns;
@@ -587,7 +603,7 @@ void sg_render_options_summary(const SgRenderOptions *o, char *buf, size_t size)
     /* openpgl: the mode draws the paths the field learns from; no openings:
      * the sky's light samples shape what a learner sees */
     bool pgl = o->sampling == SG_SAMPLING_OPENPGL;
-    snprintf(buf, size, "%dx%d, max depth %d, exponent %.9g, alpha %s, roulette %s%s%s%s", o->width, o->height,
+    snprintf(buf, size, "max depth %d, exponent %.9g, alpha %s, roulette %s%s%s%s",
              o->max_depth, o->lobe_exponent, alpha, sg_roulette_name(o->roulette), pgl ? ", openpgl " : "",
              pgl ? sg_openpgl_mode_name(o->openpgl_mode) : "", o->no_openings ? ", no openings" : "");
 }
@@ -612,7 +628,7 @@ bool sg_renderer_write_field(const SgRenderer *r, const char *path, SgError *err
     FieldIdentity id;
     field_identity(r, &id);
     id.training_spp = (uint32_t)r->training_passes;
-    return field_file_save(path, &id, r->guide, r->noise, r->noise_spp, err);
+    return field_file_save(path, &id, r->guide, r->noise, r->noise_spp, r->view_hash, err);
 }
 
 bool sg_renderer_read_field(SgRenderer *r, const char *path, SgError *err)
@@ -624,7 +640,7 @@ bool sg_renderer_read_field(SgRenderer *r, const char *path, SgError *err)
         return sg_fail(err, "%s: a field is read before the first pass", path);
     FieldIdentity want;
     field_identity(r, &want);
-    if (!field_file_load(path, &want, r->guide, r->noise, &r->noise_spp, err))
+    if (!field_file_load(path, &want, r->guide, r->noise, &r->noise_spp, r->view_hash, err))
         return false;
     if (r->noise && r->noise_spp > 1)
         pixel_noise_estimate(r->noise, r->noise_spp, r->pool);

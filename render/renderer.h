@@ -153,11 +153,12 @@ typedef struct SgRenderOptions {
  * rays. */
 void sg_render_options_default(SgRenderOptions *o, const SgScene *scene);
 
-/* The options that shape what a render draws and learns, in words: image
- * size, max depth, lobe exponent, alpha, roulette, openpgl's mode, the
- * openings (not the mode, seed, shard, threads or passes). The one summary
- * of them: a field file keeps it, refusing a render made otherwise, and a
- * shard's recipe hashes it, bin/merge refusing shards made otherwise. */
+/* The options that shape what a render draws and learns, in words: max
+ * depth, lobe exponent, alpha, roulette, openpgl's mode, the openings (not
+ * the image size, mode, seed, shard, threads or passes: a field serves any
+ * view). The one summary of them: a field file keeps it, refusing a render
+ * made otherwise, and a shard's recipe hashes it with the image size,
+ * bin/merge refusing shards made otherwise. */
 void sg_render_options_summary(const SgRenderOptions *o, char *buf, size_t size);
 
 typedef struct SgRenderer SgRenderer;
