@@ -37,6 +37,9 @@ int sg_shard_pass_count(int shard, int shard_count, int total_passes);
 #define SG_ATTR_PREFIX "sg:"
 #define SG_ATTR_SPP "spp"
 #define SG_ATTR_SECONDS "seconds"
+/* seconds from the program's start to its first pass (the scene read, the
+ * cache opened, the renderer made): with "seconds", the wall time a user waits */
+#define SG_ATTR_SETUP_SECONDS "sg:setup_seconds"
 #define SG_ATTR_SAMPLING "sampling"
 #define SG_ATTR_SEED "seed"
 /* the shard indices the image holds, ascending, comma-separated ("0,1,3") */

@@ -416,6 +416,8 @@ typedef struct Run {
     SgOutputFile log;
     bool log_open;
     double seconds;  /* the passes' time, measuring the error not counted */
+    double started;  /* sg_seconds() when the program started */
+    double setup;    /* seconds from the start to the first pass: the scene, the cache, the renderer */
 } Run;
 
 static bool open_cache(Run *run, SgError *err)
@@ -543,6 +545,7 @@ static bool run_passes(Run *run, SgError *err)
     if (a->field && !sg_renderer_read_field(run->r, a->field, err))
         return false;
     sg_renderer_set_budget(run->r, a->time > 0 ? 0 : run->spp_target, a->time > 0 ? a->time : 0.0);
+    run->setup = sg_seconds() - run->started;
     bool field_written = false;
     SgProgress progress;
     sg_progress_begin(&progress, "render", a->time > 0 ? 0 : (uint64_t)run->spp_target);
@@ -600,9 +603,10 @@ static void shard_identity(const SgScene *scene, const SgRenderOptions *o, const
 /* The EXR's attributes, as text, and the strings they point into. */
 typedef struct Attributes {
     char spp[32], seconds[32], seed[32], nonfinite[32], depth[32], exponent[32], guide_share[32], training[32],
-        training_seconds[32], branches[32], edge_rays[32], shard[32], shard_count[32], exposure[32], learned[32];
+        training_seconds[32], branches[32], edge_rays[32], shard[32], shard_count[32], exposure[32], learned[32],
+        setup[32];
     ShardIdentity id;
-    SgImageAttribute list[26];
+    SgImageAttribute list[27];
     int count;
 } Attributes;
 
@@ -635,6 +639,8 @@ static void make_attributes(const Run *run, const SgRenderStats *st, const SgRen
     at->count = 0;
     add_attribute(at, SG_ATTR_SPP, at->spp);
     add_attribute(at, SG_ATTR_SECONDS, at->seconds);
+    snprintf(at->setup, sizeof at->setup, "%.3f", run->setup);
+    add_attribute(at, SG_ATTR_SETUP_SECONDS, at->setup);
     add_attribute(at, SG_ATTR_SAMPLING, run->mode->name);
     add_attribute(at, SG_ATTR_SEED, at->seed);
     add_attribute(at, SG_ATTR_MAX_DEPTH, at->depth);
@@ -742,7 +748,7 @@ int main(int argc, char **argv)
     if (argc > 1 && !strcmp(argv[1], "--describe"))
         return describe(argc, argv);
     SgError err = {0};
-    Run run = {0};
+    Run run = {.started = sg_seconds()};
     if (!parse_args(argc, argv, &run.a, &err)) {
         sg_error_print("render", &err);
         return 2; /* a usage error, as in every program */
