@@ -93,7 +93,7 @@ TEST_SUPPORT_SRC := $(filter-out $(TEST_SRC),$(wildcard tests/*.c))
 # the longest suites start first (tests/run-tests.sh runs them side by
 # side): a long one started last would run alone at the end
 TEST_SLOW := test_render_farm test_stress test_render_integrator test_merge test_pbrt_scene \
-             test_render_pipeline test_render_sampling test_skeleton test_render_field
+             test_render_budget test_render_pipeline test_render_sampling test_skeleton test_render_field
 TEST_NAMES := $(TEST_SRC:tests/%.c=%)
 TEST_BIN := $(patsubst %,$(BUILD)/tests/%,$(foreach t,$(TEST_SLOW),$(filter $(t),$(TEST_NAMES))) \
               $(filter-out $(TEST_SLOW),$(TEST_NAMES)))

@@ -12,6 +12,10 @@
 /* Guided on the two rooms, its lobe toward the window. */
 static SgtFixedPoint window_point = {{2.0, 1.0, 1.0}};
 
+/* Under the sanitizers (SG_SANITIZED, ~5x slower) the statistical tests
+ * take half the seeds and passes. */
+static int scaled(int n) { return getenv("SG_SANITIZED") ? n / 2 : n; }
+
 static SgRenderOptions window_options(SgScene *s, uint64_t seed)
 {
     SgRenderOptions o = sgt_options(s, SG_SAMPLING_GUIDED);
@@ -59,7 +63,7 @@ static float *window_reference(SgScene *s)
     cr_assert_not_null(r, "%s", err.message);
     cr_assert(sg_renderer_train(r, &err), "%s", err.message);
     sg_renderer_freeze(r);
-    for (int p = 0; p < 1024; p++)
+    for (int p = 0; p < scaled(1024); p++)
         sg_renderer_pass(r);
     float *ref = image_of(r, &o);
     sg_renderer_free(r);
@@ -73,7 +77,7 @@ Test(render_budget, the_passes_learned_from_count_in_the_image, .timeout = 120)
 {
     SgScene *s = sgt_window_rooms();
     float *ref = window_reference(s);
-    const int learning = 16, frozen = 16, seeds = 6;
+    const int learning = 16, frozen = 16, seeds = scaled(6);
     double apart = 0.0, within = 0.0;
     for (int k = 0; k < seeds; k++) {
         SgError err = {0};
@@ -116,7 +120,7 @@ Test(render_budget, the_weighted_image_is_unbiased, .timeout = 120)
 {
     SgScene *s = sgt_window_rooms();
     float *ref = window_reference(s);
-    const int seeds = 12;
+    const int seeds = scaled(12);
     double sum = 0.0, sum2 = 0.0, ref_mean = 0.0;
     size_t pixels = 0;
     for (int k = 0; k < seeds; k++) {
