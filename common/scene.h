@@ -28,6 +28,9 @@ typedef enum SgMaterialType {
                              * Fresnel of eta + i k; a mirror below alpha 1e-3 */
     SG_MATERIAL_COATED_DIFFUSE, /* a diffuse base (diffuse) under a GGX
                                  * dielectric coat of index ior (roughness) */
+    SG_MATERIAL_DIFFUSE_TRANSMISSION, /* Lambertian both ways (pbrt-v4's
+                                       * diffusetransmission): reflects
+                                       * diffuse, lets transmittance through */
 } SgMaterialType;
 
 /* What a texture's value is made of: another texture or a constant. */
@@ -76,6 +79,7 @@ typedef struct SgMaterial {
      * its reflectance at normal incidence, in place of eta and k); 0: none.
      * `diffuse` then holds the texture's mean. */
     uint32_t diffuse_texture;
+    float transmittance[3]; /* diffuse transmission: what passes to the other side */
 } SgMaterial;
 
 /* pbrt-v4's conductor given a reflectance r instead of eta and k: eta 1 and

@@ -369,7 +369,15 @@ static bool scatter(Path *p, const Hit *h, const Material *m, Vec3 wo, Vec3 n, b
     v.p = h->p;
     v.seg = seg;
     memset(v.g.state, 0, sizeof v.g.state);
-    bsdf_init(&v.g.bsdf, m, n, wo, surface_albedo(it, m, h, pc->thread));
+    Vec3 albedo = surface_albedo(it, m, h, pc->thread);
+    if (m->type == SG_MATERIAL_DIFFUSE_TRANSMISSION) { /* one side per vertex (bsdf.h) */
+        DiffuseTransmission dt = bsdf_diffuse_transmission(n, albedo, m->kt);
+        if (bsdf_diffuse_side(&dt, sg_rng_float(pc->rng), &albedo)) {
+            n = v3_scale(n, -1.0f);
+            front = !front;
+        }
+    }
+    bsdf_init(&v.g.bsdf, m, n, wo, albedo);
     v.g.learn = false;
     v.g.rms = -1.0f;
     v.g.by_guide = false;

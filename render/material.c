@@ -59,6 +59,17 @@ void material_init(Material *m, const SgMaterial *src)
         m->ax = fmaxf(m->ax, SG_GGX_SMOOTH_ALPHA);
         m->ay = fmaxf(m->ay, SG_GGX_SMOOTH_ALPHA);
         m->roughness = sqrtf(m->ax * m->ay);
+    } else if (m->type == SG_MATERIAL_DIFFUSE_TRANSMISSION) {
+        m->kt = v3(fmaxf(0, src->transmittance[0]), fmaxf(0, src->transmittance[1]), fmaxf(0, src->transmittance[2]));
+        m->ks = v3(0, 0, 0);
+        float worst = v3_max_component(v3_add(m->kd, m->kt)); /* R + T <= 1 per channel */
+        if (worst > 1.0f) {
+            m->kd = v3_scale(m->kd, 1.0f / worst);
+            m->kt = v3_scale(m->kt, 1.0f / worst);
+        }
+        m->black = luminance(m->kd) + luminance(m->kt) <= 0.0f;
+        m->diffuse_weight = 1.0f; /* each side is a Lambertian alone (bsdf.h) */
+        m->roughness = 1.0f;
     } else if (m->type == SG_MATERIAL_MIRROR) {
         if (v3_max_component(m->ks) <= 0.0f)
             m->ks = v3(1, 1, 1); /* a mirror given without Ks reflects fully */

@@ -1,8 +1,8 @@
 /* The renderer's materials, made from the scene's SgMaterial with energy
  * conservation enforced: diffuse, glossy (diffuse plus a normalized Phong
  * lobe), mirror, dielectric (GGX, or the exact refraction when smooth),
- * conductor (GGX, or a mirror with its Fresnel when smooth) and coated
- * diffuse. render/bsdf.h turns one into
+ * conductor (GGX, or a mirror with its Fresnel when smooth), coated
+ * diffuse and diffuse transmission. render/bsdf.h turns one into
  * the BSDF at a vertex. */
 #ifndef SG_RENDER_MATERIAL_H
 #define SG_RENDER_MATERIAL_H
@@ -18,6 +18,7 @@
 typedef struct Material {
     SgMaterialType type;
     Vec3 kd, ks, emission; /* conductor: ks its reflectance at normal incidence */
+    Vec3 kt;               /* diffuse transmission: what it lets through (kd: what it reflects) */
     float exponent, ior;
     float diffuse_weight; /* diffuse, glossy: probability of sampling the diffuse part
                            * (the microfacet kinds': their vertex's, render/bsdf.c) */

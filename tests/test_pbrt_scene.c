@@ -344,6 +344,22 @@ Test(pbrt_materials, mapped_to_ours)
     sg_scene_free(s);
 }
 
+Test(pbrt_materials, diffuse_transmission_reflects_and_transmits)
+{
+    SgScene *s = load_ok(HEADER "Material \"diffusetransmission\" \"rgb reflectance\" [ 0.2 0.3 0.4 ]\n"
+                                "    \"rgb transmittance\" [ 0.5 0.4 0.3 ] \"float scale\" 0.5\n" TRIANGLE
+                                "Material \"diffusetransmission\"\n" TRIANGLE);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect_eq(m->type, SG_MATERIAL_DIFFUSE_TRANSMISSION);
+    cr_expect_float_eq(m->diffuse[1], 0.15f, 1e-6, "reflectance times scale");
+    cr_expect_float_eq(m->transmittance[0], 0.25f, 1e-6, "transmittance times scale");
+    m = material_of(s, 1); /* pbrt-v4's defaults */
+    cr_expect_float_eq(m->diffuse[0], 0.25f, 1e-6);
+    cr_expect_float_eq(m->transmittance[2], 0.25f, 1e-6);
+    cr_expect_eq(s->warning_count, 0);
+    sg_scene_free(s);
+}
+
 Test(pbrt_materials, textures_as_their_average)
 {
     SgScene *s = load_ok(

@@ -288,6 +288,48 @@ static void plane_case(SgSampling mode, SgMaterialType floor_type)
 Test(render_integrator, plane_under_square_light_bsdf) { plane_case(SG_SAMPLING_BSDF, SG_MATERIAL_DIFFUSE); }
 Test(render_integrator, plane_under_square_light_guided) { plane_case(SG_SAMPLING_GUIDED, SG_MATERIAL_DIFFUSE); }
 
+/* A lamp shade: a diffuse transmitter (R, T) across the whole floor plane,
+ * under the emitting square of plane_case, seen from below: what passes
+ * is T / pi times the irradiance above, L = T Le 4 F(a, a, h); what it
+ * reflects goes up to the black light and is lost. */
+static void lamp_shade_case(SgSampling mode)
+{
+    const double a = 2.0, h = 1.0;
+    const float r = 0.3f, t = 0.5f, le = 2.0f;
+    SgScene *s = sgt_scene_new();
+    const float black[3] = {0, 0, 0}, em[3] = {le, le, le}, refl[3] = {r, r, r};
+    uint32_t shade_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE_TRANSMISSION, refl, NULL);
+    for (int c = 0; c < 3; c++)
+        sgt_material(s, shade_m)->transmittance[c] = t;
+    uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
+    const double shade[4][3] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}}; /* faces up */
+    const double light[4][3] = {{-a, h, -a}, {a, h, -a}, {a, h, a}, {-a, h, a}};       /* faces down */
+    sgt_add_quad(s, shade, shade_m);
+    sgt_add_quad(s, light, light_m);
+    const double pos[3] = {0, -0.5, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    sgt_set_camera(s, pos, at, up, 1.0, 16, 16);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.sampling = mode;
+    o.seed = 12;
+    SgtFixedPoint fp = {{0.3, h, -0.2}};
+    o.importance.importance_point = sgt_fixed_point_guide;
+    o.importance.ctx = &fp;
+    Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
+    double expected = t * le * 4.0 * corner_form_factor(a, a, h);
+    cr_log_info("lamp shade %s: %.5f +- %.5f, expected %.5f", sg_sampling_name(mode), st.mean[0], st.std_error,
+                expected);
+    cr_assert_eq(st.nonfinite, 0);
+    cr_assert(fabs(st.mean[0] - expected) < 4.0 * st.std_error + 1e-3 * expected,
+              "lamp shade %s: %.5f, expected %.5f +- %.5f", sg_sampling_name(mode), st.mean[0], expected,
+              4 * st.std_error);
+    sgt_scene_free(s);
+}
+
+Test(render_integrator, lamp_shade_transmits_bsdf) { lamp_shade_case(SG_SAMPLING_BSDF); }
+Test(render_integrator, lamp_shade_transmits_guided) { lamp_shade_case(SG_SAMPLING_GUIDED); }
+
 /* ---- materials: exact answers ------------------------------------------ */
 
 /* Turns the triangles of s whose three vertices have coordinate `axis`

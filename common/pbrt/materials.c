@@ -83,6 +83,38 @@ static bool dielectric(Parser *p, const Token *at, double ior, bool v3, SgMateri
     return true;
 }
 
+/* pbrt-v4's diffusetransmission: reflectance and transmittance (0.25 each
+ * unless told), both times "scale". A textured transmittance is its mean. */
+static bool diffuse_transmission(Parser *p, const Token *at, SgMaterial *m)
+{
+    static const float quarter[3] = {0.25f, 0.25f, 0.25f};
+    double scale;
+    if (!pbrt_param_color(p, "reflectance", quarter, m->diffuse, NULL) ||
+        !pbrt_param_color(p, "transmittance", quarter, m->transmittance, NULL) ||
+        !pbrt_param_scalar(p, "scale", 1, &scale))
+        return false;
+    if (pbrt_param_texture(p, "transmittance"))
+        pbrt_warn_at(p, at, "diffusetransmission: a textured transmittance is taken as its mean");
+    m->diffuse_texture = scale == 1 ? pbrt_param_texture(p, "reflectance") : 0;
+    if (scale != 1 && pbrt_param_texture(p, "reflectance"))
+        pbrt_warn_at(p, at, "diffusetransmission: a scaled reflectance texture is taken as its mean");
+    bool above_1 = false;
+    for (int a = 0; a < 3; a++) {
+        m->diffuse[a] = (float)(m->diffuse[a] * fmax(scale, 0));
+        m->transmittance[a] = (float)(m->transmittance[a] * fmax(scale, 0));
+        float sum = m->diffuse[a] + m->transmittance[a];
+        if (sum > 1) {
+            above_1 = true;
+            m->diffuse[a] /= sum;
+            m->transmittance[a] /= sum;
+        }
+    }
+    if (above_1)
+        pbrt_warn_at(p, at, "diffusetransmission: reflectance + transmittance above 1 scaled to 1");
+    m->type = SG_MATERIAL_DIFFUSE_TRANSMISSION;
+    return true;
+}
+
 static bool make_material(Parser *p, const Token *at, const Token *type, const char *label,
                           PbrtMaterial *out)
 {
@@ -94,7 +126,9 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
     const Param *displacement = pbrt_find_param(p, "displacement");
     if (displacement || pbrt_find_param(p, "normalmap"))
         pbrt_warn_at(p, at, "bump and normal maps (\"displacement\", \"normalmap\") are ignored");
-    if (pbrt_string_is(type, "diffuse") || pbrt_string_is(type, "diffusetransmission") ||
+    if (pbrt_string_is(type, "diffusetransmission"))
+        return diffuse_transmission(p, at, m);
+    if (pbrt_string_is(type, "diffuse") ||
         pbrt_string_is(type, "subsurface") || pbrt_string_is(type, "measured") ||
         pbrt_string_is(type, "hair") || pbrt_string_is(type, "kdsubsurface") ||
         pbrt_string_is(type, "fourier") || pbrt_string_is(type, "disney")) {
