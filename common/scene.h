@@ -80,6 +80,16 @@ typedef struct SgMaterial {
      * `diffuse` then holds the texture's mean. */
     uint32_t diffuse_texture;
     float transmittance[3]; /* diffuse transmission: what passes to the other side */
+    /* A cut-out (pbrt-v4's shape "alpha", Mitsuba's mask): rays pass
+     * through where alpha_texture's value is below 0.5, or, for a constant
+     * alpha, with probability 1 - alpha (pbrt-v4's stochastic alpha). Not a
+     * blend: a ray either meets the surface or does not. */
+    bool cutout;
+    float alpha;
+    uint32_t alpha_texture; /* 1 + index in scene->textures; 0: the constant alpha */
+    /* dielectric: the absorption coefficient of what it encloses, per unit
+     * of world length (Beer-Lambert along the path inside); 0: clear */
+    float sigma_a[3];
 } SgMaterial;
 
 /* pbrt-v4's conductor given a reflectance r instead of eta and k: eta 1 and

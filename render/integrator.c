@@ -31,6 +31,7 @@ typedef struct BounceVertex {
     GuideVertex g;     /* the guide's distribution there */
     Vec3 origin, p;
     GuideSegment *seg; /* recording: the vertex's record */
+    int thread;
 } BounceVertex;
 
 /* A learning vertex waiting for the rest of its branch. */
@@ -110,6 +111,62 @@ static Vec3 textured_albedo(const Integrator *it, const Material *m, const Hit *
 static inline Vec3 surface_albedo(const Integrator *it, const Material *m, const Hit *h, int thread)
 {
     return m->texture ? textured_albedo(it, m, h, thread) : m->kd;
+}
+
+/* ---- cut-outs ------------------------------------------------------------------ */
+
+/* How many cut-out surfaces one ray may pass before the next counts as solid. */
+#define MAX_CUTOUT_LAYERS 64
+
+/* A number in [0, 1) of the ray and the hit's distance alone (pbrt-v4
+ * hashes the ray too): the same ray meets a surface of constant alpha, or
+ * passes it, every time; layers along one ray decide apart. */
+static float ray_hash(Vec3 o, Vec3 d, float t)
+{
+    const float f[7] = {o.x, o.y, o.z, d.x, d.y, d.z, t};
+    uint64_t h = 0x9e3779b97f4a7c15ULL;
+    for (int i = 0; i < 7; i++) {
+        uint32_t bits;
+        memcpy(&bits, &f[i], sizeof bits);
+        h = (h ^ bits) * 0xbf58476d1ce4e5b9ULL;
+        h ^= h >> 31;
+    }
+    h *= 0x94d049bb133111ebULL;
+    h ^= h >> 29;
+    return (float)(h >> 40) * 0x1p-24f;
+}
+
+/* Whether the ray from o along d passes through its hit h: a cut-out's
+ * alpha texture below 0.5 there, or its constant alpha by the ray's hash. */
+static bool passes_through(const Integrator *it, const Hit *h, Vec3 o, Vec3 d, int thread)
+{
+    const Material *m = &it->materials[it->geo->tris[h->tri].material];
+    if (!m->cutout)
+        return false;
+    if (m->alpha_texture)
+        return texture_set_eval_at(it->textures, m->alpha_texture, h->tri, h->b1, h->b2, thread).x < 0.5f;
+    return ray_hash(o, d, h->t) >= m->alpha;
+}
+
+/* The first hit along the ray that it does not pass through (scenes
+ * without cut-outs: intersect itself). Past a cut-out the ray goes on
+ * along the same line, just beyond the hit: an origin moved off the
+ * surface would shift the line and so where a shadow ray's reach ends. */
+static Hit intersect_solid(const Integrator *it, Vec3 o, Vec3 d, float tfar, int thread)
+{
+    Hit h = intersect(it->geo, o, d, tfar);
+    if (!it->geo->has_cutouts)
+        return h;
+    for (int i = 0; h.found && i < MAX_CUTOUT_LAYERS && passes_through(it, &h, o, d, thread); i++) {
+        float tnear = h.t * (1.0f + 0x1p-16f) + it->geo->scale * 0x1p-24f;
+        h = intersect_between(it->geo, o, d, tnear, tfar);
+    }
+    return h;
+}
+
+static bool occluded_solid(const Integrator *it, Vec3 o, Vec3 d, float tfar, int thread)
+{
+    return it->geo->has_cutouts ? intersect_solid(it, o, d, tfar, thread).found : occluded(it->geo, o, d, tfar);
 }
 
 /* Emission toward the path (one-sided, toward the winding normal), MIS
@@ -216,7 +273,7 @@ static LightSample sample_light_source(const Integrator *it, const BounceVertex 
         shadow = v3_scale(to, 1.0f / reach);
         reach *= 1.0f - 1e-4f;
     }
-    if (occluded(it->geo, v->origin, shadow, reach))
+    if (occluded_solid(it, v->origin, shadow, reach, v->thread))
         return ls;
     ls.lit = true;
     if (cos_x > 0.0f && lp.pdf > 0.0f) {
@@ -254,7 +311,7 @@ static LightSample sample_light(const Integrator *it, const BounceVertex *v, boo
     if (!(dist > 0.0f && cos_l > 0.0f && (cos_x > 0.0f || lit_below_horizon)))
         return ls;
     st->rays++;
-    if (occluded(geo, v->origin, wi, dist * (1.0f - 1e-4f)))
+    if (occluded_solid(it, v->origin, wi, dist * (1.0f - 1e-4f), v->thread))
         return ls;
     ls.lit = true;
     if (cos_x > 0.0f) {
@@ -368,6 +425,7 @@ static bool scatter(Path *p, const Hit *h, const Material *m, Vec3 wo, Vec3 n, b
     v.m = m;
     v.p = h->p;
     v.seg = seg;
+    v.thread = pc->thread;
     memset(v.g.state, 0, sizeof v.g.state);
     Vec3 albedo = surface_albedo(it, m, h, pc->thread);
     if (m->type == SG_MATERIAL_DIFFUSE_TRANSMISSION) { /* one side per vertex (bsdf.h) */
@@ -429,7 +487,7 @@ static bool path_vertex(Path *p)
 {
     const Integrator *it = p->it;
     const PathCtx *pc = p->pc;
-    Hit h = intersect(it->geo, p->ps.o, p->ps.d, INFINITY);
+    Hit h = intersect_solid(it, p->ps.o, p->ps.d, INFINITY, pc->thread);
     pc->st->rays++;
     if (p->last_bounce) { /* where the learning vertex's bounce led */
         if (h.found)

@@ -78,4 +78,7 @@ void material_init(Material *m, const SgMaterial *src)
     m->delta = m->delta || m->type == SG_MATERIAL_MIRROR;
     m->microfacet = !m->delta && (m->type == SG_MATERIAL_CONDUCTOR || m->type == SG_MATERIAL_COATED_DIFFUSE);
     m->texture = src->diffuse_texture;
+    m->cutout = src->cutout && (src->alpha_texture || src->alpha < 1.0f);
+    m->alpha = fminf(fmaxf(src->alpha, 0.0f), 1.0f);
+    m->alpha_texture = src->cutout ? src->alpha_texture : 0;
 }

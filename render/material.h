@@ -31,6 +31,9 @@ typedef struct Material {
     float ax, ay;         /* conductor, coated diffuse, dielectric: GGX alpha */
     float fdr;            /* coated diffuse: the coat's diffuse reflectance from inside */
     uint32_t texture;     /* 1 + index of the texture that varies kd (SgMaterial.diffuse_texture); 0: none */
+    bool cutout;          /* rays may pass through (SgMaterial.cutout): alpha, or alpha_texture's value */
+    float alpha;
+    uint32_t alpha_texture;
 } Material;
 
 void material_init(Material *m, const SgMaterial *src);

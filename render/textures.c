@@ -19,7 +19,7 @@ struct TextureSet {
 bool textures_needed(const SgScene *s)
 {
     for (uint32_t m = 0; m < s->material_count; m++)
-        if (s->materials[m].diffuse_texture)
+        if (s->materials[m].diffuse_texture || (s->materials[m].cutout && s->materials[m].alpha_texture))
             return true;
     return false;
 }

@@ -414,8 +414,12 @@ Test(mitsuba_bsdfs, wrappers_and_blends)
     cr_expect(fabsf(m.diffuse[0] - 0.7f) < 1e-6f, "0.75 0.8 + 0.25 0.4: %g", m.diffuse[0]);
     m = material_of("<bsdf type=\"mask\"><float name=\"opacity\" value=\"0.5\"/><bsdf type=\"dielectric\"/></bsdf>", &s);
     cr_expect_eq(m.type, SG_MATERIAL_DIELECTRIC);
-    cr_expect(has_warning(s, "mask"), "mask warns");
+    cr_expect(m.cutout && m.alpha == 0.5f && !m.alpha_texture, "mask: a cut-out of its opacity");
+    cr_expect(!has_warning(s, "mask"), "mask is read, no warning");
     sg_scene_free(s);
+    m = material_of("<bsdf type=\"mask\"><texture name=\"opacity\" type=\"checkerboard\"/>"
+                    "<bsdf type=\"diffuse\"/></bsdf>", NULL);
+    cr_expect(m.cutout && m.alpha_texture > 0, "a textured opacity cuts where below 0.5");
     m = material_of("<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"thindielectric\"/></bsdf>",
                     &s);
     cr_expect_eq(m.type, SG_MATERIAL_DIELECTRIC);

@@ -360,6 +360,28 @@ Test(pbrt_materials, diffuse_transmission_reflects_and_transmits)
     sg_scene_free(s);
 }
 
+Test(pbrt_shapes, alpha_makes_a_cutout_copy_of_the_material)
+{
+    SgScene *s = load_ok(HEADER "Texture \"leaf\" \"float\" \"checkerboard\" \"float uscale\" 8\n"
+                                "Material \"diffuse\"\n"
+                                "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]"
+                                " \"float alpha\" 0\n"
+                                "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]"
+                                " \"texture alpha\" \"leaf\"\n" TRIANGLE);
+    cr_assert_eq(s->triangle_count, 3);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect(m->cutout);
+    cr_expect_float_eq(m->alpha, 0.0f, 1e-9);
+    cr_expect_eq(m->alpha_texture, 0);
+    m = material_of(s, 1);
+    cr_expect(m->cutout);
+    cr_expect(m->alpha_texture > 0 && m->alpha_texture <= s->texture_count, "the leaf texture");
+    cr_expect(!material_of(s, 2)->cutout, "a shape without alpha stays opaque");
+    cr_expect_eq(material_of(s, 2)->type, material_of(s, 0)->type);
+    cr_expect_eq(s->warning_count, 0);
+    sg_scene_free(s);
+}
+
 Test(pbrt_materials, textures_as_their_average)
 {
     SgScene *s = load_ok(

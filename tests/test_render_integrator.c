@@ -330,6 +330,76 @@ static void lamp_shade_case(SgSampling mode)
 Test(render_integrator, lamp_shade_transmits_bsdf) { lamp_shade_case(SG_SAMPLING_BSDF); }
 Test(render_integrator, lamp_shade_transmits_guided) { lamp_shade_case(SG_SAMPLING_GUIDED); }
 
+/* ---- cut-outs ------------------------------------------------------------ */
+
+/* plane_case's floor and light with a black screen between them (y = 0.75)
+ * made a cut-out: alpha a constant, or (alpha < 0) a fine checkerboard of
+ * alpha 1 and 0. The camera, under the screen, looks at the floor's centre. */
+static Stats floor_under_cut_screen(SgSampling mode, float alpha)
+{
+    const double a = 2.0, h = 1.0;
+    const float rho = 0.6f, le = 2.0f;
+    SgScene *s = sgt_scene_new();
+    const float alb[3] = {rho, rho, rho}, black[3] = {0, 0, 0}, em[3] = {le, le, le};
+    uint32_t floor_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, alb, NULL);
+    uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
+    uint32_t screen_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, NULL);
+    SgMaterial *screen = sgt_material(s, screen_m);
+    screen->cutout = true;
+    screen->alpha = alpha < 0.0f ? 1.0f : alpha;
+    if (alpha < 0.0f) { /* squares of 0.05 over the 100-wide screen */
+        screen->alpha_texture = 1;
+        s->textures = calloc(1, sizeof *s->textures);
+        s->texture_count = 1;
+        s->textures[0] = (SgTexture){.kind = SG_TEXTURE_CHECKERBOARD, .uscale = 2000, .vscale = 2000, .scale = 1,
+                                     .input = {{0, {1, 1, 1}}, {0, {0, 0, 0}}}, .mean = {0.5f, 0.5f, 0.5f}};
+    }
+    const double floor[4][3] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
+    const double light[4][3] = {{-a, h, -a}, {a, h, -a}, {a, h, a}, {-a, h, a}};
+    const double cut[4][3] = {{-50, 0.75, -50}, {-50, 0.75, 50}, {50, 0.75, 50}, {50, 0.75, -50}};
+    sgt_add_quad(s, floor, floor_m);
+    sgt_add_quad(s, light, light_m);
+    sgt_add_quad(s, cut, screen_m);
+    const double pos[3] = {0, 0.5, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    sgt_set_camera(s, pos, at, up, 1.0, 16, 16);
+    s->uvs = malloc(2 * s->vertex_count * sizeof *s->uvs);
+    for (uint32_t v = 0; v < s->vertex_count; v++) { /* u, v in [0, 1] across each quad */
+        s->uvs[2 * v] = (float)((s->positions[3 * v] + 50) / 100);
+        s->uvs[2 * v + 1] = (float)((s->positions[3 * v + 2] + 50) / 100);
+    }
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.sampling = mode;
+    o.seed = 13;
+    SgtFixedPoint fp = {{0.3, h, -0.2}};
+    o.importance.importance_point = sgt_fixed_point_guide;
+    o.importance.ctx = &fp;
+    Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
+    sgt_scene_free(s);
+    return st;
+}
+
+static void cut_screen_case(SgSampling mode, float alpha, double passed)
+{
+    Stats st = floor_under_cut_screen(mode, alpha);
+    double expected = passed * 0.6 * 2.0 * 4.0 * corner_form_factor(2.0, 2.0, 1.0);
+    cr_log_info("screen alpha %g %s: %.5f +- %.5f, expected %.5f", alpha, sg_sampling_name(mode), st.mean[0],
+                st.std_error, expected);
+    cr_assert_eq(st.nonfinite, 0);
+    cr_assert(fabs(st.mean[0] - expected) <= 4.0 * st.std_error + 1e-2 * expected,
+              "screen alpha %g %s: %.5f, expected %.5f +- %.5f", alpha, sg_sampling_name(mode), st.mean[0],
+              expected, 4 * st.std_error);
+}
+
+/* alpha 0: no shadow at all; 0.5: half the rays pass; a checkerboard
+ * texture of open and closed squares: half the light. */
+Test(render_integrator, cutout_alpha_0_casts_no_shadow) { cut_screen_case(SG_SAMPLING_BSDF, 0.0f, 1.0); }
+Test(render_integrator, cutout_alpha_0_guided) { cut_screen_case(SG_SAMPLING_GUIDED, 0.0f, 1.0); }
+Test(render_integrator, cutout_constant_alpha_half) { cut_screen_case(SG_SAMPLING_BSDF, 0.5f, 0.5); }
+Test(render_integrator, cutout_half_cut_texture_passes_half) { cut_screen_case(SG_SAMPLING_BSDF, -1.0f, 0.5); }
+Test(render_integrator, cutout_opaque_alpha_1_is_a_shadow) { cut_screen_case(SG_SAMPLING_BSDF, 1.0f, 0.0); }
+
 /* ---- materials: exact answers ------------------------------------------ */
 
 /* Turns the triangles of s whose three vertices have coordinate `axis`

@@ -441,9 +441,18 @@ static bool make_material_of_type(MtsParser *p, const XmlNode *n, MtsMaterial *o
         mts_warn(p, n, "%s is ignored: its inner bsdf without it", type);
         return inner(p, n, 0, out, depth);
     }
-    if (!strcmp(type, "mask")) {
-        mts_warn(p, n, "mask (opacity) is ignored: its inner bsdf, opaque");
-        return inner(p, n, 0, out, depth);
+    if (!strcmp(type, "mask")) { /* a cut-out: see SgMaterial.cutout */
+        float opacity[3];
+        uint32_t texture;
+        static const float half_opaque[3] = {0.5f, 0.5f, 0.5f};
+        if (!mts_color(p, n, "opacity", half_opaque, opacity, &texture, NULL) || !inner(p, n, 0, out, depth))
+            return false;
+        if (texture || opacity[0] < 1.0f) {
+            m->cutout = true;
+            m->alpha = texture ? 1.0f : fmaxf(opacity[0], 0.0f);
+            m->alpha_texture = texture;
+        }
+        return true;
     }
     if (!strcmp(type, "blendbsdf"))
         return blend(p, n, out, depth);

@@ -286,6 +286,7 @@ static void parser_release(Parser *p)
         free(p->materials[i].name);
     free(p->materials);
     free(p->emissive);
+    free(p->variants);
     for (size_t i = 0; i < p->texture_count; i++)
         free(p->textures[i].name);
     free(p->textures);

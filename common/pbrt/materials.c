@@ -385,7 +385,7 @@ bool pbrt_named_material_statement(Parser *p, const Token *statement)
 }
 
 /* The scene material of the current state (emissive copies cached). */
-bool pbrt_current_scene_material(Parser *p, bool emissive, uint32_t *id)
+static bool plain_scene_material(Parser *p, bool emissive, uint32_t *id)
 {
     PbrtMaterial *m = &p->materials[p->state.material];
     if (!emissive) {
@@ -412,6 +412,33 @@ bool pbrt_current_scene_material(Parser *p, bool emissive, uint32_t *id)
     e->material = p->state.material;
     memcpy(e->radiance, L, sizeof e->radiance);
     e->scene_id = *id;
+    return true;
+}
+
+/* The scene material of the current state with the current shape's
+ * attributes (copies cached by what they were made from). */
+bool pbrt_current_scene_material(Parser *p, bool emissive, uint32_t *id)
+{
+    if (!plain_scene_material(p, emissive, id))
+        return false;
+    static const ShapeAttributes none;
+    if (!memcmp(&p->shape, &none, sizeof none))
+        return true;
+    for (size_t i = 0; i < p->variant_count; i++)
+        if (p->variants[i].base == *id && !memcmp(&p->variants[i].attr, &p->shape, sizeof p->shape)) {
+            *id = p->variants[i].scene_id;
+            return true;
+        }
+    SgMaterial copy = p->core.scene->materials[*id];
+    copy.cutout = p->shape.cutout;
+    copy.alpha = p->shape.alpha;
+    copy.alpha_texture = p->shape.alpha_texture;
+    memcpy(copy.sigma_a, p->shape.sigma_a, sizeof copy.sigma_a);
+    uint32_t base = *id;
+    if (!RESERVE(p, p->variants, p->variant_count, p->variant_capacity, 1) ||
+        !sg_builder_add_material(&p->core, &copy, id, p->err))
+        return false;
+    p->variants[p->variant_count++] = (MaterialVariant){base, p->shape, *id};
     return true;
 }
 

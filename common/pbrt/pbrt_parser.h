@@ -90,6 +90,22 @@ typedef struct EmissiveMaterial {
     uint32_t scene_id;
 } EmissiveMaterial;
 
+/* What a shape adds to its material: an alpha cut-out (its "alpha") and
+ * the absorption of the medium inside it (MediumInterface). Zeroed: none. */
+typedef struct ShapeAttributes {
+    bool cutout;
+    float alpha;
+    uint32_t alpha_texture;
+    float sigma_a[3];
+} ShapeAttributes;
+
+/* A scene material made from another for a shape's attributes. */
+typedef struct MaterialVariant {
+    uint32_t base; /* scene material */
+    ShapeAttributes attr;
+    uint32_t scene_id;
+} MaterialVariant;
+
 typedef struct Texture {
     char *name;
     float value[3]; /* average colour (float textures: all three equal) */
@@ -155,6 +171,9 @@ typedef struct Parser {
     size_t material_count, material_capacity;
     EmissiveMaterial *emissive;
     size_t emissive_count, emissive_capacity;
+    ShapeAttributes shape; /* of the Shape statement being read */
+    MaterialVariant *variants;
+    size_t variant_count, variant_capacity;
     Texture *textures;
     size_t texture_count, texture_capacity;
     NamedTransform *coordinate_systems;
