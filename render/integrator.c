@@ -23,6 +23,11 @@ typedef struct PathState {
     float prev_portal_share; /* the vertex before's (GuideVertex.portal_share) */
     Vec3 prev_p;
     Vec3 guide_estimate; /* the guide's slot for its roulette (PathGuideOps.survival) */
+    /* the absorbing dielectric the path is inside (Material.sigma_a), or 0:
+     * set where a path enters one through its front, cleared where it
+     * leaves through the back */
+    Vec3 sigma_a;
+    bool absorbing;
 } PathState;
 
 /* A diffuse or glossy vertex, as far as drawing its bounce needs. */
@@ -222,6 +227,10 @@ static bool specular_bounce(Path *p, const Material *m, const Hit *h, Vec3 wo, V
     }
     ps->d = b.wi;
     ps->o = offset_origin(it->geo, h->p, b.transmitted ? v3_scale(n, -1.0f) : n);
+    if (b.transmitted && m->type == SG_MATERIAL_DIELECTRIC) { /* into or out of what it encloses */
+        ps->absorbing = entering && m->absorbs;
+        ps->sigma_a = ps->absorbing ? m->sigma_a : v3(0, 0, 0);
+    }
     ps->beta = v3_mul(ps->beta, b.weight);
     ps->rr_beta = v3_mul(ps->rr_beta, b.rr_weight);
     ps->specular_bounce = true;
@@ -494,6 +503,12 @@ static bool path_vertex(Path *p)
             p->last_bounce->distance = h.t;
         p->last_bounce = NULL;
     }
+    if (p->ps.absorbing && h.found) { /* Beer-Lambert along the segment inside */
+        Vec3 tau = v3_scale(p->ps.sigma_a, -h.t);
+        Vec3 tr = v3(expf(tau.x), expf(tau.y), expf(tau.z));
+        p->ps.beta = v3_mul(p->ps.beta, tr);
+        p->ps.rr_beta = v3_mul(p->ps.rr_beta, tr);
+    }
     if (!h.found) {
         if (it->lights->has_escaping)
             add_escaped(p);
@@ -565,7 +580,7 @@ Vec3 integrator_trace(const Integrator *it, Vec3 o, Vec3 d, const PathCtx *pc, V
     p.it = it;
     p.pc = pc;
     p.ps = (PathState){o, d, v3(1, 1, 1), v3(1, 1, 1), true /* the camera ray counts as one */, 0.0f, -1.0f, o,
-                       v3(0, 0, 0)};
+                       v3(0, 0, 0), v3(0, 0, 0), false};
     p.radiance = v3(0, 0, 0);
     p.seen = seen;
     p.depth = 0;

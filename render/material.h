@@ -32,6 +32,8 @@ typedef struct Material {
     float fdr;            /* coated diffuse: the coat's diffuse reflectance from inside */
     uint32_t texture;     /* 1 + index of the texture that varies kd (SgMaterial.diffuse_texture); 0: none */
     bool cutout;          /* rays may pass through (SgMaterial.cutout): alpha, or alpha_texture's value */
+    bool absorbs;         /* dielectric: sigma_a > 0, what it encloses absorbs */
+    Vec3 sigma_a;
     float alpha;
     uint32_t alpha_texture;
 } Material;

@@ -379,6 +379,34 @@ static SgMaterial material_of(const char *bsdf, SgScene **keep)
     return m;
 }
 
+Test(mitsuba_media, absorbing_interior_of_a_dielectric)
+{
+    /* Mitsuba 3: sigma_t and albedo 0; nested, and by reference */
+    SgScene *s = load_body("3.0.0", "<medium type=\"homogeneous\" id=\"ink\"><rgb name=\"sigma_t\" value=\"0.5 1 2\"/>"
+                                    "<float name=\"albedo\" value=\"0\"/><float name=\"scale\" value=\"2\"/></medium>"
+                                    "<shape type=\"cube\"><bsdf type=\"dielectric\"/><ref name=\"interior\" id=\"ink\"/></shape>"
+                                    "<shape type=\"sphere\"><bsdf type=\"diffuse\"/>"
+                                    "<medium type=\"homogeneous\" name=\"interior\"><float name=\"albedo\" value=\"0\"/>"
+                                    "</medium></shape>" LIGHT);
+    const SgMaterial *m = &s->materials[s->triangle_material[0]];
+    cr_expect_eq(m->type, SG_MATERIAL_DIELECTRIC);
+    cr_expect(m->sigma_a[0] == 1.0f && m->sigma_a[2] == 4.0f, "sigma_t (1 - albedo) scale: %g %g", m->sigma_a[0],
+              m->sigma_a[2]);
+    cr_expect(has_warning(s, "not a dielectric"));
+    cr_expect(!has_warning(s, "scattering"));
+    sg_scene_free(s);
+    /* Mitsuba 0.6: sigmaA and sigmaS; a scattering one keeps its warning */
+    s = load_body("0.6.0", "<shape type=\"cube\"><bsdf type=\"dielectric\"/>"
+                           "<medium type=\"homogeneous\" name=\"interior\"><rgb name=\"sigmaA\" value=\"0.3\"/>"
+                           "<rgb name=\"sigmaS\" value=\"0\"/></medium></shape>"
+                           "<shape type=\"sphere\"><bsdf type=\"dielectric\"/>"
+                           "<medium type=\"homogeneous\" name=\"interior\"/></shape>" LIGHT);
+    cr_expect_float_eq(s->materials[s->triangle_material[0]].sigma_a[1], 0.3f, 1e-6);
+    cr_expect_eq(s->materials[s->triangle_material[s->triangle_count - 1]].sigma_a[1], 0.0f);
+    cr_expect(has_warning(s, "scattering media"));
+    sg_scene_free(s);
+}
+
 Test(mitsuba_bsdfs, conductors)
 {
     SgMaterial m = material_of("<bsdf type=\"conductor\"><string name=\"material\" value=\"none\"/></bsdf>", NULL);
@@ -523,7 +551,7 @@ Test(mitsuba_warnings, one_per_kind_with_file_and_line)
     char want[4300];
     snprintf(want, sizeof want, "%s:3: shape \"hair\" is not supported: left out (2 times)", path);
     cr_expect(has_warning(s, want), "got: %s", s->warning_count ? s->warnings[0] : "none");
-    cr_expect(has_warning(s, "media are not supported"));
+    cr_expect(has_warning(s, "scattering media"), "a scattering medium still warns");
     sg_scene_free(s);
 }
 

@@ -382,6 +382,29 @@ Test(pbrt_shapes, alpha_makes_a_cutout_copy_of_the_material)
     sg_scene_free(s);
 }
 
+Test(pbrt_materials, absorbing_medium_inside_a_dielectric)
+{
+    SgScene *s = load_ok(HEADER "MakeNamedMedium \"tint\" \"string type\" \"homogeneous\"\n"
+                                "    \"rgb sigma_a\" [ 0.1 0.2 0.4 ] \"rgb sigma_s\" [ 0 0 0 ] \"float scale\" 2\n"
+                                "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
+                                "AttributeBegin\nMediumInterface \"tint\" \"\"\n"
+                                "Material \"dielectric\"\n" TRIANGLE
+                                "Material \"diffuse\"\n" TRIANGLE "AttributeEnd\n"
+                                "Material \"dielectric\"\n" TRIANGLE
+                                "MediumInterface \"fog\"\n" TRIANGLE);
+    cr_assert_eq(s->triangle_count, 4);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect_eq(m->type, SG_MATERIAL_DIELECTRIC);
+    cr_expect(m->sigma_a[0] == 0.2f && m->sigma_a[2] == 0.8f, "sigma_a times scale: %g %g", m->sigma_a[0],
+              m->sigma_a[2]);
+    cr_expect_eq(material_of(s, 1)->sigma_a[0], 0.0f, "only a dielectric holds a medium");
+    cr_expect_eq(material_of(s, 2)->sigma_a[1], 0.0f, "AttributeEnd restores the clear inside");
+    cr_expect_eq(material_of(s, 3)->sigma_a[1], 0.0f, "a scattering medium is left out");
+    cr_expect(has_warning(s, "scattering media"));
+    cr_expect_eq(s->warning_count, 1);
+    sg_scene_free(s);
+}
+
 Test(pbrt_materials, textures_as_their_average)
 {
     SgScene *s = load_ok(

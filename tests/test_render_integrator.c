@@ -751,6 +751,46 @@ Test(render_integrator, emitter_in_a_glass_slab)
     sgt_scene_free(s);
 }
 
+/* A glass slab of thickness d whose inside absorbs sigma_a per channel,
+ * over an emitter (radiance Le) facing up, seen straight down: each pass
+ * through the slab keeps exp(-sigma_a d), each face lets 1 - R through and
+ * returns R, so L = Le (1 - R)^2 T / (1 - R^2 T^2), T = exp(-sigma_a d)
+ * (radiance's compression entering the glass undone leaving it). */
+Test(render_integrator, absorbing_glass_slab_tints_by_beer_lambert)
+{
+    const double n = 1.5, le = 2.0, d = 1.0, sigma[3] = {0.1, 0.5, 1.0};
+    SgScene *s = sgt_scene_new();
+    const float black[3] = {0, 0, 0}, glow[3] = {(float)le, (float)le, (float)le};
+    uint32_t glass = sgt_add_material(s, SG_MATERIAL_DIELECTRIC, NULL, NULL);
+    sgt_material(s, glass)->ior = (float)n;
+    for (int c = 0; c < 3; c++)
+        sgt_material(s, glass)->sigma_a[c] = (float)sigma[c];
+    uint32_t emitter = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, glow);
+    const double lo[3] = {-5, -d, -5}, hi[3] = {5, 0, 5};
+    sgt_add_box_inside(s, lo, hi, glass);
+    flip_from(s, 0);
+    const double e[4][3] = {{-50, -2, -50}, {-50, -2, 50}, {50, -2, 50}, {50, -2, -50}}; /* faces up */
+    sgt_add_quad(s, e, emitter);
+    const double pos[3] = {0, 1, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    sgt_set_camera(s, pos, at, up, 0.5, 16, 16);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.seed = 5;
+    o.max_depth = 64;
+    Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
+    double r = fresnel(n, 0.0);
+    cr_assert_eq(st.nonfinite, 0);
+    for (int c = 0; c < 3; c++) {
+        double t = exp(-sigma[c] * d), expected = le * (1 - r) * (1 - r) * t / (1 - r * r * t * t);
+        double tol = 4.0 * st.std_error * fmax(1.0, expected / fmax(st.mean[0], 1e-9)) + 2e-3 * expected;
+        cr_log_info("absorbing slab, channel %d: %.5f, expected %.5f +- %.5f", c, st.mean[c], expected, tol);
+        cr_assert(fabs(st.mean[c] - expected) < tol, "channel %d: %.5f, expected %.5f +- %.5f", c, st.mean[c],
+                  expected, tol);
+    }
+    sgt_scene_free(s);
+}
+
 /* A two-room scene: the light is in room A, the camera looks at a wall of
  * room B that only indirect light reaches, through a door. */
 static SgScene *two_rooms_with(bool dressed);

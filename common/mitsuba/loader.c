@@ -456,8 +456,12 @@ static bool scene_children(MtsParser *p, XmlNode *scene)
             else
                 ok = !as || (MTS_RESERVE(p, p->ids, p->id_count, p->id_capacity, 1) &&
                              (p->ids[p->id_count++] = (MtsId){as, target}, true));
-        } else if (mts_is_tag(n, "medium") || mts_is_tag(n, "phase")) {
-            mts_warn(p, n, "participating media are not supported: left out");
+        } else if (mts_is_tag(n, "medium")) { /* read where a shape holds it; what cannot be, said now */
+            float sigma_a[3];
+            bool absorbing;
+            ok = mts_medium_absorption(p, n, sigma_a, &absorbing);
+        } else if (mts_is_tag(n, "phase")) {
+            mts_warn(p, n, "phase functions are not supported: left out");
             ok = true;
         } else {
             mts_warn(p, n, "<%s> at the top of a scene is not supported: left out", n->tag);

@@ -554,3 +554,83 @@ bool mts_scene_material(MtsParser *p, size_t index, const float *radiance, uint3
     e->scene_id = *id;
     return true;
 }
+
+/* ---- media ------------------------------------------------------------------ */
+
+/* Mitsuba's homogeneous medium: sigma_t and albedo (Mitsuba 3's defaults 1
+ * and 0.75) or, as 0.6 also takes, sigma_a and sigma_s (1 each), all times
+ * scale (0.6: densityMultiplier). Absorbing only where what it scatters is 0. */
+bool mts_medium_absorption(MtsParser *p, const XmlNode *medium, float sigma_a[3], bool *absorbing)
+{
+    *absorbing = false;
+    memset(sigma_a, 0, 3 * sizeof(float));
+    const char *type = mts_attr(p, medium, "type");
+    if (!type)
+        return p->err->failed ? false : mts_fail(p, medium, "<medium> without a type");
+    if (strcmp(type, "homogeneous")) {
+        mts_warn(p, medium, "media of type \"%s\" are not supported: left out", type);
+        return true;
+    }
+    static const float one[3] = {1, 1, 1}, three_quarters[3] = {0.75f, 0.75f, 0.75f};
+    float a[3], s[3], sigma_t[3], albedo[3];
+    bool has_a, has_s, has_material;
+    double scale, density;
+    const XmlNode *preset;
+    if (!mts_color(p, medium, "sigma_a", one, a, NULL, &has_a) || !mts_color(p, medium, "sigma_s", one, s, NULL, &has_s) ||
+        !mts_color(p, medium, "sigma_t", one, sigma_t, NULL, NULL) ||
+        !mts_color(p, medium, "albedo", three_quarters, albedo, NULL, NULL) ||
+        !mts_float(p, medium, "scale", 1, &scale) || !mts_float(p, medium, "density_multiplier", 1, &density) ||
+        !mts_find(p, medium, "material", &preset))
+        return false;
+    has_material = preset != NULL;
+    if (has_material) {
+        mts_warn(p, medium, "media of a named \"material\" (measured scattering media) are not supported: left out");
+        return true;
+    }
+    bool scatters = false;
+    for (int c = 0; c < 3; c++) {
+        double k = scale * density;
+        double absorb = has_a || has_s ? a[c] : sigma_t[c] * (1 - albedo[c]);
+        double scatter = has_a || has_s ? s[c] : sigma_t[c] * albedo[c];
+        sigma_a[c] = (float)fmax(absorb * k, 0);
+        scatters = scatters || scatter * k > 0;
+    }
+    if (scatters) {
+        memset(sigma_a, 0, 3 * sizeof(float));
+        mts_warn(p, medium, "scattering media (albedo above 0) are not supported: left out");
+        return true;
+    }
+    *absorbing = true;
+    return true;
+}
+
+bool mts_interior_material(MtsParser *p, const XmlNode *shape, uint32_t *id)
+{
+    const XmlNode *interior, *exterior;
+    if (!mts_find(p, shape, "interior", &interior) || !mts_find(p, shape, "exterior", &exterior))
+        return false;
+    if (exterior)
+        mts_warn(p, exterior, "exterior media are ignored (the outside of shapes is clear)");
+    if (!interior)
+        return true;
+    float sigma_a[3];
+    bool absorbing;
+    if (!mts_medium_absorption(p, interior, sigma_a, &absorbing))
+        return false;
+    SgScene *scene = p->core.scene;
+    if (!absorbing || (sigma_a[0] <= 0 && sigma_a[1] <= 0 && sigma_a[2] <= 0))
+        return true;
+    if (scene->materials[*id].type != SG_MATERIAL_DIELECTRIC) {
+        mts_warn(p, interior, "a medium inside a shape that is not a dielectric is ignored");
+        return true;
+    }
+    SgMaterial copy;
+    memcpy(&copy, &scene->materials[*id], sizeof copy);
+    memcpy(copy.sigma_a, sigma_a, sizeof copy.sigma_a);
+    for (uint32_t i = 0; i < scene->material_count; i++) /* shapes sharing a bsdf and a medium share a copy */
+        if (!memcmp(&scene->materials[i], &copy, sizeof copy)) {
+            *id = i;
+            return true;
+        }
+    return sg_builder_add_material(&p->core, &copy, id, p->err);
+}

@@ -171,20 +171,10 @@ static bool statement(Parser *p, const Token *t)
         return pbrt_area_light_statement(p, t);
     if (pbrt_token_is(t, "LightSource"))
         return pbrt_light_source_statement(p, t);
-    if (pbrt_token_is(t, "MakeNamedMedium")) {
-        if (!skip_named_statement(p, t))
-            return false;
-        pbrt_warn_at(p, t, "participating media are not supported: left out");
-        return true;
-    }
-    if (pbrt_token_is(t, "MediumInterface")) {
-        Token inside, outside;
-        if (!pbrt_need_string(p, t, &inside))
-            return false;
-        if (pbrt_next_token(p, &outside) && !outside.quoted)
-            pbrt_unget_token(p, &outside);
-        return !p->err->failed;
-    }
+    if (pbrt_token_is(t, "MakeNamedMedium"))
+        return pbrt_make_named_medium_statement(p, t);
+    if (pbrt_token_is(t, "MediumInterface"))
+        return pbrt_medium_interface_statement(p, t);
     if (pbrt_token_is(t, "Attribute")) {
         if (!skip_named_statement(p, t))
             return false;
@@ -287,6 +277,9 @@ static void parser_release(Parser *p)
     free(p->materials);
     free(p->emissive);
     free(p->variants);
+    for (size_t i = 0; i < p->medium_count; i++)
+        free(p->media[i].name);
+    free(p->media);
     for (size_t i = 0; i < p->texture_count; i++)
         free(p->textures[i].name);
     free(p->textures);

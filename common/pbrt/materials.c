@@ -422,23 +422,30 @@ bool pbrt_current_scene_material(Parser *p, bool emissive, uint32_t *id)
     if (!plain_scene_material(p, emissive, id))
         return false;
     static const ShapeAttributes none;
-    if (!memcmp(&p->shape, &none, sizeof none))
+    ShapeAttributes attr;
+    memcpy(&attr, &p->shape, sizeof attr); /* padding too: compared by memcmp */
+    if (p->core.scene->materials[*id].type != SG_MATERIAL_DIELECTRIC) /* only glass holds a medium here */
+        memset(attr.sigma_a, 0, sizeof attr.sigma_a);
+    if (!memcmp(&attr, &none, sizeof none))
         return true;
     for (size_t i = 0; i < p->variant_count; i++)
-        if (p->variants[i].base == *id && !memcmp(&p->variants[i].attr, &p->shape, sizeof p->shape)) {
+        if (p->variants[i].base == *id && !memcmp(&p->variants[i].attr, &attr, sizeof attr)) {
             *id = p->variants[i].scene_id;
             return true;
         }
     SgMaterial copy = p->core.scene->materials[*id];
-    copy.cutout = p->shape.cutout;
-    copy.alpha = p->shape.alpha;
-    copy.alpha_texture = p->shape.alpha_texture;
-    memcpy(copy.sigma_a, p->shape.sigma_a, sizeof copy.sigma_a);
+    copy.cutout = attr.cutout;
+    copy.alpha = attr.alpha;
+    copy.alpha_texture = attr.alpha_texture;
+    memcpy(copy.sigma_a, attr.sigma_a, sizeof copy.sigma_a);
     uint32_t base = *id;
     if (!RESERVE(p, p->variants, p->variant_count, p->variant_capacity, 1) ||
         !sg_builder_add_material(&p->core, &copy, id, p->err))
         return false;
-    p->variants[p->variant_count++] = (MaterialVariant){base, p->shape, *id};
+    MaterialVariant *v = &p->variants[p->variant_count++];
+    v->base = base;
+    memcpy(&v->attr, &attr, sizeof attr);
+    v->scene_id = *id;
     return true;
 }
 

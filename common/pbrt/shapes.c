@@ -37,8 +37,8 @@ static bool emit_mesh(Parser *p, const Token *at, const char *what, const double
                       const double *normals, const float *uvs)
 {
     if (p->materials[p->state.material].invisible) {
-        pbrt_warn_at(p, at, "shapes with the \"interface\" material are left out (media are not "
-                       "supported)");
+        pbrt_warn_at(p, at, "shapes with the \"interface\" material are left out (a medium is "
+                       "taken only inside a dielectric)");
         return true;
     }
     SgTransform xf;
@@ -266,7 +266,8 @@ static bool quadric(Parser *p, const Token *statement, const Token *type)
 }
 
 /* What the shape adds to its material (ShapeAttributes): pbrt-v4's
- * "alpha", a constant or a float texture (a cut-out where below 0.5). */
+ * "alpha", a constant or a float texture (a cut-out where below 0.5), and
+ * the absorption of its MediumInterface's inside (dielectrics only). */
 static bool shape_attributes(Parser *p)
 {
     memset(&p->shape, 0, sizeof p->shape);
@@ -279,6 +280,7 @@ static bool shape_attributes(Parser *p)
         p->shape.alpha = texture ? 1.0f : (float)fmax(alpha, 0);
         p->shape.alpha_texture = texture;
     }
+    memcpy(p->shape.sigma_a, p->state.inside_sigma_a, sizeof p->shape.sigma_a);
     return true;
 }
 
