@@ -90,6 +90,12 @@ typedef struct SgMaterial {
     /* dielectric: the absorption coefficient of what it encloses, per unit
      * of world length (Beer-Lambert along the path inside); 0: clear */
     float sigma_a[3];
+    /* Shading normals, 1 + index in scene->textures (0: none): a tangent-
+     * space normal map (rgb = (n + 1) / 2, along the mesh's u, v and normal),
+     * or a bump map, a displacement along the normal of bump_scale times
+     * its value (pbrt's "displacement"; the first channel). */
+    uint32_t normal_texture, bump_texture;
+    float bump_scale;
 } SgMaterial;
 
 /* pbrt-v4's conductor given a reflectance r instead of eta and k: eta 1 and

@@ -37,6 +37,11 @@ typedef struct BounceVertex {
     Vec3 origin, p;
     GuideSegment *seg; /* recording: the vertex's record */
     int thread;
+    /* a normal or bump map bent the shading normal (the BSDF's lobe.n)
+     * away from ng, the geometric normal on wo's side: what is below ng
+     * gets nothing, so no light comes through the surface */
+    bool shaded;
+    Vec3 ng;
 } BounceVertex;
 
 /* A learning vertex waiting for the rest of its branch. */
@@ -239,6 +244,74 @@ static bool specular_bounce(Path *p, const Material *m, const Hit *h, Vec3 wo, V
     return true;
 }
 
+/* ---- shading normals ------------------------------------------------------------ */
+
+/* A shading-normal vertex's direction under its geometric surface. */
+static inline bool below_geometry(const BounceVertex *v, Vec3 wi) { return v->shaded && !(v3_dot(wi, v->ng) > 0.0f); }
+
+/* The triangle's tangent dp/du and bitangent dp/dv from its texture
+ * coordinates, and the coordinates at the hit; without usable ones, a
+ * frame around the normal ng and (0, 0). */
+static void surface_frame(const Integrator *it, const Hit *h, Vec3 ng, Vec3 *dpdu, Vec3 *dpdv, float *u, float *v)
+{
+    float uv[3][2];
+    *u = *v = 0.0f;
+    if (texture_set_triangle_uvs(it->textures, h->tri, uv)) {
+        const uint32_t *id = it->geo->indices + 3 * (size_t)h->tri;
+        Vec3 p0 = it->geo->vertices[id[0]], p1 = it->geo->vertices[id[1]], p2 = it->geo->vertices[id[2]];
+        float b0 = 1.0f - h->b1 - h->b2;
+        *u = b0 * uv[0][0] + h->b1 * uv[1][0] + h->b2 * uv[2][0];
+        *v = b0 * uv[0][1] + h->b1 * uv[1][1] + h->b2 * uv[2][1];
+        float du02 = uv[0][0] - uv[2][0], dv02 = uv[0][1] - uv[2][1];
+        float du12 = uv[1][0] - uv[2][0], dv12 = uv[1][1] - uv[2][1];
+        float det = du02 * dv12 - dv02 * du12;
+        if (fabsf(det) > 1e-12f) {
+            Vec3 dp02 = v3_sub(p0, p2), dp12 = v3_sub(p1, p2);
+            *dpdu = v3_scale(v3_sub(v3_scale(dp02, dv12), v3_scale(dp12, dv02)), 1.0f / det);
+            *dpdv = v3_scale(v3_sub(v3_scale(dp12, du02), v3_scale(dp02, du12)), 1.0f / det);
+            if (v3_length(v3_cross(*dpdu, *dpdv)) > 0.0f)
+                return;
+        }
+    }
+    v3_basis(ng, dpdu, dpdv);
+}
+
+/* The shading normal of a normal- or bump-mapped material at h, on the
+ * side of n (the geometric normal facing wo). A map that would turn it
+ * away from wo gives the geometric normal there (a light leak otherwise). */
+static Vec3 shading_normal(const Integrator *it, const Material *m, const Hit *h, Vec3 n, Vec3 wo, int thread)
+{
+    Vec3 ng = it->geo->tris[h->tri].normal; /* the winding's side: maps are made for it */
+    Vec3 dpdu, dpdv, ns;
+    float u, v;
+    surface_frame(it, h, ng, &dpdu, &dpdv, &u, &v);
+    if (m->normal_texture) { /* tangent space: x along dp/du, z the normal (pbrt-v4, Mitsuba) */
+        Vec3 c = texture_set_eval_at(it->textures, m->normal_texture, h->tri, h->b1, h->b2, thread);
+        Vec3 x = v3_sub(dpdu, v3_scale(ng, v3_dot(ng, dpdu)));
+        x = v3_length(x) > 0.0f ? v3_normalize(x) : dpdu;
+        Vec3 y = v3_cross(ng, x);
+        ns = v3_add(v3_add(v3_scale(x, 2.0f * c.x - 1.0f), v3_scale(y, 2.0f * c.y - 1.0f)),
+                    v3_scale(ng, 2.0f * c.z - 1.0f));
+    } else { /* the displaced surface's normal, by differences (pbrt-v4's step without ray differentials) */
+        const float step = 0.0005f;
+        float d0 = texture_set_eval(it->textures, m->bump_texture, u, v, thread).x;
+        float d_u = texture_set_eval(it->textures, m->bump_texture, u + step, v, thread).x;
+        float d_v = texture_set_eval(it->textures, m->bump_texture, u, v + step, thread).x;
+        Vec3 tu = v3_add(dpdu, v3_scale(ng, m->bump_scale * (d_u - d0) / step));
+        Vec3 tv = v3_add(dpdv, v3_scale(ng, m->bump_scale * (d_v - d0) / step));
+        ns = v3_cross(tu, tv);
+        if (v3_dot(ns, ng) < 0.0f) /* uv mirrored: the winding decides the side */
+            ns = v3_scale(ns, -1.0f);
+    }
+    float len = v3_length(ns);
+    if (!(len > 0.0f) || !isfinite(len))
+        return n;
+    ns = v3_scale(ns, 1.0f / len);
+    if (v3_dot(n, ng) < 0.0f)
+        ns = v3_scale(ns, -1.0f);
+    return v3_dot(ns, wo) > 1e-3f && v3_dot(ns, n) > 1e-3f ? ns : n;
+}
+
 /* ---- a diffuse or glossy vertex ---------------------------------------------- */
 
 /* Next-event estimation: one point on the lights, its shadow ray, and what
@@ -270,7 +343,7 @@ static LightSample sample_light_source(const Integrator *it, const BounceVertex 
     ls.sky = lp.pdf_portals > 0.0f || lp.pdf_sky > 0.0f;
     ls.pdf_portals = lp.pdf_portals;
     ls.pdf_sky = lp.pdf_sky;
-    float cos_x = v3_dot(lp.wi, v->g.bsdf.lobe.n);
+    float cos_x = below_geometry(v, lp.wi) ? 0.0f : v3_dot(lp.wi, v->g.bsdf.lobe.n);
     if (!(cos_x > 0.0f || lit_below_horizon))
         return ls;
     st->rays++;
@@ -316,7 +389,7 @@ static LightSample sample_light(const Integrator *it, const BounceVertex *v, boo
     float dist = sqrtf(dist2);
     Vec3 wi = v3_scale(to, 1.0f / dist);
     float cos_l = -v3_dot(wi, geo->tris[t].normal);
-    float cos_x = v3_dot(wi, n);
+    float cos_x = below_geometry(v, wi) ? 0.0f : v3_dot(wi, n);
     if (!(dist > 0.0f && cos_l > 0.0f && (cos_x > 0.0f || lit_below_horizon)))
         return ls;
     st->rays++;
@@ -349,7 +422,7 @@ static bool take_bounce(const PathGuide *guide, BounceVertex *v, PathState *ps, 
     st->bounces++;
     st->lobe_bounces += v->g.by_guide;
     float cos_x = v3_dot(wi, v->g.bsdf.lobe.n);
-    bool above = cos_x > 0.0f && pdf > 0.0f;
+    bool above = cos_x > 0.0f && pdf > 0.0f && !below_geometry(v, wi);
     if (pr) {
         pr->v = v->g;
         pr->bounced = above;
@@ -437,14 +510,18 @@ static bool scatter(Path *p, const Hit *h, const Material *m, Vec3 wo, Vec3 n, b
     v.thread = pc->thread;
     memset(v.g.state, 0, sizeof v.g.state);
     Vec3 albedo = surface_albedo(it, m, h, pc->thread);
+    v.shaded = m->normal_texture || m->bump_texture;
+    Vec3 ns = v.shaded ? shading_normal(it, m, h, n, wo, pc->thread) : n;
     if (m->type == SG_MATERIAL_DIFFUSE_TRANSMISSION) { /* one side per vertex (bsdf.h) */
-        DiffuseTransmission dt = bsdf_diffuse_transmission(n, albedo, m->kt);
+        DiffuseTransmission dt = bsdf_diffuse_transmission(ns, albedo, m->kt);
         if (bsdf_diffuse_side(&dt, sg_rng_float(pc->rng), &albedo)) {
             n = v3_scale(n, -1.0f);
+            ns = v3_scale(ns, -1.0f);
             front = !front;
         }
     }
-    bsdf_init(&v.g.bsdf, m, n, wo, albedo);
+    v.ng = n;
+    bsdf_init(&v.g.bsdf, m, ns, wo, albedo);
     v.g.learn = false;
     v.g.rms = -1.0f;
     v.g.by_guide = false;

@@ -81,6 +81,9 @@ void material_init(Material *m, const SgMaterial *src)
     m->cutout = src->cutout && (src->alpha_texture || src->alpha < 1.0f);
     m->alpha = fminf(fmaxf(src->alpha, 0.0f), 1.0f);
     m->alpha_texture = src->cutout ? src->alpha_texture : 0;
+    m->normal_texture = src->normal_texture;
+    m->bump_texture = src->normal_texture ? 0 : src->bump_texture;
+    m->bump_scale = src->bump_scale;
     if (m->type == SG_MATERIAL_DIELECTRIC) {
         m->sigma_a = v3(fmaxf(0, src->sigma_a[0]), fmaxf(0, src->sigma_a[1]), fmaxf(0, src->sigma_a[2]));
         m->absorbs = v3_max_component(m->sigma_a) > 0.0f;

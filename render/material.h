@@ -34,6 +34,8 @@ typedef struct Material {
     bool cutout;          /* rays may pass through (SgMaterial.cutout): alpha, or alpha_texture's value */
     bool absorbs;         /* dielectric: sigma_a > 0, what it encloses absorbs */
     Vec3 sigma_a;
+    uint32_t normal_texture, bump_texture; /* shading normals (SgMaterial's) */
+    float bump_scale;
     float alpha;
     uint32_t alpha_texture;
 } Material;

@@ -451,8 +451,12 @@ Test(mitsuba_bsdfs, wrappers_and_blends)
     m = material_of("<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"thindielectric\"/></bsdf>",
                     &s);
     cr_expect_eq(m.type, SG_MATERIAL_DIELECTRIC);
-    cr_expect(has_warning(s, "bumpmap") && has_warning(s, "thindielectric"));
+    cr_expect(m.bump_texture > 0 && m.bump_scale == 1.0f, "bumpmap: a bump texture");
+    cr_expect(!has_warning(s, "bumpmap") && has_warning(s, "thindielectric"));
     sg_scene_free(s);
+    m = material_of("<bsdf type=\"normalmap\"><texture type=\"checkerboard\" name=\"normalmap\"/>"
+                    "<bsdf type=\"diffuse\"/></bsdf>", NULL);
+    cr_expect(m.normal_texture > 0 && !m.bump_texture, "normalmap: a normal texture");
 }
 
 Test(mitsuba_bsdfs, colours_and_spectra)

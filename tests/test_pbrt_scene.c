@@ -382,6 +382,20 @@ Test(pbrt_shapes, alpha_makes_a_cutout_copy_of_the_material)
     sg_scene_free(s);
 }
 
+Test(pbrt_materials, bump_and_normal_maps_are_shading_normals)
+{
+    SgScene *s = load_ok(HEADER "Texture \"bumps\" \"float\" \"checkerboard\" \"float uscale\" 8\n"
+                                "Material \"diffuse\" \"texture displacement\" \"bumps\"\n" TRIANGLE
+                                "Material \"conductor\" \"string normalmap\" \"no-such-normals.png\"\n" TRIANGLE);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect(m->bump_texture > 0 && m->bump_texture <= s->texture_count, "displacement: a bump map");
+    cr_expect_float_eq(m->bump_scale, 1.0f, 1e-9);
+    cr_expect_eq(material_of(s, 1)->normal_texture, 0, "a normal map that cannot be read is left out");
+    cr_expect(has_warning(s, "normal maps that cannot be read"));
+    cr_expect(!has_warning(s, "displacement"));
+    sg_scene_free(s);
+}
+
 Test(pbrt_materials, absorbing_medium_inside_a_dielectric)
 {
     SgScene *s = load_ok(HEADER "MakeNamedMedium \"tint\" \"string type\" \"homogeneous\"\n"

@@ -400,6 +400,104 @@ Test(render_integrator, cutout_constant_alpha_half) { cut_screen_case(SG_SAMPLIN
 Test(render_integrator, cutout_half_cut_texture_passes_half) { cut_screen_case(SG_SAMPLING_BSDF, -1.0f, 0.5); }
 Test(render_integrator, cutout_opaque_alpha_1_is_a_shadow) { cut_screen_case(SG_SAMPLING_BSDF, 1.0f, 0.0); }
 
+/* ---- shading normals ------------------------------------------------------ */
+
+/* A constant tangent-space normal map tilted by theta toward the mesh's u
+ * direction (rgb = (n + 1) / 2), as texture 1 of s. */
+static void add_tilted_normal_map(SgScene *s, double theta)
+{
+    s->textures = calloc(1, sizeof *s->textures);
+    s->texture_count = 1;
+    float c[3] = {(float)(0.5 + 0.5 * sin(theta)), 0.5f, (float)(0.5 + 0.5 * cos(theta))};
+    s->textures[0] = (SgTexture){.kind = SG_TEXTURE_SCALE, .uscale = 1, .vscale = 1, .scale = 1,
+                                 .input = {{0, {c[0], c[1], c[2]}}, {0, {1, 1, 1}}},
+                                 .mean = {c[0], c[1], c[2]}};
+}
+
+/* u = x, v = z: the floor's tangent is +x. */
+static void uv_from_xz(SgScene *s)
+{
+    s->uvs = malloc(2 * s->vertex_count * sizeof *s->uvs);
+    for (uint32_t v = 0; v < s->vertex_count; v++) {
+        s->uvs[2 * v] = (float)s->positions[3 * v];
+        s->uvs[2 * v + 1] = (float)s->positions[3 * v + 2];
+    }
+}
+
+/* The floor's centre under plane_case's light: flat with a normal map
+ * tilted 30 degrees toward +x, or a quad truly tilted so. */
+static Stats tilted_floor(bool mapped)
+{
+    const double a = 1.0, h = 1.0, theta = 30.0 * M_PI / 180.0;
+    SgScene *s = sgt_scene_new();
+    const float alb[3] = {0.6f, 0.6f, 0.6f}, black[3] = {0, 0, 0}, em[3] = {2, 2, 2};
+    uint32_t floor_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, alb, NULL);
+    uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
+    if (mapped) {
+        sgt_material(s, floor_m)->normal_texture = 1;
+        add_tilted_normal_map(s, theta);
+        const double floor[4][3] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
+        sgt_add_quad(s, floor, floor_m);
+    } else { /* normal (sin, cos, 0): the plane x sin + y cos = 0 */
+        double cx = 0.5 * cos(theta), cy = -0.5 * sin(theta);
+        const double floor[4][3] = {{-cx, -cy, -0.5}, {-cx, -cy, 0.5}, {cx, cy, 0.5}, {cx, cy, -0.5}};
+        sgt_add_quad(s, floor, floor_m);
+    }
+    const double light[4][3] = {{-a, h, -a}, {a, h, -a}, {a, h, a}, {-a, h, a}};
+    sgt_add_quad(s, light, light_m);
+    const double pos[3] = {0, 0.5, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    sgt_set_camera(s, pos, at, up, 1.0, 16, 16);
+    uv_from_xz(s);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.seed = mapped ? 14 : 15;
+    Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
+    sgt_scene_free(s);
+    return st;
+}
+
+Test(render_integrator, normal_map_reflects_like_a_tilted_quad)
+{
+    Stats mapped = tilted_floor(true), tilted = tilted_floor(false);
+    double tol = 4.0 * hypot(mapped.std_error, tilted.std_error) + 1e-3 * tilted.mean[0];
+    cr_log_info("normal-mapped %.5f +- %.5f, tilted quad %.5f +- %.5f", mapped.mean[0], mapped.std_error,
+                tilted.mean[0], tilted.std_error);
+    cr_assert_eq(mapped.nonfinite, 0);
+    cr_assert(fabs(mapped.mean[0] - tilted.mean[0]) < tol, "normal-mapped %.5f, tilted %.5f +- %.5f",
+              mapped.mean[0], tilted.mean[0], tol);
+}
+
+/* A small patch whose normal map leans 80 degrees toward a light below its
+ * plane: the shading normal sees the light, the surface does not. Nothing
+ * may reach the camera above (no light through the surface: light samples
+ * and bounces below the geometric surface count for nothing, and the
+ * surface itself stands in the way of what would). */
+Test(render_integrator, normal_map_lets_no_light_through_the_surface)
+{
+    SgScene *s = sgt_scene_new();
+    const float alb[3] = {0.8f, 0.8f, 0.8f}, black[3] = {0, 0, 0}, em[3] = {5, 5, 5};
+    uint32_t patch_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, alb, NULL);
+    uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
+    sgt_material(s, patch_m)->normal_texture = 1;
+    add_tilted_normal_map(s, 80.0 * M_PI / 180.0);
+    const double patch[4][3] = {{-0.1, 0, -0.1}, {-0.1, 0, 0.1}, {0.1, 0, 0.1}, {0.1, 0, -0.1}}; /* faces up */
+    const double light[4][3] = {{0.5, -0.3, -0.5}, {0.5, -0.3, 0.5}, {1.5, -0.3, 0.5}, {1.5, -0.3, -0.5}};
+    sgt_add_quad(s, patch, patch_m);
+    sgt_add_quad(s, light, light_m); /* faces up, toward the patch's underside */
+    const double pos[3] = {0, 0.5, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    sgt_set_camera(s, pos, at, up, 1.0, 16, 16);
+    uv_from_xz(s);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.seed = 16;
+    Stats st = render_scene_stats(s, &o, 64, 0, 0, o.width, o.height);
+    cr_log_info("patch over a light below it: %.6f (max %.6f)", st.mean[0], st.max_pixel);
+    cr_assert_eq(st.max_pixel, 0.0, "light came through the surface: max pixel %g", st.max_pixel);
+    sgt_scene_free(s);
+}
+
 /* ---- materials: exact answers ------------------------------------------ */
 
 /* Turns the triangles of s whose three vertices have coordinate `axis`

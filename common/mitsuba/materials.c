@@ -2,9 +2,10 @@
  * diffuse, plastic and roughplastic as the coated diffuse, conductor and
  * roughconductor (named or explicit eta and k; "none" a mirror),
  * dielectric, roughdielectric and thindielectric as glass, phong as the
- * glossy material; twosided, mask, bumpmap and normalmap pass their inner
- * bsdf through, blendbsdf blends two diffuse ones and otherwise keeps the
- * heavier. Textures: bitmap, checkerboard and scale. */
+ * glossy material; twosided passes its inner bsdf through, mask makes it
+ * a cut-out, bumpmap and normalmap give it shading normals, blendbsdf
+ * blends two diffuse ones and otherwise keeps the heavier. A homogeneous
+ * medium that absorbs only, inside a dielectric, is its sigma_a. Textures: bitmap, checkerboard and scale. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -413,6 +414,33 @@ static bool blend(MtsParser *p, const XmlNode *n, MtsMaterial *out, int depth)
 
 static bool make_material_of_type(MtsParser *p, const XmlNode *n, MtsMaterial *out, int depth);
 
+/* bumpmap (its texture a displacement, times "scale") and normalmap (its
+ * texture tangent-space normals, to be read raw): the inner bsdf with
+ * shading normals (SgMaterial.normal_texture, bump_texture). */
+static bool shading_map(MtsParser *p, const XmlNode *n, const char *type, MtsMaterial *out, int depth)
+{
+    const XmlNode *tex;
+    uint32_t id = 0;
+    float mean[3];
+    double scale = 1;
+    bool bump = !strcmp(type, "bumpmap");
+    if (!mts_find_object(p, n, "texture", 0, &tex) || (tex && !texture(p, tex, &id, mean)) ||
+        (bump && !mts_float(p, n, "scale", 1, &scale)) || !inner(p, n, 0, out, depth))
+        return false;
+    if (!id) { /* a constant bends nothing */
+        if (!tex)
+            mts_warn(p, n, "%s without a texture is ignored", type);
+        return true;
+    }
+    if (bump) {
+        out->material.bump_texture = id;
+        out->material.bump_scale = (float)scale;
+    } else {
+        out->material.normal_texture = id;
+    }
+    return true;
+}
+
 /* A bsdf with its own id names the material, even where it wraps another. */
 static bool make_material(MtsParser *p, const XmlNode *n, MtsMaterial *out, int depth)
 {
@@ -437,10 +465,8 @@ static bool make_material_of_type(MtsParser *p, const XmlNode *n, MtsMaterial *o
     static const float half[3] = {0.5f, 0.5f, 0.5f};
     if (!strcmp(type, "twosided"))
         return inner(p, n, 0, out, depth);
-    if (!strcmp(type, "bumpmap") || !strcmp(type, "normalmap")) {
-        mts_warn(p, n, "%s is ignored: its inner bsdf without it", type);
-        return inner(p, n, 0, out, depth);
-    }
+    if (!strcmp(type, "bumpmap") || !strcmp(type, "normalmap"))
+        return shading_map(p, n, type, out, depth);
     if (!strcmp(type, "mask")) { /* a cut-out: see SgMaterial.cutout */
         float opacity[3];
         uint32_t texture;

@@ -115,6 +115,32 @@ static bool diffuse_transmission(Parser *p, const Token *at, SgMaterial *m)
     return true;
 }
 
+/* pbrt-v4's shading normals: "displacement", a float texture (a bump map;
+ * a constant displaces nothing), and "normalmap", an image file read
+ * linear, in tangent space. */
+static bool shading_maps(Parser *p, const Token *at, SgMaterial *m)
+{
+    m->bump_texture = pbrt_param_texture(p, "displacement");
+    m->bump_scale = 1;
+    const Token *file = pbrt_param_string(p, "normalmap");
+    if (!file || !file->len)
+        return true;
+    char path[8192];
+    if (!pbrt_resolve_path(p, at, file, path, sizeof path))
+        return false;
+    SgTexture st = {.kind = SG_TEXTURE_IMAGE, .uscale = 1, .vscale = 1, .path = path, .gamma = 0, .scale = 1,
+                    .wrap = SG_WRAP_REPEAT};
+    if (!sg_image_average(&p->images, path, 0, st.mean, NULL)) {
+        pbrt_warn_at(p, at, "normal maps that cannot be read (missing files) are ignored");
+        return true;
+    }
+    uint32_t id;
+    if (!sg_builder_add_texture(&p->core, &st, &id, p->err))
+        return false;
+    m->normal_texture = id + 1;
+    return true;
+}
+
 static bool make_material(Parser *p, const Token *at, const Token *type, const char *label,
                           PbrtMaterial *out)
 {
@@ -123,9 +149,8 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
     SgMaterial *m = &out->material;
     sg_material_default(m, label);
     static const float half[3] = {0.5f, 0.5f, 0.5f};
-    const Param *displacement = pbrt_find_param(p, "displacement");
-    if (displacement || pbrt_find_param(p, "normalmap"))
-        pbrt_warn_at(p, at, "bump and normal maps (\"displacement\", \"normalmap\") are ignored");
+    if (!shading_maps(p, at, m))
+        return false;
     if (pbrt_string_is(type, "diffusetransmission"))
         return diffuse_transmission(p, at, m);
     if (pbrt_string_is(type, "diffuse") ||
