@@ -151,6 +151,11 @@ typedef struct SgLightSource {
     double cos_cone, cos_falloff_start; /* spot */
     double angular_radius; /* distant: radians of the sun's disk; 0: a delta direction */
     char *image_path;     /* infinite: the environment image, or NULL: constant */
+    /* infinite: an image made at load time (a parametric sky, sunsky.h) in
+     * place of a file: RGB, row by row from the top, image_width x
+     * image_height; NULL: none */
+    float *image_pixels;
+    int image_width, image_height;
     SgEnvironmentLayout layout;
     /* infinite with an image: the irradiance of an upward-facing plane the
      * image is scaled to (pbrt-v4's "illuminance"); 0: as it is */

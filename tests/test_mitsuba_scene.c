@@ -9,7 +9,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "color.h"
 #include "scene.h"
+#include "sunsky.h"
 #include "support_files.h"
 
 #define BOX_V3 "tests/data/mitsuba/box_v3.xml"
@@ -407,6 +409,37 @@ Test(mitsuba_media, absorbing_interior_of_a_dielectric)
     sg_scene_free(s);
 }
 
+/* Mitsuba 0.6's sunsky: a sky image made at load time and a sun disk. */
+Test(mitsuba_emitters, sunsky_is_a_sky_image_and_a_sun)
+{
+    SgScene *s = load_body("0.6.0", "<shape type=\"cube\"/><emitter type=\"sunsky\">"
+                                    "<vector name=\"sunDirection\" x=\"0\" y=\"0.8\" z=\"0.6\"/>"
+                                    "<float name=\"turbidity\" value=\"4\"/><integer name=\"resolution\" value=\"64\"/>"
+                                    "<float name=\"sunScale\" value=\"0.5\"/><float name=\"sunRadiusScale\" value=\"2\"/>"
+                                    "</emitter>\n");
+    cr_assert_eq(s->light_source_count, 2);
+    const SgLightSource *sky = &s->light_sources[0], *sun = &s->light_sources[1];
+    cr_expect_eq(sky->kind, SG_LIGHT_INFINITE);
+    cr_assert_not_null(sky->image_pixels);
+    cr_expect(sky->image_width == 128 && sky->image_height == 64);
+    /* the top row looks at the zenith: Preetham's zenith luminance there */
+    double zenith = sg_preetham_zenith_luminance(4.0, acos(0.8)), y = 0;
+    for (int i = 0; i < sky->image_width; i++) {
+        const float *px = sky->image_pixels + 3 * i;
+        y += sg_luminance(px[0], px[1], px[2]) / sky->image_width;
+    }
+    cr_expect(fabs(y - zenith) < 0.03 * zenith, "zenith row luminance %g, Preetham's %g", y, zenith);
+    const float *below = sky->image_pixels + 3 * (size_t)sky->image_width * (sky->image_height - 1);
+    cr_expect(below[0] == 0 && below[1] == 0 && below[2] == 0, "black below the horizon");
+    cr_expect_eq(sun->kind, SG_LIGHT_DISTANT);
+    expect_point(sun->direction, 0, -0.8, -0.6); /* the way its light travels */
+    cr_expect(fabs(sun->angular_radius - 2 * SG_SUN_ANGULAR_RADIUS) < 1e-9);
+    cr_expect(sun->rgb[0] > sun->rgb[2] && sun->rgb[2] > 0, "the sun through air is reddened: %g %g", sun->rgb[0],
+              sun->rgb[2]);
+    cr_expect_eq(s->warning_count, 0);
+    sg_scene_free(s);
+}
+
 Test(mitsuba_bsdfs, conductors)
 {
     SgMaterial m = material_of("<bsdf type=\"conductor\"><string name=\"material\" value=\"none\"/></bsdf>", NULL);
@@ -582,7 +615,7 @@ static void expect_error(const char *body, const char *what)
 Test(mitsuba_errors, meaningless_scenes)
 {
     expect_error("<shape type=\"cube\"/>\n", "no light");
-    expect_error("<shape type=\"cube\"/><emitter type=\"sunsky\"/>\n", "no light (sunsky is not supported)");
+    expect_error("<shape type=\"cube\"/><emitter type=\"projector\"/>\n", "no light (projector is not supported)");
     expect_error("<shape type=\"cube\"><ref id=\"nothing\"/></shape>" LIGHT, "unknown id \"nothing\"");
     expect_error("<shape type=\"ply\"><string name=\"filename\" value=\"absent.ply\"/></shape>" LIGHT, "absent.ply");
     expect_error("<shape type=\"obj\"><string name=\"filename\" value=\"absent.obj\"/></shape>" LIGHT, "absent.obj");
