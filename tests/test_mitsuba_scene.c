@@ -487,6 +487,9 @@ Test(mitsuba_bsdfs, wrappers_and_blends)
     cr_expect(m.bump_texture > 0 && m.bump_scale == 1.0f, "bumpmap: a bump texture");
     cr_expect(!has_warning(s, "bumpmap") && has_warning(s, "thindielectric"));
     sg_scene_free(s);
+    m = material_of("<bsdf type=\"difftrans\"><rgb name=\"transmittance\" value=\"0.7\"/></bsdf>", NULL);
+    cr_expect(m.type == SG_MATERIAL_DIFFUSE_TRANSMISSION && m.transmittance[1] == 0.7f && m.diffuse[1] == 0,
+              "difftrans: a diffuse transmitter");
     m = material_of("<bsdf type=\"normalmap\"><texture type=\"checkerboard\" name=\"normalmap\"/>"
                     "<bsdf type=\"diffuse\"/></bsdf>", NULL);
     cr_expect(m.normal_texture > 0 && !m.bump_texture, "normalmap: a normal texture");

@@ -2,10 +2,11 @@
  * diffuse, plastic and roughplastic as the coated diffuse, conductor and
  * roughconductor (named or explicit eta and k; "none" a mirror),
  * dielectric, roughdielectric and thindielectric as glass, phong as the
- * glossy material; twosided passes its inner bsdf through, mask makes it
- * a cut-out, bumpmap and normalmap give it shading normals, blendbsdf
- * blends two diffuse ones and otherwise keeps the heavier. A homogeneous
- * medium that absorbs only, inside a dielectric, is its sigma_a. Textures: bitmap, checkerboard and scale. */
+ * glossy material, difftrans as diffuse transmission; twosided passes its
+ * inner bsdf through, mask makes it a cut-out, bumpmap and normalmap give
+ * it shading normals, blendbsdf blends two diffuse ones and otherwise
+ * keeps the heavier. A homogeneous medium that absorbs only, inside a
+ * dielectric, is its sigma_a. Textures: bitmap, checkerboard and scale. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -493,6 +494,14 @@ static bool make_material_of_type(MtsParser *p, const XmlNode *n, MtsMaterial *o
             mts_warn(p, n, "roughdiffuse is taken as diffuse");
         clamp_albedo(p, n, m->diffuse);
         m->type = SG_MATERIAL_DIFFUSE;
+        return true;
+    }
+    if (!strcmp(type, "difftrans")) { /* 0.6's diffuse transmitter: it reflects nothing */
+        if (!mts_color(p, n, "transmittance", half, m->transmittance, NULL, NULL))
+            return false;
+        clamp_albedo(p, n, m->transmittance);
+        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
+        m->type = SG_MATERIAL_DIFFUSE_TRANSMISSION;
         return true;
     }
     if (!strcmp(type, "plastic") || !strcmp(type, "roughplastic"))
