@@ -4,6 +4,7 @@
  * guided and bsdf estimators. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -11,6 +12,8 @@
 #include "scene_builder.h"
 #include "../render/guides/openpgl_field.h"
 #include "../render/renderer.h"
+#include "image_io.h"
+#include "support_files.h"
 #include "support_render.h"
 
 typedef struct Stats {
@@ -414,7 +417,7 @@ static void add_tilted_normal_map(SgScene *s, double theta)
                                  .mean = {c[0], c[1], c[2]}};
 }
 
-/* u = x, v = z: the floor's tangent is +x. */
+/* u = x, v = z: a floor's tangent is +x. */
 static void uv_from_xz(SgScene *s)
 {
     s->uvs = malloc(2 * s->vertex_count * sizeof *s->uvs);
@@ -424,48 +427,90 @@ static void uv_from_xz(SgScene *s)
     }
 }
 
-/* The floor's centre under plane_case's light: flat with a normal map
- * tilted 30 degrees toward +x, or a quad truly tilted so. */
-static Stats tilted_floor(bool mapped)
+/* How the floor of tilted_floor is made. */
+typedef enum FloorTilt { FLOOR_TILTED_PLUS_X, FLOOR_TILTED_MINUS_X, FLOOR_NORMAL_MAP, FLOOR_BUMP_MAP } FloorTilt;
+
+/* A displacement rising toward +x, k world units per unit of u, as an
+ * image (bilinear: exactly linear between texel centres); its path. */
+static const char *ramp_image(double k)
 {
-    const double a = 1.0, h = 1.0, theta = 30.0 * M_PI / 180.0;
+    enum { W = 64 };
+    static char path[4200];
+    float rgb[3 * W * 2];
+    for (int y = 0; y < 2; y++)
+        for (int x = 0; x < W; x++)
+            for (int c = 0; c < 3; c++)
+                rgb[3 * (y * W + x) + c] = (float)(k * (x + 0.5) / W);
+    snprintf(path, sizeof path, "%s/ramp.exr", sg_test_tmpdir());
+    SgError err = {0};
+    cr_assert(sg_image_write_exr(path, W, 2, rgb, NULL, 0, &err), "%s", err.message);
+    return path;
+}
+
+/* The floor's centre under a square light off to +x: a quad truly tilted
+ * by 30 degrees toward +x or -x, or flat with a normal map tilted toward
+ * +x, or with a bump map rising toward +x (its normal leans toward -x). */
+static Stats tilted_floor(FloorTilt how)
+{
+    const double a = 0.8, cx = 0.5, h = 1.0, theta = 30.0 * M_PI / 180.0;
     SgScene *s = sgt_scene_new();
     const float alb[3] = {0.6f, 0.6f, 0.6f}, black[3] = {0, 0, 0}, em[3] = {2, 2, 2};
     uint32_t floor_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, alb, NULL);
     uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
-    if (mapped) {
-        sgt_material(s, floor_m)->normal_texture = 1;
-        add_tilted_normal_map(s, theta);
+    if (how == FLOOR_NORMAL_MAP || how == FLOOR_BUMP_MAP) {
+        if (how == FLOOR_NORMAL_MAP) {
+            sgt_material(s, floor_m)->normal_texture = 1;
+            add_tilted_normal_map(s, theta);
+        } else { /* u = (x + 50) / 100: dp/du is 100 x, so slope tan(theta) is k = 100 tan(theta) */
+            sgt_material(s, floor_m)->bump_texture = 1;
+            sgt_material(s, floor_m)->bump_scale = 1;
+            s->textures = calloc(1, sizeof *s->textures);
+            s->texture_count = 1;
+            s->textures[0] = (SgTexture){.kind = SG_TEXTURE_IMAGE, .uscale = 1, .vscale = 1, .scale = 1,
+                                         .path = strdup(ramp_image(100 * tan(theta))), .wrap = SG_WRAP_CLAMP};
+        }
         const double floor[4][3] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
         sgt_add_quad(s, floor, floor_m);
-    } else { /* normal (sin, cos, 0): the plane x sin + y cos = 0 */
-        double cx = 0.5 * cos(theta), cy = -0.5 * sin(theta);
-        const double floor[4][3] = {{-cx, -cy, -0.5}, {-cx, -cy, 0.5}, {cx, cy, 0.5}, {cx, cy, -0.5}};
+    } else { /* normal (sign sin, cos, 0): the plane sign x sin + y cos = 0 */
+        double sign = how == FLOOR_TILTED_PLUS_X ? 1 : -1, ux = 0.5 * cos(theta), uy = -0.5 * sign * sin(theta);
+        const double floor[4][3] = {{-ux, -uy, -0.5}, {-ux, -uy, 0.5}, {ux, uy, 0.5}, {ux, uy, -0.5}};
         sgt_add_quad(s, floor, floor_m);
     }
-    const double light[4][3] = {{-a, h, -a}, {a, h, -a}, {a, h, a}, {-a, h, a}};
+    const double light[4][3] = {{cx - a, h, -a}, {cx + a, h, -a}, {cx + a, h, a}, {cx - a, h, a}};
     sgt_add_quad(s, light, light_m);
     const double pos[3] = {0, 0.5, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
     sgt_set_camera(s, pos, at, up, 1.0, 16, 16);
-    uv_from_xz(s);
+    s->uvs = malloc(2 * s->vertex_count * sizeof *s->uvs);
+    for (uint32_t v = 0; v < s->vertex_count; v++) {
+        s->uvs[2 * v] = (float)((s->positions[3 * v] + 50) / 100);
+        s->uvs[2 * v + 1] = (float)((s->positions[3 * v + 2] + 50) / 100);
+    }
     sgt_finish(s);
     SgRenderOptions o;
     sg_render_options_default(&o, s);
-    o.seed = mapped ? 14 : 15;
+    o.seed = 14 + (uint64_t)how;
     Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
     sgt_scene_free(s);
     return st;
 }
 
-Test(render_integrator, normal_map_reflects_like_a_tilted_quad)
+static void expect_same_floor(const char *what, Stats got, Stats want)
 {
-    Stats mapped = tilted_floor(true), tilted = tilted_floor(false);
-    double tol = 4.0 * hypot(mapped.std_error, tilted.std_error) + 1e-3 * tilted.mean[0];
-    cr_log_info("normal-mapped %.5f +- %.5f, tilted quad %.5f +- %.5f", mapped.mean[0], mapped.std_error,
-                tilted.mean[0], tilted.std_error);
-    cr_assert_eq(mapped.nonfinite, 0);
-    cr_assert(fabs(mapped.mean[0] - tilted.mean[0]) < tol, "normal-mapped %.5f, tilted %.5f +- %.5f",
-              mapped.mean[0], tilted.mean[0], tol);
+    double tol = 4.0 * hypot(got.std_error, want.std_error) + 1e-3 * want.mean[0];
+    cr_log_info("%s %.5f +- %.5f, tilted quad %.5f +- %.5f", what, got.mean[0], got.std_error, want.mean[0],
+                want.std_error);
+    cr_assert_eq(got.nonfinite, 0);
+    cr_assert(fabs(got.mean[0] - want.mean[0]) < tol, "%s %.5f, tilted %.5f +- %.5f", what, got.mean[0],
+              want.mean[0], tol);
+}
+
+Test(render_integrator, normal_and_bump_maps_reflect_like_a_tilted_quad)
+{
+    Stats plus = tilted_floor(FLOOR_TILTED_PLUS_X), minus = tilted_floor(FLOOR_TILTED_MINUS_X);
+    /* the light is off to +x: the two tilts differ, so the side is tested */
+    cr_assert_gt(plus.mean[0] - minus.mean[0], 10.0 * hypot(plus.std_error, minus.std_error));
+    expect_same_floor("normal-mapped", tilted_floor(FLOOR_NORMAL_MAP), plus);
+    expect_same_floor("bump-mapped", tilted_floor(FLOOR_BUMP_MAP), minus);
 }
 
 /* A small patch whose normal map leans 80 degrees toward a light below its
