@@ -422,8 +422,9 @@ Test(mitsuba_emitters, sunsky_is_a_sky_image_and_a_sun)
     cr_expect_eq(sky->kind, SG_LIGHT_INFINITE);
     cr_assert_not_null(sky->image_pixels);
     cr_expect(sky->image_width == 128 && sky->image_height == 64);
-    /* the top row looks at the zenith: Preetham's zenith luminance there */
-    double zenith = sg_preetham_zenith_luminance(4.0, acos(0.8)), y = 0;
+    /* the top row looks at the zenith: Preetham's zenith luminance there, in
+     * Mitsuba's units (kcd/m^2 over 683 lm/W x 106.857 nm / 1000) */
+    double zenith = sg_preetham_zenith_luminance(4.0, acos(0.8)) / (683.0 * 106.857 / 1000.0), y = 0;
     for (int i = 0; i < sky->image_width; i++) {
         const float *px = sky->image_pixels + 3 * i;
         y += sg_luminance(px[0], px[1], px[2]) / sky->image_width;

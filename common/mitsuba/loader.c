@@ -139,7 +139,11 @@ static bool sun_direction(MtsParser *p, const XmlNode *e, const double world_fro
 /* Mitsuba 0.6's sky, sun and sunsky: Preetham's sky as an environment
  * image made here (common/sunsky.h), the sun a distant light with its disk;
  * sky_scale, sun_scale, sun_radius_scale (the disk's size, its power kept;
- * 0 a delta), turbidity, resolution, extend. */
+ * 0 a delta), turbidity, resolution, extend. Mitsuba's values are spectral
+ * radiance (W m^-2 sr^-1 nm^-1) averaged under the CIE y curve: Preetham's
+ * luminance in kcd/m^2 over 683 lm/W times the curve's 106.857 nm / 1000. */
+#define KCD_PER_MITSUBA_RADIANCE (683.0 * 106.857 / 1000.0)
+
 static bool sunsky(MtsParser *p, const XmlNode *e, const char *type, const SgTransform *to_world)
 {
     bool with_sky = strcmp(type, "sun") != 0, with_sun = strcmp(type, "sky") != 0, extend;
@@ -176,8 +180,8 @@ static bool sunsky(MtsParser *p, const XmlNode *e, const char *type, const SgTra
         sky.rgb[0] = sky.rgb[1] = sky.rgb[2] = 1.0f;
         sky.image_width = (int)(2 * resolution);
         sky.image_height = (int)resolution;
-        if (!(sky.image_pixels = sg_sky_image(&model, ours, sky.image_width, sky.image_height, sky_scale, extend,
-                                              p->err)))
+        if (!(sky.image_pixels = sg_sky_image(&model, ours, sky.image_width, sky.image_height,
+                                              sky_scale / KCD_PER_MITSUBA_RADIANCE, extend, p->err)))
             return false;
         bool ok = sg_builder_add_light_source(&p->core, &sky, p->err);
         free(sky.image_pixels);
@@ -196,7 +200,7 @@ static bool sunsky(MtsParser *p, const XmlNode *e, const char *type, const SgTra
     sun.kind = SG_LIGHT_DISTANT;
     double disk = 2 * M_PI * (1 - cos(SG_SUN_ANGULAR_RADIUS)); /* the physical disk's solid angle */
     for (int c = 0; c < 3; c++) {
-        sun.rgb[c] = (float)(radiance[c] * disk * sun_scale);
+        sun.rgb[c] = (float)(radiance[c] / KCD_PER_MITSUBA_RADIANCE * disk * sun_scale);
         sun.direction[c] = -(world_from_mitsuba[c][0] * local[0] + world_from_mitsuba[c][1] * local[1] +
                              world_from_mitsuba[c][2] * local[2]);
     }
