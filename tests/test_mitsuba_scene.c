@@ -384,12 +384,13 @@ static SgMaterial material_of(const char *bsdf, SgScene **keep)
 Test(mitsuba_media, absorbing_interior_of_a_dielectric)
 {
     /* Mitsuba 3: sigma_t and albedo 0; nested, and by reference */
-    SgScene *s = load_body("3.0.0", "<medium type=\"homogeneous\" id=\"ink\"><rgb name=\"sigma_t\" value=\"0.5 1 2\"/>"
-                                    "<float name=\"albedo\" value=\"0\"/><float name=\"scale\" value=\"2\"/></medium>"
-                                    "<shape type=\"cube\"><bsdf type=\"dielectric\"/><ref name=\"interior\" id=\"ink\"/></shape>"
-                                    "<shape type=\"sphere\"><bsdf type=\"diffuse\"/>"
-                                    "<medium type=\"homogeneous\" name=\"interior\"><float name=\"albedo\" value=\"0\"/>"
-                                    "</medium></shape>" LIGHT);
+    SgScene *s = load_body("3.0.0",
+                           "<medium type=\"homogeneous\" id=\"ink\"><rgb name=\"sigma_t\" value=\"0.5 1 2\"/>"
+                           "<float name=\"albedo\" value=\"0\"/><float name=\"scale\" value=\"2\"/></medium>"
+                           "<shape type=\"cube\"><bsdf type=\"dielectric\"/><ref name=\"interior\" id=\"ink\"/></shape>"
+                           "<shape type=\"sphere\"><bsdf type=\"diffuse\"/>"
+                           "<medium type=\"homogeneous\" name=\"interior\"><float name=\"albedo\" value=\"0\"/>"
+                           "</medium></shape>" LIGHT);
     const SgMaterial *m = &s->materials[s->triangle_material[0]];
     cr_expect_eq(m->type, SG_MATERIAL_DIELECTRIC);
     cr_expect(m->sigma_a[0] == 1.0f && m->sigma_a[2] == 4.0f, "sigma_t (1 - albedo) scale: %g %g", m->sigma_a[0],
@@ -412,11 +413,12 @@ Test(mitsuba_media, absorbing_interior_of_a_dielectric)
 /* Mitsuba 0.6's sunsky: a sky image made at load time and a sun disk. */
 Test(mitsuba_emitters, sunsky_is_a_sky_image_and_a_sun)
 {
-    SgScene *s = load_body("0.6.0", "<shape type=\"cube\"/><emitter type=\"sunsky\">"
-                                    "<vector name=\"sunDirection\" x=\"0\" y=\"0.8\" z=\"0.6\"/>"
-                                    "<float name=\"turbidity\" value=\"4\"/><integer name=\"resolution\" value=\"64\"/>"
-                                    "<float name=\"sunScale\" value=\"0.5\"/><float name=\"sunRadiusScale\" value=\"2\"/>"
-                                    "</emitter>\n");
+    SgScene *s = load_body("0.6.0",
+                           "<shape type=\"cube\"/><emitter type=\"sunsky\">"
+                           "<vector name=\"sunDirection\" x=\"0\" y=\"0.8\" z=\"0.6\"/>"
+                           "<float name=\"turbidity\" value=\"4\"/><integer name=\"resolution\" value=\"64\"/>"
+                           "<float name=\"sunScale\" value=\"0.5\"/><float name=\"sunRadiusScale\" value=\"2\"/>"
+                           "</emitter>\n");
     cr_assert_eq(s->light_source_count, 2);
     const SgLightSource *sky = &s->light_sources[0], *sun = &s->light_sources[1];
     cr_expect_eq(sky->kind, SG_LIGHT_INFINITE);

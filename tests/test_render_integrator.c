@@ -254,6 +254,53 @@ static double corner_form_factor(double a, double b, double c)
     return (A / sa * atan(B / sa) + B / sb * atan(A / sb)) / (2 * M_PI);
 }
 
+/* A black square (2a wide) emitting le downward at height h. */
+static void add_square_light(SgScene *s, double a, double h, float le)
+{
+    const float black[3] = {0, 0, 0}, em[3] = {le, le, le};
+    uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
+    const double light[4][3] = {{-a, h, -a}, {a, h, -a}, {a, h, a}, {-a, h, a}}; /* faces down */
+    sgt_add_quad(s, light, light_m);
+}
+
+/* A 100-wide horizontal quad at height y, facing up. */
+static void add_wide_quad(SgScene *s, double y, uint32_t material)
+{
+    const double q[4][3] = {{-50, y, -50}, {-50, y, 50}, {50, y, 50}, {50, y, -50}};
+    sgt_add_quad(s, q, material);
+}
+
+/* s finished and seen from (0, camera_y, 0) straight at the origin (a 9 mm
+ * patch at 0.5), 256 passes under `mode` (the guides led to a point of a
+ * light at height 1); s freed. */
+static Stats render_origin_view(SgScene *s, SgSampling mode, uint64_t seed, double camera_y)
+{
+    const double pos[3] = {0, camera_y, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    sgt_set_camera(s, pos, at, up, 1.0, 16, 16);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.sampling = mode;
+    o.seed = seed;
+    SgtFixedPoint fp = {{0.3, 1.0, -0.2}};
+    o.importance.importance_point = sgt_fixed_point_guide;
+    o.importance.ctx = &fp;
+    Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
+    sgt_scene_free(s);
+    return st;
+}
+
+/* The mean within 4 standard errors and `rel` of the expected value. */
+static void expect_mean(const char *what, SgSampling mode, Stats st, double expected, double rel)
+{
+    cr_log_info("%s %s: %.5f +- %.5f, expected %.5f", what, sg_sampling_name(mode), st.mean[0], st.std_error,
+                expected);
+    cr_assert_eq(st.nonfinite, 0);
+    cr_assert(fabs(st.mean[0] - expected) <= 4.0 * st.std_error + rel * expected,
+              "%s %s: %.5f, expected %.5f +- %.5f", what, sg_sampling_name(mode), st.mean[0], expected,
+              4 * st.std_error);
+}
+
 /* A diffuse floor (albedo rho) under a black emitting square of radiance
  * Le at height h: at the floor's centre L = rho Le 4 F(a, a, h). */
 static void plane_case(SgSampling mode, SgMaterialType floor_type)
@@ -261,31 +308,11 @@ static void plane_case(SgSampling mode, SgMaterialType floor_type)
     const double a = 2.0, h = 1.0;
     const float rho = 0.6f, le = 2.0f;
     SgScene *s = sgt_scene_new();
-    const float alb[3] = {rho, rho, rho}, black[3] = {0, 0, 0}, em[3] = {le, le, le};
-    uint32_t floor_m = sgt_add_material(s, floor_type, alb, NULL);
-    uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
-    const double floor[4][3] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
-    const double light[4][3] = {{-a, h, -a}, {a, h, -a}, {a, h, a}, {-a, h, a}}; /* faces down */
-    sgt_add_quad(s, floor, floor_m);
-    sgt_add_quad(s, light, light_m);
-    const double pos[3] = {0, 0.5, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
-    sgt_set_camera(s, pos, at, up, 1.0, 16, 16); /* looks at a 9 mm patch */
-    sgt_finish(s);
-    SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.sampling = mode;
-    o.seed = 11;
-    SgtFixedPoint fp = {{0.3, h, -0.2}};
-    o.importance.importance_point = sgt_fixed_point_guide;
-    o.importance.ctx = &fp;
-    Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
+    const float alb[3] = {rho, rho, rho};
+    add_wide_quad(s, 0, sgt_add_material(s, floor_type, alb, NULL));
+    add_square_light(s, a, h, le);
     double expected = rho * le * 4.0 * corner_form_factor(a, a, h);
-    cr_log_info("plane %s: %.5f +- %.5f, expected %.5f", sg_sampling_name(mode), st.mean[0],
-                st.std_error, expected);
-    cr_assert(fabs(st.mean[0] - expected) < 4.0 * st.std_error + 1e-3 * expected,
-              "plane %s: %.5f, expected %.5f +- %.5f", sg_sampling_name(mode), st.mean[0], expected,
-              4 * st.std_error);
-    sgt_scene_free(s);
+    expect_mean("plane", mode, render_origin_view(s, mode, 11, 0.5), expected, 1e-3);
 }
 
 Test(render_integrator, plane_under_square_light_bsdf) { plane_case(SG_SAMPLING_BSDF, SG_MATERIAL_DIFFUSE); }
@@ -300,34 +327,14 @@ static void lamp_shade_case(SgSampling mode)
     const double a = 2.0, h = 1.0;
     const float r = 0.3f, t = 0.5f, le = 2.0f;
     SgScene *s = sgt_scene_new();
-    const float black[3] = {0, 0, 0}, em[3] = {le, le, le}, refl[3] = {r, r, r};
+    const float refl[3] = {r, r, r};
     uint32_t shade_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE_TRANSMISSION, refl, NULL);
     for (int c = 0; c < 3; c++)
         sgt_material(s, shade_m)->transmittance[c] = t;
-    uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
-    const double shade[4][3] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}}; /* faces up */
-    const double light[4][3] = {{-a, h, -a}, {a, h, -a}, {a, h, a}, {-a, h, a}};       /* faces down */
-    sgt_add_quad(s, shade, shade_m);
-    sgt_add_quad(s, light, light_m);
-    const double pos[3] = {0, -0.5, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
-    sgt_set_camera(s, pos, at, up, 1.0, 16, 16);
-    sgt_finish(s);
-    SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.sampling = mode;
-    o.seed = 12;
-    SgtFixedPoint fp = {{0.3, h, -0.2}};
-    o.importance.importance_point = sgt_fixed_point_guide;
-    o.importance.ctx = &fp;
-    Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
+    add_wide_quad(s, 0, shade_m);
+    add_square_light(s, a, h, le);
     double expected = t * le * 4.0 * corner_form_factor(a, a, h);
-    cr_log_info("lamp shade %s: %.5f +- %.5f, expected %.5f", sg_sampling_name(mode), st.mean[0], st.std_error,
-                expected);
-    cr_assert_eq(st.nonfinite, 0);
-    cr_assert(fabs(st.mean[0] - expected) < 4.0 * st.std_error + 1e-3 * expected,
-              "lamp shade %s: %.5f, expected %.5f +- %.5f", sg_sampling_name(mode), st.mean[0], expected,
-              4 * st.std_error);
-    sgt_scene_free(s);
+    expect_mean("lamp shade", mode, render_origin_view(s, mode, 12, -0.5), expected, 1e-3);
 }
 
 Test(render_integrator, lamp_shade_transmits_bsdf) { lamp_shade_case(SG_SAMPLING_BSDF); }
@@ -337,15 +344,12 @@ Test(render_integrator, lamp_shade_transmits_guided) { lamp_shade_case(SG_SAMPLI
 
 /* plane_case's floor and light with a black screen between them (y = 0.75)
  * made a cut-out: alpha a constant, or (alpha < 0) a fine checkerboard of
- * alpha 1 and 0. The camera, under the screen, looks at the floor's centre. */
-static Stats floor_under_cut_screen(SgSampling mode, float alpha)
+ * alpha 1 and 0; `passed`: the share of the light expected through it. */
+static void cut_screen_case(SgSampling mode, float alpha, double passed)
 {
-    const double a = 2.0, h = 1.0;
-    const float rho = 0.6f, le = 2.0f;
     SgScene *s = sgt_scene_new();
-    const float alb[3] = {rho, rho, rho}, black[3] = {0, 0, 0}, em[3] = {le, le, le};
+    const float alb[3] = {0.6f, 0.6f, 0.6f}, black[3] = {0, 0, 0};
     uint32_t floor_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, alb, NULL);
-    uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
     uint32_t screen_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, NULL);
     SgMaterial *screen = sgt_material(s, screen_m);
     screen->cutout = true;
@@ -357,42 +361,18 @@ static Stats floor_under_cut_screen(SgSampling mode, float alpha)
         s->textures[0] = (SgTexture){.kind = SG_TEXTURE_CHECKERBOARD, .uscale = 2000, .vscale = 2000, .scale = 1,
                                      .input = {{0, {1, 1, 1}}, {0, {0, 0, 0}}}, .mean = {0.5f, 0.5f, 0.5f}};
     }
-    const double floor[4][3] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
-    const double light[4][3] = {{-a, h, -a}, {a, h, -a}, {a, h, a}, {-a, h, a}};
-    const double cut[4][3] = {{-50, 0.75, -50}, {-50, 0.75, 50}, {50, 0.75, 50}, {50, 0.75, -50}};
-    sgt_add_quad(s, floor, floor_m);
-    sgt_add_quad(s, light, light_m);
-    sgt_add_quad(s, cut, screen_m);
-    const double pos[3] = {0, 0.5, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
-    sgt_set_camera(s, pos, at, up, 1.0, 16, 16);
+    add_wide_quad(s, 0, floor_m);
+    add_square_light(s, 2.0, 1.0, 2.0f);
+    add_wide_quad(s, 0.75, screen_m);
     s->uvs = malloc(2 * s->vertex_count * sizeof *s->uvs);
     for (uint32_t v = 0; v < s->vertex_count; v++) { /* u, v in [0, 1] across each quad */
         s->uvs[2 * v] = (float)((s->positions[3 * v] + 50) / 100);
         s->uvs[2 * v + 1] = (float)((s->positions[3 * v + 2] + 50) / 100);
     }
-    sgt_finish(s);
-    SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.sampling = mode;
-    o.seed = 13;
-    SgtFixedPoint fp = {{0.3, h, -0.2}};
-    o.importance.importance_point = sgt_fixed_point_guide;
-    o.importance.ctx = &fp;
-    Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
-    sgt_scene_free(s);
-    return st;
-}
-
-static void cut_screen_case(SgSampling mode, float alpha, double passed)
-{
-    Stats st = floor_under_cut_screen(mode, alpha);
-    double expected = passed * 0.6 * 2.0 * 4.0 * corner_form_factor(2.0, 2.0, 1.0);
-    cr_log_info("screen alpha %g %s: %.5f +- %.5f, expected %.5f", alpha, sg_sampling_name(mode), st.mean[0],
-                st.std_error, expected);
-    cr_assert_eq(st.nonfinite, 0);
-    cr_assert(fabs(st.mean[0] - expected) <= 4.0 * st.std_error + 1e-2 * expected,
-              "screen alpha %g %s: %.5f, expected %.5f +- %.5f", alpha, sg_sampling_name(mode), st.mean[0],
-              expected, 4 * st.std_error);
+    char what[64];
+    snprintf(what, sizeof what, "screen alpha %g", alpha);
+    double expected = passed * 0.6 * 2.0 * 4.0 * corner_form_factor(2, 2, 1);
+    expect_mean(what, mode, render_origin_view(s, mode, 13, 0.5), expected, 1e-2);
 }
 
 /* alpha 0: no shadow at all; 0.5: half the rays pass; a checkerboard

@@ -608,17 +608,17 @@ bool mts_medium_absorption(MtsParser *p, const XmlNode *medium, float sigma_a[3]
     }
     static const float one[3] = {1, 1, 1}, three_quarters[3] = {0.75f, 0.75f, 0.75f};
     float a[3], s[3], sigma_t[3], albedo[3];
-    bool has_a, has_s, has_material;
+    bool has_a, has_s;
     double scale, density;
     const XmlNode *preset;
-    if (!mts_color(p, medium, "sigma_a", one, a, NULL, &has_a) || !mts_color(p, medium, "sigma_s", one, s, NULL, &has_s) ||
+    if (!mts_color(p, medium, "sigma_a", one, a, NULL, &has_a) ||
+        !mts_color(p, medium, "sigma_s", one, s, NULL, &has_s) ||
         !mts_color(p, medium, "sigma_t", one, sigma_t, NULL, NULL) ||
         !mts_color(p, medium, "albedo", three_quarters, albedo, NULL, NULL) ||
         !mts_float(p, medium, "scale", 1, &scale) || !mts_float(p, medium, "density_multiplier", 1, &density) ||
         !mts_find(p, medium, "material", &preset))
         return false;
-    has_material = preset != NULL;
-    if (has_material) {
+    if (preset) {
         mts_warn(p, medium, "media of a named \"material\" (measured scattering media) are not supported: left out");
         return true;
     }
