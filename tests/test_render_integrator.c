@@ -339,6 +339,11 @@ static void lamp_shade_case(SgSampling mode)
 
 Test(render_integrator, lamp_shade_transmits_bsdf) { lamp_shade_case(SG_SAMPLING_BSDF); }
 Test(render_integrator, lamp_shade_transmits_guided) { lamp_shade_case(SG_SAMPLING_GUIDED); }
+Test(render_integrator, lamp_shade_transmits_openpgl) /* a guide that learns what crosses the shade */
+{
+    skip_without_openpgl();
+    lamp_shade_case(SG_SAMPLING_OPENPGL);
+}
 
 /* ---- cut-outs ------------------------------------------------------------ */
 
