@@ -28,6 +28,9 @@ typedef enum SgMaterialType {
                              * Fresnel of eta + i k; a mirror below alpha 1e-3 */
     SG_MATERIAL_COATED_DIFFUSE, /* a diffuse base (diffuse) under a GGX
                                  * dielectric coat of index ior (roughness) */
+    SG_MATERIAL_DIFFUSE_TRANSMISSION, /* Lambertian both ways (pbrt-v4's
+                                       * diffusetransmission): reflects
+                                       * diffuse, lets transmittance through */
 } SgMaterialType;
 
 /* What a texture's value is made of: another texture or a constant. */
@@ -76,6 +79,23 @@ typedef struct SgMaterial {
      * its reflectance at normal incidence, in place of eta and k); 0: none.
      * `diffuse` then holds the texture's mean. */
     uint32_t diffuse_texture;
+    float transmittance[3]; /* diffuse transmission: what passes to the other side */
+    /* A cut-out (pbrt-v4's shape "alpha", Mitsuba's mask): rays pass
+     * through where alpha_texture's value is below 0.5, or, for a constant
+     * alpha, with probability 1 - alpha (pbrt-v4's stochastic alpha). Not a
+     * blend: a ray either meets the surface or does not. */
+    bool cutout;
+    float alpha;
+    uint32_t alpha_texture; /* 1 + index in scene->textures; 0: the constant alpha */
+    /* dielectric: the absorption coefficient of what it encloses, per unit
+     * of world length (Beer-Lambert along the path inside); 0: clear */
+    float sigma_a[3];
+    /* Shading normals, 1 + index in scene->textures (0: none): a tangent-
+     * space normal map (rgb = (n + 1) / 2, along the mesh's u, v and normal),
+     * or a bump map, a displacement along the normal of bump_scale times
+     * its value (pbrt's "displacement"; the first channel). */
+    uint32_t normal_texture, bump_texture;
+    float bump_scale;
 } SgMaterial;
 
 /* pbrt-v4's conductor given a reflectance r instead of eta and k: eta 1 and
@@ -131,6 +151,11 @@ typedef struct SgLightSource {
     double cos_cone, cos_falloff_start; /* spot */
     double angular_radius; /* distant: radians of the sun's disk; 0: a delta direction */
     char *image_path;     /* infinite: the environment image, or NULL: constant */
+    /* infinite: an image made at load time (a parametric sky, sunsky.h) in
+     * place of a file: RGB, row by row from the top, image_width x
+     * image_height; NULL: none */
+    float *image_pixels;
+    int image_width, image_height;
     SgEnvironmentLayout layout;
     /* infinite with an image: the irradiance of an upward-facing plane the
      * image is scaled to (pbrt-v4's "illuminance"); 0: as it is */

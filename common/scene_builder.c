@@ -338,6 +338,8 @@ static bool compute_bounds_and_hash(SgScene *s, const char *path, SgError *err)
         h = sg_hash_bytes(h, &l->angular_radius, sizeof l->angular_radius);
         if (l->image_path && !hash_file(&h, path, l->image_path, err))
             return false;
+        if (l->image_pixels)
+            h = sg_hash_bytes(h, l->image_pixels, sizeof(float) * 3 * (size_t)l->image_width * l->image_height);
         h = sg_hash_bytes(h, &layout, sizeof layout);
         h = sg_hash_bytes(h, l->light_to_world, sizeof l->light_to_world);
         h = sg_hash_bytes(h, &portal, sizeof portal);
@@ -367,8 +369,10 @@ void sg_scene_free(SgScene *s)
     /* the strings the arrays' items own, then the arrays */
     for (uint32_t i = 0; i < s->texture_count; i++)
         free(s->textures[i].path);
-    for (uint32_t i = 0; i < s->light_source_count; i++)
+    for (uint32_t i = 0; i < s->light_source_count; i++) {
         free(s->light_sources[i].image_path);
+        free(s->light_sources[i].image_pixels);
+    }
     for (uint32_t i = 0; i < s->warning_count; i++)
         free(s->warnings[i]);
     void *arrays[] = {s->positions, s->indices,        s->triangle_material, s->triangle_light,
@@ -443,8 +447,17 @@ bool sg_builder_add_light_source(SgSceneBuilder *b, const SgLightSource *light, 
     SgLightSource *l = &grown[s->light_source_count];
     *l = *light;
     l->image_path = NULL;
+    l->image_pixels = NULL;
     if (light->image_path && !(l->image_path = strdup(light->image_path)))
         return sg_fail(err, "%s: out of memory", b->path);
+    if (light->image_pixels) {
+        size_t bytes = sizeof(float) * 3 * (size_t)light->image_width * light->image_height;
+        if (!(light->image_width > 0 && light->image_height > 0) || !(l->image_pixels = malloc(bytes))) {
+            free(l->image_path);
+            return sg_fail(err, "%s: out of memory for a sky image", b->path);
+        }
+        memcpy(l->image_pixels, light->image_pixels, bytes);
+    }
     s->light_source_count++;
     return true;
 }

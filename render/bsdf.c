@@ -94,6 +94,33 @@ Vec3 bsdf_sample_microfacet(const Bsdf *b, float u0, float u1, float u2)
     return v3_normalize(sg_to_world(wi, b->lobe.n));
 }
 
+Vec3 bsdf_diffuse_eval(const DiffuseTransmission *d, Vec3 wi)
+{
+    float c = v3_dot(wi, d->n);
+    return c > 0.0f ? v3_scale(d->r, SG_INV_PI) : c < 0.0f ? v3_scale(d->t, SG_INV_PI) : v3(0, 0, 0);
+}
+
+float bsdf_diffuse_pdf(const DiffuseTransmission *d, Vec3 wi)
+{
+    float c = v3_dot(wi, d->n);
+    return (c > 0.0f ? d->pr * c : (1.0f - d->pr) * -c) * SG_INV_PI;
+}
+
+Vec3 bsdf_diffuse_sample(const DiffuseTransmission *d, float u0, float u1, float u2)
+{
+    return sg_sample_cosine_hemisphere(u0 < d->pr ? d->n : v3_scale(d->n, -1.0f), u1, u2);
+}
+
+bool bsdf_diffuse_side(const DiffuseTransmission *d, float u, Vec3 *albedo)
+{
+    if (u < d->pr) {
+        *albedo = v3_scale(d->r, 1.0f / d->pr);
+        return false;
+    }
+    *albedo = v3_scale(d->t, 1.0f / (1.0f - d->pr));
+    return true;
+}
+
 void bsdf_sample_delta(const Material *m, Vec3 albedo, Vec3 wo, Vec3 n, bool entering, float u, SpecularBounce *b)
 {
     b->pdf = 1.0f;

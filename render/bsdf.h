@@ -4,6 +4,8 @@
  * normal on wo's side. Reflection only: every kind is zero below the
  * surface, though its sampler may draw there (a valid direction with f = 0,
  * so that each pdf is a density over the whole sphere, as sampling.h's).
+ * Diffuse transmission is a Lambertian on the side the vertex chooses
+ * (DiffuseTransmission, below).
  * Mirrors, smooth conductors and glass, smooth or rough, are sampled alone
  * (SpecularBounce, at the end).
  *   PHONG      diffuse + normalized Phong lobe (sampling.h's SgGlossyLobe):
@@ -123,6 +125,33 @@ static inline Vec3 bsdf_sample(const Bsdf *b, float u0, float u1, float u2)
 {
     return b->kind == BSDF_PHONG ? sg_sample_glossy(&b->lobe, u0, u1, u2) : bsdf_sample_microfacet(b, u0, u1, u2);
 }
+
+/* Diffuse transmission (pbrt-v4's diffusetransmission): Lambertian
+ * reflection r on wo's side of the surface, Lambertian transmission t on
+ * the other, f = r / pi above n and t / pi below. Its sampler draws the
+ * side by the luminance shares (pr), then a cosine direction there. The
+ * integrator makes the same choice once per vertex (bsdf_diffuse_side)
+ * and then treats the chosen side as a Lambertian of albedo r / pr or
+ * t / (1 - pr): light samples, guides and the roulette see one
+ * hemisphere as everywhere else, and the expectation is the full BSDF. */
+typedef struct DiffuseTransmission {
+    Vec3 n;   /* on wo's side */
+    Vec3 r, t;
+    float pr; /* probability of drawing the reflecting side */
+} DiffuseTransmission;
+
+static inline DiffuseTransmission bsdf_diffuse_transmission(Vec3 n, Vec3 r, Vec3 t)
+{
+    float lr = luminance(r), lt = luminance(t);
+    return (DiffuseTransmission){n, r, t, lr + lt > 0.0f ? lr / (lr + lt) : 1.0f};
+}
+
+Vec3 bsdf_diffuse_eval(const DiffuseTransmission *d, Vec3 wi);
+float bsdf_diffuse_pdf(const DiffuseTransmission *d, Vec3 wi);
+Vec3 bsdf_diffuse_sample(const DiffuseTransmission *d, float u0, float u1, float u2);
+/* The side a vertex scatters on, from u: true where it transmits; *albedo
+ * is the Lambertian's there, divided by the side's probability. */
+bool bsdf_diffuse_side(const DiffuseTransmission *d, float u, Vec3 *albedo);
 
 /* One-sample mixture (defensive importance sampling), the guided bounce:
  * the BSDF's sampler with probability alpha, a cosine-power lobe folded

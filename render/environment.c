@@ -186,10 +186,18 @@ bool environment_load(Environment *e, const SgLightSource *light, SgError *err)
 {
     int w, h;
     float *rgb;
-    if (!sg_image_read(light->image_path, &w, &h, &rgb, err))
+    bool made = light->image_pixels != NULL; /* a sky made at load time */
+    if (made) {
+        w = light->image_width;
+        h = light->image_height;
+        rgb = light->image_pixels;
+    } else if (!sg_image_read(light->image_path, &w, &h, &rgb, err)) {
         return false;
-    bool ok = environment_init(e, rgb, w, h, light->layout, light->rgb, light->light_to_world, light->image_path, err);
-    free(rgb);
+    }
+    const char *name = made ? "the sky" : light->image_path;
+    bool ok = environment_init(e, rgb, w, h, light->layout, light->rgb, light->light_to_world, name, err);
+    if (!made)
+        free(rgb);
     if (!ok || !(light->illuminance > 0.0))
         return ok;
     /* pbrt-v4's "illuminance": the upper hemisphere's cosine-weighted
@@ -206,7 +214,7 @@ bool environment_load(Environment *e, const SgLightSource *light, SgError *err)
         }
     if (!(k > 0.0)) {
         environment_free(e);
-        return sg_fail(err, "%s: \"illuminance\" asked of an image dark above the horizon", light->image_path);
+        return sg_fail(err, "%s: \"illuminance\" asked of an image dark above the horizon", name);
     }
     float s = (float)(light->illuminance / k);
     for (size_t i = 0; i < (size_t)w * h; i++)

@@ -29,6 +29,9 @@ bool geometry_init(Geometry *g, const SgScene *s, const char *path, SgError *err
     if (!isfinite(extent) || !(extent > 0.0))
         return sg_fail(err, "%s: degenerate or non-finite scene bounds", path);
     g->scale = (float)extent;
+    for (uint32_t m = 0; m < s->material_count; m++)
+        g->has_cutouts = g->has_cutouts || (s->materials[m].cutout &&
+                                            (s->materials[m].alpha_texture || s->materials[m].alpha < 1.0f));
 
     g->vertex_count = s->vertex_count;
     g->triangle_count = s->triangle_count;

@@ -29,6 +29,7 @@ typedef struct Geometry {
     Vec3 *vertices;    /* local coordinates */
     uint32_t *indices;
     TriInfo *tris;     /* per triangle, packed: one cache line per hit */
+    bool has_cutouts;  /* some material lets rays through (render/integrator.c walks past it) */
     RTCDevice device;
     RTCScene scene;
 } Geometry;
@@ -71,14 +72,15 @@ typedef struct Hit {
     Vec3 p;
 } Hit;
 
-static inline Hit intersect(const Geometry *g, Vec3 o, Vec3 d, float tfar)
+/* The first hit along o + t d with tnear < t < tfar. */
+static inline Hit intersect_between(const Geometry *g, Vec3 o, Vec3 d, float tnear, float tfar)
 {
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     struct RTCRayHit rh;
     rh.ray.org_x = o.x; rh.ray.org_y = o.y; rh.ray.org_z = o.z;
     rh.ray.dir_x = d.x; rh.ray.dir_y = d.y; rh.ray.dir_z = d.z;
-    rh.ray.tnear = 0.0f;
+    rh.ray.tnear = tnear;
     rh.ray.tfar = tfar;
     rh.ray.mask = 0xFFFFFFFFu;
     rh.ray.flags = 0;
@@ -100,6 +102,11 @@ static inline Hit intersect(const Geometry *g, Vec3 o, Vec3 d, float tfar)
     h.b2 = v;
     h.p = v3_add(v3_add(v3_scale(a, 1.0f - u - v), v3_scale(b, u)), v3_scale(c, v));
     return h;
+}
+
+static inline Hit intersect(const Geometry *g, Vec3 o, Vec3 d, float tfar)
+{
+    return intersect_between(g, o, d, 0.0f, tfar);
 }
 
 static inline bool occluded(const Geometry *g, Vec3 o, Vec3 d, float tfar)

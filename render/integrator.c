@@ -23,6 +23,11 @@ typedef struct PathState {
     float prev_portal_share; /* the vertex before's (GuideVertex.portal_share) */
     Vec3 prev_p;
     Vec3 guide_estimate; /* the guide's slot for its roulette (PathGuideOps.survival) */
+    /* the absorbing dielectric the path is inside (Material.sigma_a), or 0:
+     * set where a path enters one through its front, cleared where it
+     * leaves through the back */
+    Vec3 sigma_a;
+    bool absorbing;
 } PathState;
 
 /* A diffuse or glossy vertex, as far as drawing its bounce needs. */
@@ -31,6 +36,12 @@ typedef struct BounceVertex {
     GuideVertex g;     /* the guide's distribution there */
     Vec3 origin, p;
     GuideSegment *seg; /* recording: the vertex's record */
+    int thread;
+    /* a normal or bump map bent the shading normal (the BSDF's lobe.n)
+     * away from ng, the geometric normal on wo's side: what is below ng
+     * gets nothing, so no light comes through the surface */
+    bool shaded;
+    Vec3 ng;
 } BounceVertex;
 
 /* A learning vertex waiting for the rest of its branch. */
@@ -112,6 +123,62 @@ static inline Vec3 surface_albedo(const Integrator *it, const Material *m, const
     return m->texture ? textured_albedo(it, m, h, thread) : m->kd;
 }
 
+/* ---- cut-outs ------------------------------------------------------------------ */
+
+/* How many cut-out surfaces one ray may pass before the next counts as solid. */
+#define MAX_CUTOUT_LAYERS 64
+
+/* A number in [0, 1) of the ray and the hit's distance alone (pbrt-v4
+ * hashes the ray too): the same ray meets a surface of constant alpha, or
+ * passes it, every time; layers along one ray decide apart. */
+static float ray_hash(Vec3 o, Vec3 d, float t)
+{
+    const float f[7] = {o.x, o.y, o.z, d.x, d.y, d.z, t};
+    uint64_t h = 0x9e3779b97f4a7c15ULL;
+    for (int i = 0; i < 7; i++) {
+        uint32_t bits;
+        memcpy(&bits, &f[i], sizeof bits);
+        h = (h ^ bits) * 0xbf58476d1ce4e5b9ULL;
+        h ^= h >> 31;
+    }
+    h *= 0x94d049bb133111ebULL;
+    h ^= h >> 29;
+    return (float)(h >> 40) * 0x1p-24f;
+}
+
+/* Whether the ray from o along d passes through its hit h: a cut-out's
+ * alpha texture below 0.5 there, or its constant alpha by the ray's hash. */
+static bool passes_through(const Integrator *it, const Hit *h, Vec3 o, Vec3 d, int thread)
+{
+    const Material *m = &it->materials[it->geo->tris[h->tri].material];
+    if (!m->cutout)
+        return false;
+    if (m->alpha_texture)
+        return texture_set_eval_at(it->textures, m->alpha_texture, h->tri, h->b1, h->b2, thread).x < 0.5f;
+    return ray_hash(o, d, h->t) >= m->alpha;
+}
+
+/* The first hit along the ray that it does not pass through (scenes
+ * without cut-outs: intersect itself). Past a cut-out the ray goes on
+ * along the same line, just beyond the hit: an origin moved off the
+ * surface would shift the line and so where a shadow ray's reach ends. */
+static Hit intersect_solid(const Integrator *it, Vec3 o, Vec3 d, float tfar, int thread)
+{
+    Hit h = intersect(it->geo, o, d, tfar);
+    if (!it->geo->has_cutouts)
+        return h;
+    for (int i = 0; h.found && i < MAX_CUTOUT_LAYERS && passes_through(it, &h, o, d, thread); i++) {
+        float tnear = h.t * (1.0f + 0x1p-16f) + it->geo->scale * 0x1p-24f;
+        h = intersect_between(it->geo, o, d, tnear, tfar);
+    }
+    return h;
+}
+
+static bool occluded_solid(const Integrator *it, Vec3 o, Vec3 d, float tfar, int thread)
+{
+    return it->geo->has_cutouts ? intersect_solid(it, o, d, tfar, thread).found : occluded(it->geo, o, d, tfar);
+}
+
 /* Emission toward the path (one-sided, toward the winding normal), MIS
  * weighted against the light sample of the vertex before. */
 static void add_emission(Path *p, const Hit *h, const Material *m, float cos_o, GuideSegment *seg)
@@ -165,12 +232,84 @@ static bool specular_bounce(Path *p, const Material *m, const Hit *h, Vec3 wo, V
     }
     ps->d = b.wi;
     ps->o = offset_origin(it->geo, h->p, b.transmitted ? v3_scale(n, -1.0f) : n);
+    if (b.transmitted && m->type == SG_MATERIAL_DIELECTRIC) { /* into or out of what it encloses */
+        ps->absorbing = entering && m->absorbs;
+        ps->sigma_a = ps->absorbing ? m->sigma_a : v3(0, 0, 0);
+    }
     ps->beta = v3_mul(ps->beta, b.weight);
     ps->rr_beta = v3_mul(ps->rr_beta, b.rr_weight);
     ps->specular_bounce = true;
     if (seg)
         it->guide->ops->record_bounce(seg, b.wi, b.pdf, b.weight, b.delta, b.eta, b.delta ? 0.0f : m->roughness);
     return true;
+}
+
+/* ---- shading normals ------------------------------------------------------------ */
+
+/* A shading-normal vertex's direction under its geometric surface. */
+static inline bool below_geometry(const BounceVertex *v, Vec3 wi) { return v->shaded && !(v3_dot(wi, v->ng) > 0.0f); }
+
+/* The triangle's tangent dp/du and bitangent dp/dv from its texture
+ * coordinates, and the coordinates at the hit; without usable ones, a
+ * frame around the normal ng and (0, 0). */
+static void surface_frame(const Integrator *it, const Hit *h, Vec3 ng, Vec3 *dpdu, Vec3 *dpdv, float *u, float *v)
+{
+    float uv[3][2];
+    *u = *v = 0.0f;
+    if (texture_set_triangle_uvs(it->textures, h->tri, uv)) {
+        const uint32_t *id = it->geo->indices + 3 * (size_t)h->tri;
+        Vec3 p0 = it->geo->vertices[id[0]], p1 = it->geo->vertices[id[1]], p2 = it->geo->vertices[id[2]];
+        float b0 = 1.0f - h->b1 - h->b2;
+        *u = b0 * uv[0][0] + h->b1 * uv[1][0] + h->b2 * uv[2][0];
+        *v = b0 * uv[0][1] + h->b1 * uv[1][1] + h->b2 * uv[2][1];
+        float du02 = uv[0][0] - uv[2][0], dv02 = uv[0][1] - uv[2][1];
+        float du12 = uv[1][0] - uv[2][0], dv12 = uv[1][1] - uv[2][1];
+        float det = du02 * dv12 - dv02 * du12;
+        if (fabsf(det) > 1e-12f) {
+            Vec3 dp02 = v3_sub(p0, p2), dp12 = v3_sub(p1, p2);
+            *dpdu = v3_scale(v3_sub(v3_scale(dp02, dv12), v3_scale(dp12, dv02)), 1.0f / det);
+            *dpdv = v3_scale(v3_sub(v3_scale(dp12, du02), v3_scale(dp02, du12)), 1.0f / det);
+            if (v3_length(v3_cross(*dpdu, *dpdv)) > 0.0f)
+                return;
+        }
+    }
+    v3_basis(ng, dpdu, dpdv);
+}
+
+/* The shading normal of a normal- or bump-mapped material at h, on the
+ * side of n (the geometric normal facing wo). A map that would turn it
+ * away from wo gives the geometric normal there (a light leak otherwise). */
+static Vec3 shading_normal(const Integrator *it, const Material *m, const Hit *h, Vec3 n, Vec3 wo, int thread)
+{
+    Vec3 ng = it->geo->tris[h->tri].normal; /* the winding's side: maps are made for it */
+    Vec3 dpdu, dpdv, ns;
+    float u, v;
+    surface_frame(it, h, ng, &dpdu, &dpdv, &u, &v);
+    if (m->normal_texture) { /* tangent space: x along dp/du, z the normal (pbrt-v4, Mitsuba) */
+        Vec3 c = texture_set_eval_at(it->textures, m->normal_texture, h->tri, h->b1, h->b2, thread);
+        Vec3 x = v3_sub(dpdu, v3_scale(ng, v3_dot(ng, dpdu)));
+        x = v3_length(x) > 0.0f ? v3_normalize(x) : dpdu;
+        Vec3 y = v3_cross(ng, x);
+        ns = v3_add(v3_add(v3_scale(x, 2.0f * c.x - 1.0f), v3_scale(y, 2.0f * c.y - 1.0f)),
+                    v3_scale(ng, 2.0f * c.z - 1.0f));
+    } else { /* the displaced surface's normal, by differences (pbrt-v4's step without ray differentials) */
+        const float step = 0.0005f;
+        float d0 = texture_set_eval(it->textures, m->bump_texture, u, v, thread).x;
+        float d_u = texture_set_eval(it->textures, m->bump_texture, u + step, v, thread).x;
+        float d_v = texture_set_eval(it->textures, m->bump_texture, u, v + step, thread).x;
+        Vec3 tu = v3_add(dpdu, v3_scale(ng, m->bump_scale * (d_u - d0) / step));
+        Vec3 tv = v3_add(dpdv, v3_scale(ng, m->bump_scale * (d_v - d0) / step));
+        ns = v3_cross(tu, tv);
+        if (v3_dot(ns, ng) < 0.0f) /* uv mirrored: the winding decides the side */
+            ns = v3_scale(ns, -1.0f);
+    }
+    float len = v3_length(ns);
+    if (!(len > 0.0f) || !isfinite(len))
+        return n;
+    ns = v3_scale(ns, 1.0f / len);
+    if (v3_dot(n, ng) < 0.0f)
+        ns = v3_scale(ns, -1.0f);
+    return v3_dot(ns, wo) > 1e-3f && v3_dot(ns, n) > 1e-3f ? ns : n;
 }
 
 /* ---- a diffuse or glossy vertex ---------------------------------------------- */
@@ -204,7 +343,7 @@ static LightSample sample_light_source(const Integrator *it, const BounceVertex 
     ls.sky = lp.pdf_portals > 0.0f || lp.pdf_sky > 0.0f;
     ls.pdf_portals = lp.pdf_portals;
     ls.pdf_sky = lp.pdf_sky;
-    float cos_x = v3_dot(lp.wi, v->g.bsdf.lobe.n);
+    float cos_x = below_geometry(v, lp.wi) ? 0.0f : v3_dot(lp.wi, v->g.bsdf.lobe.n);
     if (!(cos_x > 0.0f || lit_below_horizon))
         return ls;
     st->rays++;
@@ -216,7 +355,7 @@ static LightSample sample_light_source(const Integrator *it, const BounceVertex 
         shadow = v3_scale(to, 1.0f / reach);
         reach *= 1.0f - 1e-4f;
     }
-    if (occluded(it->geo, v->origin, shadow, reach))
+    if (occluded_solid(it, v->origin, shadow, reach, v->thread))
         return ls;
     ls.lit = true;
     if (cos_x > 0.0f && lp.pdf > 0.0f) {
@@ -250,11 +389,11 @@ static LightSample sample_light(const Integrator *it, const BounceVertex *v, boo
     float dist = sqrtf(dist2);
     Vec3 wi = v3_scale(to, 1.0f / dist);
     float cos_l = -v3_dot(wi, geo->tris[t].normal);
-    float cos_x = v3_dot(wi, n);
+    float cos_x = below_geometry(v, wi) ? 0.0f : v3_dot(wi, n);
     if (!(dist > 0.0f && cos_l > 0.0f && (cos_x > 0.0f || lit_below_horizon)))
         return ls;
     st->rays++;
-    if (occluded(geo, v->origin, wi, dist * (1.0f - 1e-4f)))
+    if (occluded_solid(it, v->origin, wi, dist * (1.0f - 1e-4f), v->thread))
         return ls;
     ls.lit = true;
     if (cos_x > 0.0f) {
@@ -283,7 +422,7 @@ static bool take_bounce(const PathGuide *guide, BounceVertex *v, PathState *ps, 
     st->bounces++;
     st->lobe_bounces += v->g.by_guide;
     float cos_x = v3_dot(wi, v->g.bsdf.lobe.n);
-    bool above = cos_x > 0.0f && pdf > 0.0f;
+    bool above = cos_x > 0.0f && pdf > 0.0f && !below_geometry(v, wi);
     if (pr) {
         pr->v = v->g;
         pr->bounced = above;
@@ -368,8 +507,21 @@ static bool scatter(Path *p, const Hit *h, const Material *m, Vec3 wo, Vec3 n, b
     v.m = m;
     v.p = h->p;
     v.seg = seg;
+    v.thread = pc->thread;
     memset(v.g.state, 0, sizeof v.g.state);
-    bsdf_init(&v.g.bsdf, m, n, wo, surface_albedo(it, m, h, pc->thread));
+    Vec3 albedo = surface_albedo(it, m, h, pc->thread);
+    v.shaded = m->normal_texture || m->bump_texture;
+    Vec3 ns = v.shaded ? shading_normal(it, m, h, n, wo, pc->thread) : n;
+    if (m->type == SG_MATERIAL_DIFFUSE_TRANSMISSION) { /* one side per vertex (bsdf.h) */
+        DiffuseTransmission dt = bsdf_diffuse_transmission(ns, albedo, m->kt);
+        if (bsdf_diffuse_side(&dt, sg_rng_float(pc->rng), &albedo)) {
+            n = v3_scale(n, -1.0f);
+            ns = v3_scale(ns, -1.0f);
+            front = !front;
+        }
+    }
+    v.ng = n;
+    bsdf_init(&v.g.bsdf, m, ns, wo, albedo);
     v.g.learn = false;
     v.g.rms = -1.0f;
     v.g.by_guide = false;
@@ -421,12 +573,18 @@ static bool path_vertex(Path *p)
 {
     const Integrator *it = p->it;
     const PathCtx *pc = p->pc;
-    Hit h = intersect(it->geo, p->ps.o, p->ps.d, INFINITY);
+    Hit h = intersect_solid(it, p->ps.o, p->ps.d, INFINITY, pc->thread);
     pc->st->rays++;
     if (p->last_bounce) { /* where the learning vertex's bounce led */
         if (h.found)
             p->last_bounce->distance = h.t;
         p->last_bounce = NULL;
+    }
+    if (p->ps.absorbing && h.found) { /* Beer-Lambert along the segment inside */
+        Vec3 tau = v3_scale(p->ps.sigma_a, -h.t);
+        Vec3 tr = v3(expf(tau.x), expf(tau.y), expf(tau.z));
+        p->ps.beta = v3_mul(p->ps.beta, tr);
+        p->ps.rr_beta = v3_mul(p->ps.rr_beta, tr);
     }
     if (!h.found) {
         if (it->lights->has_escaping)
@@ -499,7 +657,7 @@ Vec3 integrator_trace(const Integrator *it, Vec3 o, Vec3 d, const PathCtx *pc, V
     p.it = it;
     p.pc = pc;
     p.ps = (PathState){o, d, v3(1, 1, 1), v3(1, 1, 1), true /* the camera ray counts as one */, 0.0f, -1.0f, o,
-                       v3(0, 0, 0)};
+                       v3(0, 0, 0), v3(0, 0, 0), false};
     p.radiance = v3(0, 0, 0);
     p.seen = seen;
     p.depth = 0;

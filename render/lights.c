@@ -169,7 +169,7 @@ static bool sources_init(LightSet *ls, const SgScene *s, const double centre[3],
                 if (!light_source_set_portals(ls, i, (const Vec3(*)[4])c, 1))
                     return sg_fail(err, "%s: a sky's portal is degenerate (its corners must span a window)", path);
             }
-            if (in->image_path) {
+            if (in->image_path || in->image_pixels) {
                 if (!(l->map = calloc(1, sizeof *l->map)))
                     return sg_fail(err, "%s: out of memory for the lights", path);
                 if (!environment_load(l->map, in, err))

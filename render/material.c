@@ -59,6 +59,17 @@ void material_init(Material *m, const SgMaterial *src)
         m->ax = fmaxf(m->ax, SG_GGX_SMOOTH_ALPHA);
         m->ay = fmaxf(m->ay, SG_GGX_SMOOTH_ALPHA);
         m->roughness = sqrtf(m->ax * m->ay);
+    } else if (m->type == SG_MATERIAL_DIFFUSE_TRANSMISSION) {
+        m->kt = v3(fmaxf(0, src->transmittance[0]), fmaxf(0, src->transmittance[1]), fmaxf(0, src->transmittance[2]));
+        m->ks = v3(0, 0, 0);
+        float worst = v3_max_component(v3_add(m->kd, m->kt)); /* R + T <= 1 per channel */
+        if (worst > 1.0f) {
+            m->kd = v3_scale(m->kd, 1.0f / worst);
+            m->kt = v3_scale(m->kt, 1.0f / worst);
+        }
+        m->black = luminance(m->kd) + luminance(m->kt) <= 0.0f;
+        m->diffuse_weight = 1.0f; /* each side is a Lambertian alone (bsdf.h) */
+        m->roughness = 1.0f;
     } else if (m->type == SG_MATERIAL_MIRROR) {
         if (v3_max_component(m->ks) <= 0.0f)
             m->ks = v3(1, 1, 1); /* a mirror given without Ks reflects fully */
@@ -67,4 +78,14 @@ void material_init(Material *m, const SgMaterial *src)
     m->delta = m->delta || m->type == SG_MATERIAL_MIRROR;
     m->microfacet = !m->delta && (m->type == SG_MATERIAL_CONDUCTOR || m->type == SG_MATERIAL_COATED_DIFFUSE);
     m->texture = src->diffuse_texture;
+    m->cutout = src->cutout && (src->alpha_texture || src->alpha < 1.0f);
+    m->alpha = fminf(fmaxf(src->alpha, 0.0f), 1.0f);
+    m->alpha_texture = src->cutout ? src->alpha_texture : 0;
+    m->normal_texture = src->normal_texture;
+    m->bump_texture = src->normal_texture ? 0 : src->bump_texture;
+    m->bump_scale = src->bump_scale;
+    if (m->type == SG_MATERIAL_DIELECTRIC) {
+        m->sigma_a = v3(fmaxf(0, src->sigma_a[0]), fmaxf(0, src->sigma_a[1]), fmaxf(0, src->sigma_a[2]));
+        m->absorbs = v3_max_component(m->sigma_a) > 0.0f;
+    }
 }

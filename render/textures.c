@@ -19,7 +19,8 @@ struct TextureSet {
 bool textures_needed(const SgScene *s)
 {
     for (uint32_t m = 0; m < s->material_count; m++)
-        if (s->materials[m].diffuse_texture)
+        if (s->materials[m].diffuse_texture || (s->materials[m].cutout && s->materials[m].alpha_texture) ||
+            s->materials[m].normal_texture || s->materials[m].bump_texture)
             return true;
     return false;
 }
@@ -122,6 +123,18 @@ Vec3 texture_set_eval(const TextureSet *t, uint32_t texture, float u, float v, i
     }
     }
     return v3(tex->mean[0], tex->mean[1], tex->mean[2]);
+}
+
+bool texture_set_triangle_uvs(const TextureSet *t, uint32_t tri, float uv[3][2])
+{
+    if (!t->uvs)
+        return false;
+    const uint32_t *id = t->indices + 3 * (size_t)tri;
+    for (int k = 0; k < 3; k++) {
+        uv[k][0] = t->uvs[2 * (size_t)id[k]];
+        uv[k][1] = t->uvs[2 * (size_t)id[k] + 1];
+    }
+    return true;
 }
 
 Vec3 texture_set_eval_at(const TextureSet *t, uint32_t texture, uint32_t tri, float b1, float b2, int thread)

@@ -30,6 +30,8 @@ void texture_set_free(TextureSet *t);
 /* Texture `texture` (1 + index in the scene's list) at barycentrics
  * (b1, b2) of triangle tri, looked up by worker `thread`. */
 Vec3 texture_set_eval_at(const TextureSet *t, uint32_t texture, uint32_t tri, float b1, float b2, int thread);
+/* The texture coordinates of triangle tri's corners; false: the scene has none. */
+bool texture_set_triangle_uvs(const TextureSet *t, uint32_t tri, float uv[3][2]);
 /* The same at texture coordinates (u, v). */
 Vec3 texture_set_eval(const TextureSet *t, uint32_t texture, float u, float v, int thread);
 

@@ -9,7 +9,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "color.h"
 #include "scene.h"
+#include "sunsky.h"
 #include "support_files.h"
 
 #define BOX_V3 "tests/data/mitsuba/box_v3.xml"
@@ -379,6 +381,68 @@ static SgMaterial material_of(const char *bsdf, SgScene **keep)
     return m;
 }
 
+Test(mitsuba_media, absorbing_interior_of_a_dielectric)
+{
+    /* Mitsuba 3: sigma_t and albedo 0; nested, and by reference */
+    SgScene *s = load_body("3.0.0",
+                           "<medium type=\"homogeneous\" id=\"ink\"><rgb name=\"sigma_t\" value=\"0.5 1 2\"/>"
+                           "<float name=\"albedo\" value=\"0\"/><float name=\"scale\" value=\"2\"/></medium>"
+                           "<shape type=\"cube\"><bsdf type=\"dielectric\"/><ref name=\"interior\" id=\"ink\"/></shape>"
+                           "<shape type=\"sphere\"><bsdf type=\"diffuse\"/>"
+                           "<medium type=\"homogeneous\" name=\"interior\"><float name=\"albedo\" value=\"0\"/>"
+                           "</medium></shape>" LIGHT);
+    const SgMaterial *m = &s->materials[s->triangle_material[0]];
+    cr_expect_eq(m->type, SG_MATERIAL_DIELECTRIC);
+    cr_expect(m->sigma_a[0] == 1.0f && m->sigma_a[2] == 4.0f, "sigma_t (1 - albedo) scale: %g %g", m->sigma_a[0],
+              m->sigma_a[2]);
+    cr_expect(has_warning(s, "not a dielectric"));
+    cr_expect(!has_warning(s, "scattering"));
+    sg_scene_free(s);
+    /* Mitsuba 0.6: sigmaA and sigmaS; a scattering one keeps its warning */
+    s = load_body("0.6.0", "<shape type=\"cube\"><bsdf type=\"dielectric\"/>"
+                           "<medium type=\"homogeneous\" name=\"interior\"><rgb name=\"sigmaA\" value=\"0.3\"/>"
+                           "<rgb name=\"sigmaS\" value=\"0\"/></medium></shape>"
+                           "<shape type=\"sphere\"><bsdf type=\"dielectric\"/>"
+                           "<medium type=\"homogeneous\" name=\"interior\"/></shape>" LIGHT);
+    cr_expect_float_eq(s->materials[s->triangle_material[0]].sigma_a[1], 0.3f, 1e-6);
+    cr_expect_eq(s->materials[s->triangle_material[s->triangle_count - 1]].sigma_a[1], 0.0f);
+    cr_expect(has_warning(s, "scattering media"));
+    sg_scene_free(s);
+}
+
+/* Mitsuba 0.6's sunsky: a sky image made at load time and a sun disk. */
+Test(mitsuba_emitters, sunsky_is_a_sky_image_and_a_sun)
+{
+    SgScene *s = load_body("0.6.0",
+                           "<shape type=\"cube\"/><emitter type=\"sunsky\">"
+                           "<vector name=\"sunDirection\" x=\"0\" y=\"0.8\" z=\"0.6\"/>"
+                           "<float name=\"turbidity\" value=\"4\"/><integer name=\"resolution\" value=\"64\"/>"
+                           "<float name=\"sunScale\" value=\"0.5\"/><float name=\"sunRadiusScale\" value=\"2\"/>"
+                           "</emitter>\n");
+    cr_assert_eq(s->light_source_count, 2);
+    const SgLightSource *sky = &s->light_sources[0], *sun = &s->light_sources[1];
+    cr_expect_eq(sky->kind, SG_LIGHT_INFINITE);
+    cr_assert_not_null(sky->image_pixels);
+    cr_expect(sky->image_width == 128 && sky->image_height == 64);
+    /* the top row looks at the zenith: Preetham's zenith luminance there, in
+     * Mitsuba's units (kcd/m^2 over 683 lm/W x 106.857 nm / 1000) */
+    double zenith = sg_preetham_zenith_luminance(4.0, acos(0.8)) / (683.0 * 106.857 / 1000.0), y = 0;
+    for (int i = 0; i < sky->image_width; i++) {
+        const float *px = sky->image_pixels + 3 * i;
+        y += sg_luminance(px[0], px[1], px[2]) / sky->image_width;
+    }
+    cr_expect(fabs(y - zenith) < 0.03 * zenith, "zenith row luminance %g, Preetham's %g", y, zenith);
+    const float *below = sky->image_pixels + 3 * (size_t)sky->image_width * (sky->image_height - 1);
+    cr_expect(below[0] == 0 && below[1] == 0 && below[2] == 0, "black below the horizon");
+    cr_expect_eq(sun->kind, SG_LIGHT_DISTANT);
+    expect_point(sun->direction, 0, -0.8, -0.6); /* the way its light travels */
+    cr_expect(fabs(sun->angular_radius - 2 * SG_SUN_ANGULAR_RADIUS) < 1e-9);
+    cr_expect(sun->rgb[0] > sun->rgb[2] && sun->rgb[2] > 0, "the sun through air is reddened: %g %g", sun->rgb[0],
+              sun->rgb[2]);
+    cr_expect_eq(s->warning_count, 0);
+    sg_scene_free(s);
+}
+
 Test(mitsuba_bsdfs, conductors)
 {
     SgMaterial m = material_of("<bsdf type=\"conductor\"><string name=\"material\" value=\"none\"/></bsdf>", NULL);
@@ -414,13 +478,24 @@ Test(mitsuba_bsdfs, wrappers_and_blends)
     cr_expect(fabsf(m.diffuse[0] - 0.7f) < 1e-6f, "0.75 0.8 + 0.25 0.4: %g", m.diffuse[0]);
     m = material_of("<bsdf type=\"mask\"><float name=\"opacity\" value=\"0.5\"/><bsdf type=\"dielectric\"/></bsdf>", &s);
     cr_expect_eq(m.type, SG_MATERIAL_DIELECTRIC);
-    cr_expect(has_warning(s, "mask"), "mask warns");
+    cr_expect(m.cutout && m.alpha == 0.5f && !m.alpha_texture, "mask: a cut-out of its opacity");
+    cr_expect(!has_warning(s, "mask"), "mask is read, no warning");
     sg_scene_free(s);
+    m = material_of("<bsdf type=\"mask\"><texture name=\"opacity\" type=\"checkerboard\"/>"
+                    "<bsdf type=\"diffuse\"/></bsdf>", NULL);
+    cr_expect(m.cutout && m.alpha_texture > 0, "a textured opacity cuts where below 0.5");
     m = material_of("<bsdf type=\"bumpmap\"><texture type=\"checkerboard\"/><bsdf type=\"thindielectric\"/></bsdf>",
                     &s);
     cr_expect_eq(m.type, SG_MATERIAL_DIELECTRIC);
-    cr_expect(has_warning(s, "bumpmap") && has_warning(s, "thindielectric"));
+    cr_expect(m.bump_texture > 0 && m.bump_scale == 1.0f, "bumpmap: a bump texture");
+    cr_expect(!has_warning(s, "bumpmap") && has_warning(s, "thindielectric"));
     sg_scene_free(s);
+    m = material_of("<bsdf type=\"difftrans\"><rgb name=\"transmittance\" value=\"0.7\"/></bsdf>", NULL);
+    cr_expect(m.type == SG_MATERIAL_DIFFUSE_TRANSMISSION && m.transmittance[1] == 0.7f && m.diffuse[1] == 0,
+              "difftrans: a diffuse transmitter");
+    m = material_of("<bsdf type=\"normalmap\"><texture type=\"checkerboard\" name=\"normalmap\"/>"
+                    "<bsdf type=\"diffuse\"/></bsdf>", NULL);
+    cr_expect(m.normal_texture > 0 && !m.bump_texture, "normalmap: a normal texture");
 }
 
 Test(mitsuba_bsdfs, colours_and_spectra)
@@ -519,7 +594,7 @@ Test(mitsuba_warnings, one_per_kind_with_file_and_line)
     char want[4300];
     snprintf(want, sizeof want, "%s:3: shape \"hair\" is not supported: left out (2 times)", path);
     cr_expect(has_warning(s, want), "got: %s", s->warning_count ? s->warnings[0] : "none");
-    cr_expect(has_warning(s, "media are not supported"));
+    cr_expect(has_warning(s, "scattering media"), "a scattering medium still warns");
     sg_scene_free(s);
 }
 
@@ -546,7 +621,7 @@ static void expect_error(const char *body, const char *what)
 Test(mitsuba_errors, meaningless_scenes)
 {
     expect_error("<shape type=\"cube\"/>\n", "no light");
-    expect_error("<shape type=\"cube\"/><emitter type=\"sunsky\"/>\n", "no light (sunsky is not supported)");
+    expect_error("<shape type=\"cube\"/><emitter type=\"projector\"/>\n", "no light (projector is not supported)");
     expect_error("<shape type=\"cube\"><ref id=\"nothing\"/></shape>" LIGHT, "unknown id \"nothing\"");
     expect_error("<shape type=\"ply\"><string name=\"filename\" value=\"absent.ply\"/></shape>" LIGHT, "absent.ply");
     expect_error("<shape type=\"obj\"><string name=\"filename\" value=\"absent.obj\"/></shape>" LIGHT, "absent.obj");

@@ -344,6 +344,81 @@ Test(pbrt_materials, mapped_to_ours)
     sg_scene_free(s);
 }
 
+Test(pbrt_materials, diffuse_transmission_reflects_and_transmits)
+{
+    SgScene *s = load_ok(HEADER "Material \"diffusetransmission\" \"rgb reflectance\" [ 0.2 0.3 0.4 ]\n"
+                                "    \"rgb transmittance\" [ 0.5 0.4 0.3 ] \"float scale\" 0.5\n" TRIANGLE
+                                "Material \"diffusetransmission\"\n" TRIANGLE);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect_eq(m->type, SG_MATERIAL_DIFFUSE_TRANSMISSION);
+    cr_expect_float_eq(m->diffuse[1], 0.15f, 1e-6, "reflectance times scale");
+    cr_expect_float_eq(m->transmittance[0], 0.25f, 1e-6, "transmittance times scale");
+    m = material_of(s, 1); /* pbrt-v4's defaults */
+    cr_expect_float_eq(m->diffuse[0], 0.25f, 1e-6);
+    cr_expect_float_eq(m->transmittance[2], 0.25f, 1e-6);
+    cr_expect_eq(s->warning_count, 0);
+    sg_scene_free(s);
+}
+
+Test(pbrt_shapes, alpha_makes_a_cutout_copy_of_the_material)
+{
+    SgScene *s = load_ok(HEADER "Texture \"leaf\" \"float\" \"checkerboard\" \"float uscale\" 8\n"
+                                "Material \"diffuse\"\n"
+                                "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]"
+                                " \"float alpha\" 0\n"
+                                "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]"
+                                " \"texture alpha\" \"leaf\"\n" TRIANGLE);
+    cr_assert_eq(s->triangle_count, 3);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect(m->cutout);
+    cr_expect_float_eq(m->alpha, 0.0f, 1e-9);
+    cr_expect_eq(m->alpha_texture, 0);
+    m = material_of(s, 1);
+    cr_expect(m->cutout);
+    cr_expect(m->alpha_texture > 0 && m->alpha_texture <= s->texture_count, "the leaf texture");
+    cr_expect(!material_of(s, 2)->cutout, "a shape without alpha stays opaque");
+    cr_expect_eq(material_of(s, 2)->type, material_of(s, 0)->type);
+    cr_expect_eq(s->warning_count, 0);
+    sg_scene_free(s);
+}
+
+Test(pbrt_materials, bump_and_normal_maps_are_shading_normals)
+{
+    SgScene *s = load_ok(HEADER "Texture \"bumps\" \"float\" \"checkerboard\" \"float uscale\" 8\n"
+                                "Material \"diffuse\" \"texture displacement\" \"bumps\"\n" TRIANGLE
+                                "Material \"conductor\" \"string normalmap\" \"no-such-normals.png\"\n" TRIANGLE);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect(m->bump_texture > 0 && m->bump_texture <= s->texture_count, "displacement: a bump map");
+    cr_expect_float_eq(m->bump_scale, 1.0f, 1e-9);
+    cr_expect_eq(material_of(s, 1)->normal_texture, 0, "a normal map that cannot be read is left out");
+    cr_expect(has_warning(s, "normal maps that cannot be read"));
+    cr_expect(!has_warning(s, "displacement"));
+    sg_scene_free(s);
+}
+
+Test(pbrt_materials, absorbing_medium_inside_a_dielectric)
+{
+    SgScene *s = load_ok(HEADER "MakeNamedMedium \"tint\" \"string type\" \"homogeneous\"\n"
+                                "    \"rgb sigma_a\" [ 0.1 0.2 0.4 ] \"rgb sigma_s\" [ 0 0 0 ] \"float scale\" 2\n"
+                                "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
+                                "AttributeBegin\nMediumInterface \"tint\" \"\"\n"
+                                "Material \"dielectric\"\n" TRIANGLE
+                                "Material \"diffuse\"\n" TRIANGLE "AttributeEnd\n"
+                                "Material \"dielectric\"\n" TRIANGLE
+                                "MediumInterface \"fog\"\n" TRIANGLE);
+    cr_assert_eq(s->triangle_count, 4);
+    const SgMaterial *m = material_of(s, 0);
+    cr_expect_eq(m->type, SG_MATERIAL_DIELECTRIC);
+    cr_expect(m->sigma_a[0] == 0.2f && m->sigma_a[2] == 0.8f, "sigma_a times scale: %g %g", m->sigma_a[0],
+              m->sigma_a[2]);
+    cr_expect_eq(material_of(s, 1)->sigma_a[0], 0.0f, "only a dielectric holds a medium");
+    cr_expect_eq(material_of(s, 2)->sigma_a[1], 0.0f, "AttributeEnd restores the clear inside");
+    cr_expect_eq(material_of(s, 3)->sigma_a[1], 0.0f, "a scattering medium is left out");
+    cr_expect(has_warning(s, "scattering media"));
+    cr_expect_eq(s->warning_count, 1);
+    sg_scene_free(s);
+}
+
 Test(pbrt_materials, textures_as_their_average)
 {
     SgScene *s = load_ok(

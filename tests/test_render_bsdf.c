@@ -262,3 +262,69 @@ Test(render_bsdf, white_furnace_rough_dielectric_keeps_at_most_its_energy)
                 }
             }
 }
+
+/* ---- diffuse transmission ------------------------------------------------ */
+
+/* Its albedo over the whole sphere, by its own sampler: R + T per channel,
+ * whatever wo; the reflected and transmitted halves each on their side. */
+Test(render_bsdf, white_furnace_diffuse_transmission_returns_r_plus_t)
+{
+    const Vec3 r = v3(0.3f, 0.5f, 0.1f), t = v3(0.6f, 0.2f, 0.0f);
+    DiffuseTransmission d = bsdf_diffuse_transmission(v3_normalize(v3(0.2f, -0.4f, 1.0f)), r, t);
+    SgRng rng;
+    sg_rng_seed(&rng, 46, 1);
+    const int n = 200000;
+    double up[3] = {0}, down[3] = {0};
+    for (int i = 0; i < n; i++) {
+        Vec3 wi = bsdf_diffuse_sample(&d, sg_rng_float(&rng), sg_rng_float(&rng), sg_rng_float(&rng));
+        float pdf = bsdf_diffuse_pdf(&d, wi), c = v3_dot(wi, d.n);
+        cr_assert(pdf > 0.0f, "sample %d has pdf 0", i);
+        Vec3 x = v3_scale(bsdf_diffuse_eval(&d, wi), fabsf(c) / pdf);
+        double *side = c > 0.0f ? up : down;
+        side[0] += x.x;
+        side[1] += x.y;
+        side[2] += x.z;
+    }
+    /* f |cos| / pdf is constant on each side (the sampler is exact): tight */
+    const float rr[3] = {r.x, r.y, r.z}, tt[3] = {t.x, t.y, t.z};
+    for (int c = 0; c < 3; c++) {
+        cr_assert_float_eq(up[c] / n, rr[c], 0.01, "channel %d reflected %g, expected %g", c, up[c] / n, rr[c]);
+        cr_assert_float_eq(down[c] / n, tt[c], 0.01, "channel %d transmitted %g, expected %g", c, down[c] / n,
+                           tt[c]);
+    }
+    /* the integrator's one side per vertex: in expectation the same */
+    double sum[3] = {0};
+    for (int i = 0; i < n; i++) {
+        Vec3 a;
+        bsdf_diffuse_side(&d, sg_rng_float(&rng), &a);
+        sum[0] += a.x;
+        sum[1] += a.y;
+        sum[2] += a.z;
+    }
+    for (int c = 0; c < 3; c++)
+        cr_assert_float_eq(sum[c] / n, rr[c] + tt[c], 0.01, "side choice, channel %d: %g", c, sum[c] / n);
+    /* a pure transmitter never reflects */
+    DiffuseTransmission only_t = bsdf_diffuse_transmission(v3(0, 0, 1), v3(0, 0, 0), v3(0.5f, 0.5f, 0.5f));
+    Vec3 a;
+    cr_assert(bsdf_diffuse_side(&only_t, 0.0f, &a));
+    cr_assert_float_eq(a.x, 0.5f, 1e-6f);
+}
+
+/* The material keeps R + T <= 1 and is black only when both are. */
+Test(render_bsdf, diffuse_transmission_material_conserves_energy)
+{
+    SgMaterial sm;
+    sg_material_default(&sm, "shade");
+    sm.type = SG_MATERIAL_DIFFUSE_TRANSMISSION;
+    const float r[3] = {0.8f, 0.2f, 0.0f}, t[3] = {0.8f, 0.3f, 0.0f};
+    memcpy(sm.diffuse, r, sizeof r);
+    memcpy(sm.transmittance, t, sizeof t);
+    Material m;
+    material_init(&m, &sm);
+    cr_assert_float_eq(m.kd.x + m.kt.x, 1.0f, 1e-5f);
+    cr_assert(!m.black && !m.delta && !m.microfacet);
+    sm.diffuse[0] = sm.diffuse[1] = 0.0f;
+    sm.transmittance[0] = sm.transmittance[1] = 0.0f;
+    material_init(&m, &sm);
+    cr_assert(m.black);
+}

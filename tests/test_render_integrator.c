@@ -4,6 +4,7 @@
  * guided and bsdf estimators. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -11,6 +12,8 @@
 #include "scene_builder.h"
 #include "../render/guides/openpgl_field.h"
 #include "../render/renderer.h"
+#include "image_io.h"
+#include "support_files.h"
 #include "support_render.h"
 
 typedef struct Stats {
@@ -251,6 +254,53 @@ static double corner_form_factor(double a, double b, double c)
     return (A / sa * atan(B / sa) + B / sb * atan(A / sb)) / (2 * M_PI);
 }
 
+/* A black square (2a wide) emitting le downward at height h. */
+static void add_square_light(SgScene *s, double a, double h, float le)
+{
+    const float black[3] = {0, 0, 0}, em[3] = {le, le, le};
+    uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
+    const double light[4][3] = {{-a, h, -a}, {a, h, -a}, {a, h, a}, {-a, h, a}}; /* faces down */
+    sgt_add_quad(s, light, light_m);
+}
+
+/* A 100-wide horizontal quad at height y, facing up. */
+static void add_wide_quad(SgScene *s, double y, uint32_t material)
+{
+    const double q[4][3] = {{-50, y, -50}, {-50, y, 50}, {50, y, 50}, {50, y, -50}};
+    sgt_add_quad(s, q, material);
+}
+
+/* s finished and seen from (0, camera_y, 0) straight at the origin (a 9 mm
+ * patch at 0.5), 256 passes under `mode` (the guides led to a point of a
+ * light at height 1); s freed. */
+static Stats render_origin_view(SgScene *s, SgSampling mode, uint64_t seed, double camera_y)
+{
+    const double pos[3] = {0, camera_y, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    sgt_set_camera(s, pos, at, up, 1.0, 16, 16);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.sampling = mode;
+    o.seed = seed;
+    SgtFixedPoint fp = {{0.3, 1.0, -0.2}};
+    o.importance.importance_point = sgt_fixed_point_guide;
+    o.importance.ctx = &fp;
+    Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
+    sgt_scene_free(s);
+    return st;
+}
+
+/* The mean within 4 standard errors and `rel` of the expected value. */
+static void expect_mean(const char *what, SgSampling mode, Stats st, double expected, double rel)
+{
+    cr_log_info("%s %s: %.5f +- %.5f, expected %.5f", what, sg_sampling_name(mode), st.mean[0], st.std_error,
+                expected);
+    cr_assert_eq(st.nonfinite, 0);
+    cr_assert(fabs(st.mean[0] - expected) <= 4.0 * st.std_error + rel * expected,
+              "%s %s: %.5f, expected %.5f +- %.5f", what, sg_sampling_name(mode), st.mean[0], expected,
+              4 * st.std_error);
+}
+
 /* A diffuse floor (albedo rho) under a black emitting square of radiance
  * Le at height h: at the floor's centre L = rho Le 4 F(a, a, h). */
 static void plane_case(SgSampling mode, SgMaterialType floor_type)
@@ -258,35 +308,225 @@ static void plane_case(SgSampling mode, SgMaterialType floor_type)
     const double a = 2.0, h = 1.0;
     const float rho = 0.6f, le = 2.0f;
     SgScene *s = sgt_scene_new();
-    const float alb[3] = {rho, rho, rho}, black[3] = {0, 0, 0}, em[3] = {le, le, le};
-    uint32_t floor_m = sgt_add_material(s, floor_type, alb, NULL);
-    uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
-    const double floor[4][3] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
-    const double light[4][3] = {{-a, h, -a}, {a, h, -a}, {a, h, a}, {-a, h, a}}; /* faces down */
-    sgt_add_quad(s, floor, floor_m);
-    sgt_add_quad(s, light, light_m);
-    const double pos[3] = {0, 0.5, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
-    sgt_set_camera(s, pos, at, up, 1.0, 16, 16); /* looks at a 9 mm patch */
-    sgt_finish(s);
-    SgRenderOptions o;
-    sg_render_options_default(&o, s);
-    o.sampling = mode;
-    o.seed = 11;
-    SgtFixedPoint fp = {{0.3, h, -0.2}};
-    o.importance.importance_point = sgt_fixed_point_guide;
-    o.importance.ctx = &fp;
-    Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
+    const float alb[3] = {rho, rho, rho};
+    add_wide_quad(s, 0, sgt_add_material(s, floor_type, alb, NULL));
+    add_square_light(s, a, h, le);
     double expected = rho * le * 4.0 * corner_form_factor(a, a, h);
-    cr_log_info("plane %s: %.5f +- %.5f, expected %.5f", sg_sampling_name(mode), st.mean[0],
-                st.std_error, expected);
-    cr_assert(fabs(st.mean[0] - expected) < 4.0 * st.std_error + 1e-3 * expected,
-              "plane %s: %.5f, expected %.5f +- %.5f", sg_sampling_name(mode), st.mean[0], expected,
-              4 * st.std_error);
-    sgt_scene_free(s);
+    expect_mean("plane", mode, render_origin_view(s, mode, 11, 0.5), expected, 1e-3);
 }
 
 Test(render_integrator, plane_under_square_light_bsdf) { plane_case(SG_SAMPLING_BSDF, SG_MATERIAL_DIFFUSE); }
 Test(render_integrator, plane_under_square_light_guided) { plane_case(SG_SAMPLING_GUIDED, SG_MATERIAL_DIFFUSE); }
+
+/* A lamp shade: a diffuse transmitter (R, T) across the whole floor plane,
+ * under the emitting square of plane_case, seen from below: what passes
+ * is T / pi times the irradiance above, L = T Le 4 F(a, a, h); what it
+ * reflects goes up to the black light and is lost. */
+static void lamp_shade_case(SgSampling mode)
+{
+    const double a = 2.0, h = 1.0;
+    const float r = 0.3f, t = 0.5f, le = 2.0f;
+    SgScene *s = sgt_scene_new();
+    const float refl[3] = {r, r, r};
+    uint32_t shade_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE_TRANSMISSION, refl, NULL);
+    for (int c = 0; c < 3; c++)
+        sgt_material(s, shade_m)->transmittance[c] = t;
+    add_wide_quad(s, 0, shade_m);
+    add_square_light(s, a, h, le);
+    double expected = t * le * 4.0 * corner_form_factor(a, a, h);
+    expect_mean("lamp shade", mode, render_origin_view(s, mode, 12, -0.5), expected, 1e-3);
+}
+
+Test(render_integrator, lamp_shade_transmits_bsdf) { lamp_shade_case(SG_SAMPLING_BSDF); }
+Test(render_integrator, lamp_shade_transmits_guided) { lamp_shade_case(SG_SAMPLING_GUIDED); }
+Test(render_integrator, lamp_shade_transmits_openpgl) /* a guide that learns what crosses the shade */
+{
+    skip_without_openpgl();
+    lamp_shade_case(SG_SAMPLING_OPENPGL);
+}
+
+/* ---- cut-outs ------------------------------------------------------------ */
+
+/* plane_case's floor and light with a black screen between them (y = 0.75)
+ * made a cut-out: alpha a constant, or (alpha < 0) a fine checkerboard of
+ * alpha 1 and 0; `passed`: the share of the light expected through it. */
+static void cut_screen_case(SgSampling mode, float alpha, double passed)
+{
+    SgScene *s = sgt_scene_new();
+    const float alb[3] = {0.6f, 0.6f, 0.6f}, black[3] = {0, 0, 0};
+    uint32_t floor_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, alb, NULL);
+    uint32_t screen_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, NULL);
+    SgMaterial *screen = sgt_material(s, screen_m);
+    screen->cutout = true;
+    screen->alpha = alpha < 0.0f ? 1.0f : alpha;
+    if (alpha < 0.0f) { /* squares of 0.05 over the 100-wide screen */
+        screen->alpha_texture = 1;
+        s->textures = calloc(1, sizeof *s->textures);
+        s->texture_count = 1;
+        s->textures[0] = (SgTexture){.kind = SG_TEXTURE_CHECKERBOARD, .uscale = 2000, .vscale = 2000, .scale = 1,
+                                     .input = {{0, {1, 1, 1}}, {0, {0, 0, 0}}}, .mean = {0.5f, 0.5f, 0.5f}};
+    }
+    add_wide_quad(s, 0, floor_m);
+    add_square_light(s, 2.0, 1.0, 2.0f);
+    add_wide_quad(s, 0.75, screen_m);
+    s->uvs = malloc(2 * s->vertex_count * sizeof *s->uvs);
+    for (uint32_t v = 0; v < s->vertex_count; v++) { /* u, v in [0, 1] across each quad */
+        s->uvs[2 * v] = (float)((s->positions[3 * v] + 50) / 100);
+        s->uvs[2 * v + 1] = (float)((s->positions[3 * v + 2] + 50) / 100);
+    }
+    char what[64];
+    snprintf(what, sizeof what, "screen alpha %g", alpha);
+    double expected = passed * 0.6 * 2.0 * 4.0 * corner_form_factor(2, 2, 1);
+    expect_mean(what, mode, render_origin_view(s, mode, 13, 0.5), expected, 1e-2);
+}
+
+/* alpha 0: no shadow at all; 0.5: half the rays pass; a checkerboard
+ * texture of open and closed squares: half the light. */
+Test(render_integrator, cutout_alpha_0_casts_no_shadow) { cut_screen_case(SG_SAMPLING_BSDF, 0.0f, 1.0); }
+Test(render_integrator, cutout_alpha_0_guided) { cut_screen_case(SG_SAMPLING_GUIDED, 0.0f, 1.0); }
+Test(render_integrator, cutout_constant_alpha_half) { cut_screen_case(SG_SAMPLING_BSDF, 0.5f, 0.5); }
+Test(render_integrator, cutout_half_cut_texture_passes_half) { cut_screen_case(SG_SAMPLING_BSDF, -1.0f, 0.5); }
+Test(render_integrator, cutout_opaque_alpha_1_is_a_shadow) { cut_screen_case(SG_SAMPLING_BSDF, 1.0f, 0.0); }
+
+/* ---- shading normals ------------------------------------------------------ */
+
+/* A constant tangent-space normal map tilted by theta toward the mesh's u
+ * direction (rgb = (n + 1) / 2), as texture 1 of s. */
+static void add_tilted_normal_map(SgScene *s, double theta)
+{
+    s->textures = calloc(1, sizeof *s->textures);
+    s->texture_count = 1;
+    float c[3] = {(float)(0.5 + 0.5 * sin(theta)), 0.5f, (float)(0.5 + 0.5 * cos(theta))};
+    s->textures[0] = (SgTexture){.kind = SG_TEXTURE_SCALE, .uscale = 1, .vscale = 1, .scale = 1,
+                                 .input = {{0, {c[0], c[1], c[2]}}, {0, {1, 1, 1}}},
+                                 .mean = {c[0], c[1], c[2]}};
+}
+
+/* u = x, v = z: a floor's tangent is +x. */
+static void uv_from_xz(SgScene *s)
+{
+    s->uvs = malloc(2 * s->vertex_count * sizeof *s->uvs);
+    for (uint32_t v = 0; v < s->vertex_count; v++) {
+        s->uvs[2 * v] = (float)s->positions[3 * v];
+        s->uvs[2 * v + 1] = (float)s->positions[3 * v + 2];
+    }
+}
+
+/* How the floor of tilted_floor is made. */
+typedef enum FloorTilt { FLOOR_TILTED_PLUS_X, FLOOR_TILTED_MINUS_X, FLOOR_NORMAL_MAP, FLOOR_BUMP_MAP } FloorTilt;
+
+/* A displacement rising toward +x, k world units per unit of u, as an
+ * image (bilinear: exactly linear between texel centres); its path. */
+static const char *ramp_image(double k)
+{
+    enum { W = 64 };
+    static char path[4200];
+    float rgb[3 * W * 2];
+    for (int y = 0; y < 2; y++)
+        for (int x = 0; x < W; x++)
+            for (int c = 0; c < 3; c++)
+                rgb[3 * (y * W + x) + c] = (float)(k * (x + 0.5) / W);
+    snprintf(path, sizeof path, "%s/ramp.exr", sg_test_tmpdir());
+    SgError err = {0};
+    cr_assert(sg_image_write_exr(path, W, 2, rgb, NULL, 0, &err), "%s", err.message);
+    return path;
+}
+
+/* The floor's centre under a square light off to +x: a quad truly tilted
+ * by 30 degrees toward +x or -x, or flat with a normal map tilted toward
+ * +x, or with a bump map rising toward +x (its normal leans toward -x). */
+static Stats tilted_floor(FloorTilt how)
+{
+    const double a = 0.8, cx = 0.5, h = 1.0, theta = 30.0 * M_PI / 180.0;
+    SgScene *s = sgt_scene_new();
+    const float alb[3] = {0.6f, 0.6f, 0.6f}, black[3] = {0, 0, 0}, em[3] = {2, 2, 2};
+    uint32_t floor_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, alb, NULL);
+    uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
+    if (how == FLOOR_NORMAL_MAP || how == FLOOR_BUMP_MAP) {
+        if (how == FLOOR_NORMAL_MAP) {
+            sgt_material(s, floor_m)->normal_texture = 1;
+            add_tilted_normal_map(s, theta);
+        } else { /* u = (x + 50) / 100: dp/du is 100 x, so slope tan(theta) is k = 100 tan(theta) */
+            sgt_material(s, floor_m)->bump_texture = 1;
+            sgt_material(s, floor_m)->bump_scale = 1;
+            s->textures = calloc(1, sizeof *s->textures);
+            s->texture_count = 1;
+            s->textures[0] = (SgTexture){.kind = SG_TEXTURE_IMAGE, .uscale = 1, .vscale = 1, .scale = 1,
+                                         .path = strdup(ramp_image(100 * tan(theta))), .wrap = SG_WRAP_CLAMP};
+        }
+        const double floor[4][3] = {{-50, 0, -50}, {-50, 0, 50}, {50, 0, 50}, {50, 0, -50}};
+        sgt_add_quad(s, floor, floor_m);
+    } else { /* normal (sign sin, cos, 0): the plane sign x sin + y cos = 0 */
+        double sign = how == FLOOR_TILTED_PLUS_X ? 1 : -1, ux = 0.5 * cos(theta), uy = -0.5 * sign * sin(theta);
+        const double floor[4][3] = {{-ux, -uy, -0.5}, {-ux, -uy, 0.5}, {ux, uy, 0.5}, {ux, uy, -0.5}};
+        sgt_add_quad(s, floor, floor_m);
+    }
+    const double light[4][3] = {{cx - a, h, -a}, {cx + a, h, -a}, {cx + a, h, a}, {cx - a, h, a}};
+    sgt_add_quad(s, light, light_m);
+    const double pos[3] = {0, 0.5, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    sgt_set_camera(s, pos, at, up, 1.0, 16, 16);
+    s->uvs = malloc(2 * s->vertex_count * sizeof *s->uvs);
+    for (uint32_t v = 0; v < s->vertex_count; v++) {
+        s->uvs[2 * v] = (float)((s->positions[3 * v] + 50) / 100);
+        s->uvs[2 * v + 1] = (float)((s->positions[3 * v + 2] + 50) / 100);
+    }
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.seed = 14 + (uint64_t)how;
+    Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
+    sgt_scene_free(s);
+    return st;
+}
+
+static void expect_same_floor(const char *what, Stats got, Stats want)
+{
+    double tol = 4.0 * hypot(got.std_error, want.std_error) + 1e-3 * want.mean[0];
+    cr_log_info("%s %.5f +- %.5f, tilted quad %.5f +- %.5f", what, got.mean[0], got.std_error, want.mean[0],
+                want.std_error);
+    cr_assert_eq(got.nonfinite, 0);
+    cr_assert(fabs(got.mean[0] - want.mean[0]) < tol, "%s %.5f, tilted %.5f +- %.5f", what, got.mean[0],
+              want.mean[0], tol);
+}
+
+Test(render_integrator, normal_and_bump_maps_reflect_like_a_tilted_quad)
+{
+    Stats plus = tilted_floor(FLOOR_TILTED_PLUS_X), minus = tilted_floor(FLOOR_TILTED_MINUS_X);
+    /* the light is off to +x: the two tilts differ, so the side is tested */
+    cr_assert_gt(plus.mean[0] - minus.mean[0], 10.0 * hypot(plus.std_error, minus.std_error));
+    expect_same_floor("normal-mapped", tilted_floor(FLOOR_NORMAL_MAP), plus);
+    expect_same_floor("bump-mapped", tilted_floor(FLOOR_BUMP_MAP), minus);
+}
+
+/* A small patch whose normal map leans 80 degrees toward a light below its
+ * plane: the shading normal sees the light, the surface does not. Nothing
+ * may reach the camera above (no light through the surface: light samples
+ * and bounces below the geometric surface count for nothing, and the
+ * surface itself stands in the way of what would). */
+Test(render_integrator, normal_map_lets_no_light_through_the_surface)
+{
+    SgScene *s = sgt_scene_new();
+    const float alb[3] = {0.8f, 0.8f, 0.8f}, black[3] = {0, 0, 0}, em[3] = {5, 5, 5};
+    uint32_t patch_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, alb, NULL);
+    uint32_t light_m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, em);
+    sgt_material(s, patch_m)->normal_texture = 1;
+    add_tilted_normal_map(s, 80.0 * M_PI / 180.0);
+    const double patch[4][3] = {{-0.1, 0, -0.1}, {-0.1, 0, 0.1}, {0.1, 0, 0.1}, {0.1, 0, -0.1}}; /* faces up */
+    const double light[4][3] = {{0.5, -0.3, -0.5}, {0.5, -0.3, 0.5}, {1.5, -0.3, 0.5}, {1.5, -0.3, -0.5}};
+    sgt_add_quad(s, patch, patch_m);
+    sgt_add_quad(s, light, light_m); /* faces up, toward the patch's underside */
+    const double pos[3] = {0, 0.5, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    sgt_set_camera(s, pos, at, up, 1.0, 16, 16);
+    uv_from_xz(s);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.seed = 16;
+    Stats st = render_scene_stats(s, &o, 64, 0, 0, o.width, o.height);
+    cr_log_info("patch over a light below it: %.6f (max %.6f)", st.mean[0], st.max_pixel);
+    cr_assert_eq(st.max_pixel, 0.0, "light came through the surface: max pixel %g", st.max_pixel);
+    sgt_scene_free(s);
+}
 
 /* ---- materials: exact answers ------------------------------------------ */
 
@@ -636,6 +876,46 @@ Test(render_integrator, emitter_in_a_glass_slab)
     cr_assert_eq(st.nonfinite, 0);
     cr_assert(fabs(st.mean[0] - expected) < 4.0 * st.std_error + 1e-3 * expected,
               "emitter in glass: %.5f, expected %.5f +- %.5f", st.mean[0], expected, 4 * st.std_error);
+    sgt_scene_free(s);
+}
+
+/* A glass slab of thickness d whose inside absorbs sigma_a per channel,
+ * over an emitter (radiance Le) facing up, seen straight down: each pass
+ * through the slab keeps exp(-sigma_a d), each face lets 1 - R through and
+ * returns R, so L = Le (1 - R)^2 T / (1 - R^2 T^2), T = exp(-sigma_a d)
+ * (radiance's compression entering the glass undone leaving it). */
+Test(render_integrator, absorbing_glass_slab_tints_by_beer_lambert)
+{
+    const double n = 1.5, le = 2.0, d = 1.0, sigma[3] = {0.1, 0.5, 1.0};
+    SgScene *s = sgt_scene_new();
+    const float black[3] = {0, 0, 0}, glow[3] = {(float)le, (float)le, (float)le};
+    uint32_t glass = sgt_add_material(s, SG_MATERIAL_DIELECTRIC, NULL, NULL);
+    sgt_material(s, glass)->ior = (float)n;
+    for (int c = 0; c < 3; c++)
+        sgt_material(s, glass)->sigma_a[c] = (float)sigma[c];
+    uint32_t emitter = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, glow);
+    const double lo[3] = {-5, -d, -5}, hi[3] = {5, 0, 5};
+    sgt_add_box_inside(s, lo, hi, glass);
+    flip_from(s, 0);
+    const double e[4][3] = {{-50, -2, -50}, {-50, -2, 50}, {50, -2, 50}, {50, -2, -50}}; /* faces up */
+    sgt_add_quad(s, e, emitter);
+    const double pos[3] = {0, 1, 0}, at[3] = {0, 0, 0}, up[3] = {0, 0, 1};
+    sgt_set_camera(s, pos, at, up, 0.5, 16, 16);
+    sgt_finish(s);
+    SgRenderOptions o;
+    sg_render_options_default(&o, s);
+    o.seed = 5;
+    o.max_depth = 64;
+    Stats st = render_scene_stats(s, &o, 256, 0, 0, o.width, o.height);
+    double r = fresnel(n, 0.0);
+    cr_assert_eq(st.nonfinite, 0);
+    for (int c = 0; c < 3; c++) {
+        double t = exp(-sigma[c] * d), expected = le * (1 - r) * (1 - r) * t / (1 - r * r * t * t);
+        double tol = 4.0 * st.std_error * fmax(1.0, expected / fmax(st.mean[0], 1e-9)) + 2e-3 * expected;
+        cr_log_info("absorbing slab, channel %d: %.5f, expected %.5f +- %.5f", c, st.mean[c], expected, tol);
+        cr_assert(fabs(st.mean[c] - expected) < tol, "channel %d: %.5f, expected %.5f +- %.5f", c, st.mean[c],
+                  expected, tol);
+    }
     sgt_scene_free(s);
 }
 

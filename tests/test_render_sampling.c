@@ -457,6 +457,19 @@ static void mixture_conductor_case(void)
     assert_chi2("mixture 0.5 conductor 0.2 + lobe 16", mixture_sample, mixture_pdf, &m, 22, 16);
 }
 
+/* Diffuse transmission (render/bsdf.h): both hemispheres. */
+static Vec3 diffuse_transmission_sample(const void *c, float u0, float u1, float u2)
+{
+    return bsdf_diffuse_sample(c, u0, u1, u2);
+}
+static float diffuse_transmission_pdf(const void *c, Vec3 w) { return bsdf_diffuse_pdf(c, w); }
+
+static void diffuse_transmission_case(Vec3 r, Vec3 t, Vec3 n, uint64_t seed)
+{
+    DiffuseTransmission d = bsdf_diffuse_transmission(n, r, t);
+    assert_chi2("diffuse transmission", diffuse_transmission_sample, diffuse_transmission_pdf, &d, seed, 8);
+}
+
 /* A rough dielectric (render/microfacet.h) in its own frame: wo above,
  * eta > 1 entering glass, < 1 leaving it (total internal reflection). */
 typedef struct DielectricCtx {
@@ -635,7 +648,11 @@ static void histogram_case(uint64_t seed, int sub)
     X(sky_through_portal, portal_case(-1.0f, 31, 32)) \
     X(sky_through_portal_nearly_always, portal_case(0.99f, 34, 32)) \
     X(sky_through_portal_half_the_time, portal_case(0.5f, 35, 32)) \
-    X(learned_histogram, histogram_case(32, 16))
+    X(learned_histogram, histogram_case(32, 16)) \
+    X(diffuse_transmission_tilted, \
+      diffuse_transmission_case(v3(0.3f, 0.3f, 0.3f), v3(0.5f, 0.4f, 0.6f), tilted(0.3f, -0.5f, 0.8f), 36)) \
+    X(diffuse_transmission_mostly_reflecting, \
+      diffuse_transmission_case(v3(0.9f, 0.8f, 0.9f), v3(0.05f, 0.05f, 0.05f), v3(0, 1, 0), 37))
 
 #define CHI2_TEST(name, call) \
     Test(render_sampling, name) { call; }

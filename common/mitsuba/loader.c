@@ -12,6 +12,7 @@
 #include <strings.h>
 
 #include "mitsuba_parser.h"
+#include "sunsky.h"
 #include "vecmath.h"
 
 /* Mitsuba's max_depth counts the segments of a path from the camera (1:
@@ -52,6 +53,29 @@ static bool check_rgb(MtsParser *p, const XmlNode *at, const float rgb[3], const
  * below are where our axes land in Mitsuba's frame. */
 static const double OURS_TO_MITSUBA[3][3] = {{0, 1, 0}, {0, 0, 1}, {-1, 0, 0}};
 
+/* An environment's frame: the rotation of to_world (*world_from_mitsuba)
+ * and, from it, the light's light_to_world. */
+static bool environment_frame(MtsParser *p, const XmlNode *e, const SgTransform *to_world,
+                              double world_from_mitsuba[3][3], SgLightSource *l)
+{
+    for (int c = 0; c < 3; c++) {
+        double col[3];
+        linear_column(to_world, c, col);
+        if (!unit(p, e, col, "emitter to_world axis"))
+            return false;
+        for (int r = 0; r < 3; r++)
+            world_from_mitsuba[r][c] = col[r];
+    }
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            double s = 0;
+            for (int k = 0; k < 3; k++)
+                s += world_from_mitsuba[r][k] * OURS_TO_MITSUBA[k][c];
+            l->light_to_world[r][c] = s;
+        }
+    return true;
+}
+
 static bool envmap(MtsParser *p, const XmlNode *e, const SgTransform *to_world, SgLightSource *l, char *path,
                    size_t size)
 {
@@ -73,22 +97,115 @@ static bool envmap(MtsParser *p, const XmlNode *e, const SgTransform *to_world, 
     l->layout = SG_ENVIRONMENT_LATLONG;
     l->rgb[0] = l->rgb[1] = l->rgb[2] = (float)scale;
     double world_from_mitsuba[3][3];
-    for (int c = 0; c < 3; c++) {
-        double col[3];
-        linear_column(to_world, c, col);
-        if (!unit(p, e, col, "envmap to_world axis"))
+    return environment_frame(p, e, to_world, world_from_mitsuba, l);
+}
+
+/* The sun's direction in the emitter's frame (Mitsuba's: y up, x east, z
+ * north... as its sun plugin places it): sun_direction (world space) where
+ * given, else where the sun stands for the place and time asked. */
+static bool sun_direction(MtsParser *p, const XmlNode *e, const double world_from_mitsuba[3][3], double local[3])
+{
+    double world[3];
+    bool given;
+    static const double up[3] = {0, 1, 0};
+    if (!mts_point(p, e, "sun_direction", up, world, &given))
+        return false;
+    if (given) {
+        if (!unit(p, e, world, "sun_direction"))
             return false;
-        for (int r = 0; r < 3; r++)
-            world_from_mitsuba[r][c] = col[r];
+        for (int c = 0; c < 3; c++) /* the inverse of a rotation: its transpose */
+            local[c] = world_from_mitsuba[0][c] * world[0] + world_from_mitsuba[1][c] * world[1] +
+                       world_from_mitsuba[2][c] * world[2];
+        return true;
     }
-    for (int r = 0; r < 3; r++)
-        for (int c = 0; c < 3; c++) {
-            double s = 0;
-            for (int k = 0; k < 3; k++)
-                s += world_from_mitsuba[r][k] * OURS_TO_MITSUBA[k][c];
-            l->light_to_world[r][c] = s;
-        }
+    long year, month, day;
+    double hour, minute, second, timezone, latitude, longitude;
+    if (!mts_int(p, e, "year", 2010, &year) || !mts_int(p, e, "month", 7, &month) || !mts_int(p, e, "day", 10, &day) ||
+        !mts_float(p, e, "hour", 15, &hour) || !mts_float(p, e, "minute", 0, &minute) ||
+        !mts_float(p, e, "second", 0, &second) || !mts_float(p, e, "timezone", 9, &timezone) ||
+        !mts_float(p, e, "latitude", 35.6894, &latitude) || !mts_float(p, e, "longitude", 139.6917, &longitude))
+        return false;
+    if (!(month >= 1 && month <= 12 && day >= 1 && day <= 31 && labs(year) < 100000))
+        return mts_fail(p, e, "sun position: want a month 1..12, a day 1..31 and a sensible year");
+    double zenith, azimuth;
+    sg_sun_position((int)year, (int)month, (int)day, hour, minute, second, timezone, latitude, longitude, &zenith,
+                    &azimuth);
+    local[0] = sin(azimuth) * sin(zenith);
+    local[1] = cos(zenith);
+    local[2] = -cos(azimuth) * sin(zenith);
     return true;
+}
+
+/* Mitsuba 0.6's sky, sun and sunsky: Preetham's sky as an environment
+ * image made here (common/sunsky.h), the sun a distant light with its disk;
+ * sky_scale, sun_scale, sun_radius_scale (the disk's size, its power kept;
+ * 0 a delta), turbidity, resolution, extend. Mitsuba's values are spectral
+ * radiance (W m^-2 sr^-1 nm^-1) averaged under the CIE y curve: Preetham's
+ * luminance in kcd/m^2 over 683 lm/W times the curve's 106.857 nm / 1000. */
+#define KCD_PER_MITSUBA_RADIANCE (683.0 * 106.857 / 1000.0)
+
+static bool sunsky(MtsParser *p, const XmlNode *e, const char *type, const SgTransform *to_world)
+{
+    bool with_sky = strcmp(type, "sun") != 0, with_sun = strcmp(type, "sky") != 0, extend;
+    double turbidity, sky_scale, sun_scale, radius_scale, stretch, local[3], world_from_mitsuba[3][3];
+    long resolution;
+    SgLightSource sky = {0};
+    if (!mts_float(p, e, "turbidity", 3, &turbidity) || !mts_float(p, e, "sky_scale", 1, &sky_scale) ||
+        !mts_float(p, e, "sun_scale", 1, &sun_scale) || !mts_float(p, e, "sun_radius_scale", 1, &radius_scale) ||
+        !mts_float(p, e, "stretch", 1, &stretch) || !mts_int(p, e, "resolution", 512, &resolution) ||
+        !mts_bool(p, e, "extend", false, &extend) || !environment_frame(p, e, to_world, world_from_mitsuba, &sky) ||
+        !sun_direction(p, e, world_from_mitsuba, local))
+        return false;
+    if (!(turbidity >= 1 && turbidity <= 30))
+        return mts_fail(p, e, "%s: turbidity must be in [1, 30]", type);
+    if (!(sky_scale >= 0 && sun_scale >= 0 && radius_scale >= 0 && isfinite(sky_scale * sun_scale * radius_scale)))
+        return mts_fail(p, e, "%s: scales must be finite and not negative", type);
+    if (!(resolution >= 4 && resolution <= 8192))
+        return mts_fail(p, e, "%s: resolution must be in [4, 8192]", type);
+    if (!e->doc->old_dialect)
+        mts_warn(p, e, "Mitsuba 3's %s (Hosek-Wilkie) is taken as Mitsuba 0.6's Preetham sky", type);
+    if (stretch != 1)
+        mts_warn(p, e, "%s: stretch is ignored", type);
+    double theta_sun = acos(fmin(fmax(local[1], -1.0), 1.0));
+    if (with_sky) {
+        /* the sun in our light space (z up): the transpose of OURS_TO_MITSUBA */
+        double ours[3];
+        for (int c = 0; c < 3; c++)
+            ours[c] = OURS_TO_MITSUBA[0][c] * local[0] + OURS_TO_MITSUBA[1][c] * local[1] +
+                      OURS_TO_MITSUBA[2][c] * local[2];
+        SgPreethamSky model;
+        sg_preetham_init(&model, turbidity, fmin(theta_sun, 0.5 * M_PI));
+        sky.kind = SG_LIGHT_INFINITE;
+        sky.layout = SG_ENVIRONMENT_LATLONG;
+        sky.rgb[0] = sky.rgb[1] = sky.rgb[2] = 1.0f;
+        sky.image_width = (int)(2 * resolution);
+        sky.image_height = (int)resolution;
+        if (!(sky.image_pixels = sg_sky_image(&model, ours, sky.image_width, sky.image_height,
+                                              sky_scale / KCD_PER_MITSUBA_RADIANCE, extend, p->err)))
+            return false;
+        bool ok = sg_builder_add_light_source(&p->core, &sky, p->err);
+        free(sky.image_pixels);
+        if (!ok)
+            return false;
+    }
+    if (!with_sun)
+        return true;
+    float radiance[3];
+    sg_sun_radiance(turbidity, theta_sun, radiance);
+    if (!(radiance[0] + radiance[1] + radiance[2] > 0)) {
+        mts_warn(p, e, "%s: the sun is below the horizon: no sun", type);
+        return true;
+    }
+    SgLightSource sun = {0};
+    sun.kind = SG_LIGHT_DISTANT;
+    double disk = 2 * M_PI * (1 - cos(SG_SUN_ANGULAR_RADIUS)); /* the physical disk's solid angle */
+    for (int c = 0; c < 3; c++) {
+        sun.rgb[c] = (float)(radiance[c] / KCD_PER_MITSUBA_RADIANCE * disk * sun_scale);
+        sun.direction[c] = -(world_from_mitsuba[c][0] * local[0] + world_from_mitsuba[c][1] * local[1] +
+                             world_from_mitsuba[c][2] * local[2]);
+    }
+    sun.angular_radius = fmin(SG_SUN_ANGULAR_RADIUS * radius_scale, 0.5);
+    return sg_builder_add_light_source(&p->core, &sun, p->err);
 }
 
 static bool emitter(MtsParser *p, XmlNode *e)
@@ -153,6 +270,8 @@ static bool emitter(MtsParser *p, XmlNode *e)
     } else if (!strcmp(type, "envmap")) {
         if (!envmap(p, e, &to_world, &l, path, sizeof path))
             return false;
+    } else if (!strcmp(type, "sunsky") || !strcmp(type, "sky") || !strcmp(type, "sun")) {
+        return sunsky(p, e, type, &to_world);
     } else {
         mts_warn(p, e, "emitter \"%s\" is not supported: left out", type);
         if (!p->unsupported_emitter[0])
@@ -456,8 +575,12 @@ static bool scene_children(MtsParser *p, XmlNode *scene)
             else
                 ok = !as || (MTS_RESERVE(p, p->ids, p->id_count, p->id_capacity, 1) &&
                              (p->ids[p->id_count++] = (MtsId){as, target}, true));
-        } else if (mts_is_tag(n, "medium") || mts_is_tag(n, "phase")) {
-            mts_warn(p, n, "participating media are not supported: left out");
+        } else if (mts_is_tag(n, "medium")) { /* read where a shape holds it; what cannot be, said now */
+            float sigma_a[3];
+            bool absorbing;
+            ok = mts_medium_absorption(p, n, sigma_a, &absorbing);
+        } else if (mts_is_tag(n, "phase")) {
+            mts_warn(p, n, "phase functions are not supported: left out");
             ok = true;
         } else {
             mts_warn(p, n, "<%s> at the top of a scene is not supported: left out", n->tag);

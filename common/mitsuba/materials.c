@@ -2,9 +2,11 @@
  * diffuse, plastic and roughplastic as the coated diffuse, conductor and
  * roughconductor (named or explicit eta and k; "none" a mirror),
  * dielectric, roughdielectric and thindielectric as glass, phong as the
- * glossy material; twosided, mask, bumpmap and normalmap pass their inner
- * bsdf through, blendbsdf blends two diffuse ones and otherwise keeps the
- * heavier. Textures: bitmap, checkerboard and scale. */
+ * glossy material, difftrans as diffuse transmission; twosided passes its
+ * inner bsdf through, mask makes it a cut-out, bumpmap and normalmap give
+ * it shading normals, blendbsdf blends two diffuse ones and otherwise
+ * keeps the heavier. A homogeneous medium that absorbs only, inside a
+ * dielectric, is its sigma_a. Textures: bitmap, checkerboard and scale. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -413,6 +415,33 @@ static bool blend(MtsParser *p, const XmlNode *n, MtsMaterial *out, int depth)
 
 static bool make_material_of_type(MtsParser *p, const XmlNode *n, MtsMaterial *out, int depth);
 
+/* bumpmap (its texture a displacement, times "scale") and normalmap (its
+ * texture tangent-space normals, to be read raw): the inner bsdf with
+ * shading normals (SgMaterial.normal_texture, bump_texture). */
+static bool shading_map(MtsParser *p, const XmlNode *n, const char *type, MtsMaterial *out, int depth)
+{
+    const XmlNode *tex;
+    uint32_t id = 0;
+    float mean[3];
+    double scale = 1;
+    bool bump = !strcmp(type, "bumpmap");
+    if (!mts_find_object(p, n, "texture", 0, &tex) || (tex && !texture(p, tex, &id, mean)) ||
+        (bump && !mts_float(p, n, "scale", 1, &scale)) || !inner(p, n, 0, out, depth))
+        return false;
+    if (!id) { /* a constant bends nothing */
+        if (!tex)
+            mts_warn(p, n, "%s without a texture is ignored", type);
+        return true;
+    }
+    if (bump) {
+        out->material.bump_texture = id;
+        out->material.bump_scale = (float)scale;
+    } else {
+        out->material.normal_texture = id;
+    }
+    return true;
+}
+
 /* A bsdf with its own id names the material, even where it wraps another. */
 static bool make_material(MtsParser *p, const XmlNode *n, MtsMaterial *out, int depth)
 {
@@ -437,13 +466,20 @@ static bool make_material_of_type(MtsParser *p, const XmlNode *n, MtsMaterial *o
     static const float half[3] = {0.5f, 0.5f, 0.5f};
     if (!strcmp(type, "twosided"))
         return inner(p, n, 0, out, depth);
-    if (!strcmp(type, "bumpmap") || !strcmp(type, "normalmap")) {
-        mts_warn(p, n, "%s is ignored: its inner bsdf without it", type);
-        return inner(p, n, 0, out, depth);
-    }
-    if (!strcmp(type, "mask")) {
-        mts_warn(p, n, "mask (opacity) is ignored: its inner bsdf, opaque");
-        return inner(p, n, 0, out, depth);
+    if (!strcmp(type, "bumpmap") || !strcmp(type, "normalmap"))
+        return shading_map(p, n, type, out, depth);
+    if (!strcmp(type, "mask")) { /* a cut-out: see SgMaterial.cutout */
+        float opacity[3];
+        uint32_t texture;
+        static const float half_opaque[3] = {0.5f, 0.5f, 0.5f};
+        if (!mts_color(p, n, "opacity", half_opaque, opacity, &texture, NULL) || !inner(p, n, 0, out, depth))
+            return false;
+        if (texture || opacity[0] < 1.0f) {
+            m->cutout = true;
+            m->alpha = texture ? 1.0f : fmaxf(opacity[0], 0.0f);
+            m->alpha_texture = texture;
+        }
+        return true;
     }
     if (!strcmp(type, "blendbsdf"))
         return blend(p, n, out, depth);
@@ -458,6 +494,14 @@ static bool make_material_of_type(MtsParser *p, const XmlNode *n, MtsMaterial *o
             mts_warn(p, n, "roughdiffuse is taken as diffuse");
         clamp_albedo(p, n, m->diffuse);
         m->type = SG_MATERIAL_DIFFUSE;
+        return true;
+    }
+    if (!strcmp(type, "difftrans")) { /* 0.6's diffuse transmitter: it reflects nothing */
+        if (!mts_color(p, n, "transmittance", half, m->transmittance, NULL, NULL))
+            return false;
+        clamp_albedo(p, n, m->transmittance);
+        m->diffuse[0] = m->diffuse[1] = m->diffuse[2] = 0;
+        m->type = SG_MATERIAL_DIFFUSE_TRANSMISSION;
         return true;
     }
     if (!strcmp(type, "plastic") || !strcmp(type, "roughplastic"))
@@ -544,4 +588,84 @@ bool mts_scene_material(MtsParser *p, size_t index, const float *radiance, uint3
     memcpy(e->radiance, radiance, sizeof e->radiance);
     e->scene_id = *id;
     return true;
+}
+
+/* ---- media ------------------------------------------------------------------ */
+
+/* Mitsuba's homogeneous medium: sigma_t and albedo (Mitsuba 3's defaults 1
+ * and 0.75) or, as 0.6 also takes, sigma_a and sigma_s (1 each), all times
+ * scale (0.6: densityMultiplier). Absorbing only where what it scatters is 0. */
+bool mts_medium_absorption(MtsParser *p, const XmlNode *medium, float sigma_a[3], bool *absorbing)
+{
+    *absorbing = false;
+    memset(sigma_a, 0, 3 * sizeof(float));
+    const char *type = mts_attr(p, medium, "type");
+    if (!type)
+        return p->err->failed ? false : mts_fail(p, medium, "<medium> without a type");
+    if (strcmp(type, "homogeneous")) {
+        mts_warn(p, medium, "media of type \"%s\" are not supported: left out", type);
+        return true;
+    }
+    static const float one[3] = {1, 1, 1}, three_quarters[3] = {0.75f, 0.75f, 0.75f};
+    float a[3], s[3], sigma_t[3], albedo[3];
+    bool has_a, has_s;
+    double scale, density;
+    const XmlNode *preset;
+    if (!mts_color(p, medium, "sigma_a", one, a, NULL, &has_a) ||
+        !mts_color(p, medium, "sigma_s", one, s, NULL, &has_s) ||
+        !mts_color(p, medium, "sigma_t", one, sigma_t, NULL, NULL) ||
+        !mts_color(p, medium, "albedo", three_quarters, albedo, NULL, NULL) ||
+        !mts_float(p, medium, "scale", 1, &scale) || !mts_float(p, medium, "density_multiplier", 1, &density) ||
+        !mts_find(p, medium, "material", &preset))
+        return false;
+    if (preset) {
+        mts_warn(p, medium, "media of a named \"material\" (measured scattering media) are not supported: left out");
+        return true;
+    }
+    bool scatters = false;
+    for (int c = 0; c < 3; c++) {
+        double k = scale * density;
+        double absorb = has_a || has_s ? a[c] : sigma_t[c] * (1 - albedo[c]);
+        double scatter = has_a || has_s ? s[c] : sigma_t[c] * albedo[c];
+        sigma_a[c] = (float)fmax(absorb * k, 0);
+        scatters = scatters || scatter * k > 0;
+    }
+    if (scatters) {
+        memset(sigma_a, 0, 3 * sizeof(float));
+        mts_warn(p, medium, "scattering media (albedo above 0) are not supported: left out");
+        return true;
+    }
+    *absorbing = true;
+    return true;
+}
+
+bool mts_interior_material(MtsParser *p, const XmlNode *shape, uint32_t *id)
+{
+    const XmlNode *interior, *exterior;
+    if (!mts_find(p, shape, "interior", &interior) || !mts_find(p, shape, "exterior", &exterior))
+        return false;
+    if (exterior)
+        mts_warn(p, exterior, "exterior media are ignored (the outside of shapes is clear)");
+    if (!interior)
+        return true;
+    float sigma_a[3];
+    bool absorbing;
+    if (!mts_medium_absorption(p, interior, sigma_a, &absorbing))
+        return false;
+    SgScene *scene = p->core.scene;
+    if (!absorbing || (sigma_a[0] <= 0 && sigma_a[1] <= 0 && sigma_a[2] <= 0))
+        return true;
+    if (scene->materials[*id].type != SG_MATERIAL_DIELECTRIC) {
+        mts_warn(p, interior, "a medium inside a shape that is not a dielectric is ignored");
+        return true;
+    }
+    SgMaterial copy;
+    memcpy(&copy, &scene->materials[*id], sizeof copy);
+    memcpy(copy.sigma_a, sigma_a, sizeof copy.sigma_a);
+    for (uint32_t i = 0; i < scene->material_count; i++) /* shapes sharing a bsdf and a medium share a copy */
+        if (!memcmp(&scene->materials[i], &copy, sizeof copy)) {
+            *id = i;
+            return true;
+        }
+    return sg_builder_add_material(&p->core, &copy, id, p->err);
 }

@@ -182,6 +182,12 @@ bool mts_color(MtsParser *p, const XmlNode *obj, const char *name, const float f
 bool mts_material(MtsParser *p, const XmlNode *bsdf, size_t *index);
 /* Its scene id; with emission, a copy that emits radiance. */
 bool mts_scene_material(MtsParser *p, size_t index, const float *radiance, uint32_t *id);
+/* A medium element's absorption where it is homogeneous and absorbs only
+ * (*absorbing); otherwise one warning of its kind. */
+bool mts_medium_absorption(MtsParser *p, const XmlNode *medium, float sigma_a[3], bool *absorbing);
+/* The shape's scene material *id given the absorbing medium inside it
+ * ("interior"), where it is a dielectric: a copy with its sigma_a. */
+bool mts_interior_material(MtsParser *p, const XmlNode *shape, uint32_t *id);
 
 /* ---- shapes.c ----------------------------------------------------------- */
 

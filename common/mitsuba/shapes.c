@@ -66,14 +66,15 @@ static bool emit_mesh(MtsParser *p, const XmlNode *shape, const char *what, cons
         !mts_bool(p, shape, "flip_normals", false, &flip) || !mts_material(p, bsdf, &material))
         return false;
     if (p->materials[material].invisible) {
-        mts_warn(p, shape, "shapes with the \"null\" bsdf are left out (media are not supported)");
+        mts_warn(p, shape, "shapes with the \"null\" bsdf are left out (a medium is taken only inside a dielectric)");
         return true;
     }
     if (emits && p->defining) {
         mts_warn(p, shape, "area emitters inside a shapegroup are ignored");
         emits = false;
     }
-    if (!mts_scene_material(p, material, emits ? radiance : NULL, &scene_material))
+    if (!mts_scene_material(p, material, emits ? radiance : NULL, &scene_material) ||
+        !mts_interior_material(p, shape, &scene_material))
         return false;
     if (analytic && sg_transform_determinant(xf) < 0)
         flip = !flip;

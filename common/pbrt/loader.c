@@ -167,21 +167,6 @@ static bool skip_with_warning(Parser *p, const Token *t, const char *warning)
     return true;
 }
 
-static bool named_medium_statement(Parser *p, const Token *t)
-{
-    return skip_with_warning(p, t, "participating media are not supported: left out");
-}
-
-static bool medium_interface_statement(Parser *p, const Token *t)
-{
-    Token inside, outside;
-    if (!pbrt_need_string(p, t, &inside))
-        return false;
-    if (pbrt_next_token(p, &outside) && !outside.quoted)
-        pbrt_unget_token(p, &outside);
-    return !p->err->failed;
-}
-
 static bool attribute_statement(Parser *p, const Token *t)
 {
     return skip_with_warning(p, t, "Attribute statements are ignored");
@@ -240,8 +225,8 @@ static const struct {
     {"Texture", pbrt_texture_statement},
     {"AreaLightSource", pbrt_area_light_statement},
     {"LightSource", pbrt_light_source_statement},
-    {"MakeNamedMedium", named_medium_statement},
-    {"MediumInterface", medium_interface_statement},
+    {"MakeNamedMedium", pbrt_make_named_medium_statement},
+    {"MediumInterface", pbrt_medium_interface_statement},
     {"Attribute", attribute_statement},
     {"ActiveTransform", active_transform_statement},
     {"TransformTimes", transform_times_statement},
@@ -335,6 +320,10 @@ static void parser_release(Parser *p)
         free(p->materials[i].name);
     free(p->materials);
     free(p->emissive);
+    free(p->variants);
+    for (size_t i = 0; i < p->medium_count; i++)
+        free(p->media[i].name);
+    free(p->media);
     for (size_t i = 0; i < p->texture_count; i++)
         free(p->textures[i].name);
     free(p->textures);

@@ -83,6 +83,64 @@ static bool dielectric(Parser *p, const Token *at, double ior, bool v3, SgMateri
     return true;
 }
 
+/* pbrt-v4's diffusetransmission: reflectance and transmittance (0.25 each
+ * unless told), both times "scale". A textured transmittance is its mean. */
+static bool diffuse_transmission(Parser *p, const Token *at, SgMaterial *m)
+{
+    static const float quarter[3] = {0.25f, 0.25f, 0.25f};
+    double scale;
+    if (!pbrt_param_color(p, "reflectance", quarter, m->diffuse, NULL) ||
+        !pbrt_param_color(p, "transmittance", quarter, m->transmittance, NULL) ||
+        !pbrt_param_scalar(p, "scale", 1, &scale))
+        return false;
+    if (pbrt_param_texture(p, "transmittance"))
+        pbrt_warn_at(p, at, "diffusetransmission: a textured transmittance is taken as its mean");
+    m->diffuse_texture = scale == 1 ? pbrt_param_texture(p, "reflectance") : 0;
+    if (scale != 1 && pbrt_param_texture(p, "reflectance"))
+        pbrt_warn_at(p, at, "diffusetransmission: a scaled reflectance texture is taken as its mean");
+    bool above_1 = false;
+    for (int a = 0; a < 3; a++) {
+        m->diffuse[a] = (float)(m->diffuse[a] * fmax(scale, 0));
+        m->transmittance[a] = (float)(m->transmittance[a] * fmax(scale, 0));
+        float sum = m->diffuse[a] + m->transmittance[a];
+        if (sum > 1) {
+            above_1 = true;
+            m->diffuse[a] /= sum;
+            m->transmittance[a] /= sum;
+        }
+    }
+    if (above_1)
+        pbrt_warn_at(p, at, "diffusetransmission: reflectance + transmittance above 1 scaled to 1");
+    m->type = SG_MATERIAL_DIFFUSE_TRANSMISSION;
+    return true;
+}
+
+/* pbrt-v4's shading normals: "displacement", a float texture (a bump map;
+ * a constant displaces nothing), and "normalmap", an image file read
+ * linear, in tangent space. */
+static bool shading_maps(Parser *p, const Token *at, SgMaterial *m)
+{
+    m->bump_texture = pbrt_param_texture(p, "displacement");
+    m->bump_scale = 1;
+    const Token *file = pbrt_param_string(p, "normalmap");
+    if (!file || !file->len)
+        return true;
+    char path[8192];
+    if (!pbrt_resolve_path(p, at, file, path, sizeof path))
+        return false;
+    SgTexture st = {.kind = SG_TEXTURE_IMAGE, .uscale = 1, .vscale = 1, .path = path, .gamma = 0, .scale = 1,
+                    .wrap = SG_WRAP_REPEAT};
+    if (!sg_image_average(&p->images, path, 0, st.mean, NULL)) {
+        pbrt_warn_at(p, at, "normal maps that cannot be read (missing files) are ignored");
+        return true;
+    }
+    uint32_t id;
+    if (!sg_builder_add_texture(&p->core, &st, &id, p->err))
+        return false;
+    m->normal_texture = id + 1;
+    return true;
+}
+
 /* A material's constructor: reads the statement's parameters into *out,
  * which holds pbrt's defaults (sg_material_default) named for the
  * statement. `type` is the name it was called by. */
@@ -102,6 +160,12 @@ static bool make_diffuse(Parser *p, const Token *at, const Token *type, PbrtMate
     m->diffuse_texture = pbrt_param_texture(p, "reflectance");
     m->type = SG_MATERIAL_DIFFUSE;
     return true;
+}
+
+static bool make_diffuse_transmission(Parser *p, const Token *at, const Token *type, PbrtMaterial *out)
+{
+    (void)type;
+    return diffuse_transmission(p, at, &out->material);
 }
 
 static bool make_coated_diffuse(Parser *p, const Token *at, const Token *type, PbrtMaterial *out)
@@ -276,7 +340,7 @@ static const struct {
     MaterialMaker *make;
 } material_makers[] = {
     {"diffuse", make_diffuse},
-    {"diffusetransmission", make_diffuse},
+    {"diffusetransmission", make_diffuse_transmission},
     {"subsurface", make_diffuse},
     {"measured", make_diffuse},
     {"hair", make_diffuse},
@@ -308,9 +372,8 @@ static bool make_material(Parser *p, const Token *at, const Token *type, const c
     memset(out, 0, sizeof *out);
     out->scene_id = UINT32_MAX;
     sg_material_default(&out->material, label);
-    const Param *displacement = pbrt_find_param(p, "displacement");
-    if (displacement || pbrt_find_param(p, "normalmap"))
-        pbrt_warn_at(p, at, "bump and normal maps (\"displacement\", \"normalmap\") are ignored");
+    if (!shading_maps(p, at, &out->material))
+        return false;
     for (size_t i = 0; i < sizeof material_makers / sizeof material_makers[0]; i++)
         if (pbrt_string_is(type, material_makers[i].type))
             return material_makers[i].make(p, at, type, out);
@@ -419,7 +482,7 @@ bool pbrt_named_material_statement(Parser *p, const Token *statement)
 }
 
 /* The scene material of the current state (emissive copies cached). */
-bool pbrt_current_scene_material(Parser *p, bool emissive, uint32_t *id)
+static bool plain_scene_material(Parser *p, bool emissive, uint32_t *id)
 {
     PbrtMaterial *m = &p->materials[p->state.material];
     if (!emissive) {
@@ -446,6 +509,40 @@ bool pbrt_current_scene_material(Parser *p, bool emissive, uint32_t *id)
     e->material = p->state.material;
     memcpy(e->radiance, L, sizeof e->radiance);
     e->scene_id = *id;
+    return true;
+}
+
+/* The scene material of the current state with the current shape's
+ * attributes (copies cached by what they were made from). */
+bool pbrt_current_scene_material(Parser *p, bool emissive, uint32_t *id)
+{
+    if (!plain_scene_material(p, emissive, id))
+        return false;
+    static const ShapeAttributes none;
+    ShapeAttributes attr;
+    memcpy(&attr, &p->shape, sizeof attr); /* padding too: compared by memcmp */
+    if (p->core.scene->materials[*id].type != SG_MATERIAL_DIELECTRIC) /* only glass holds a medium here */
+        memset(attr.sigma_a, 0, sizeof attr.sigma_a);
+    if (!memcmp(&attr, &none, sizeof none))
+        return true;
+    for (size_t i = 0; i < p->variant_count; i++)
+        if (p->variants[i].base == *id && !memcmp(&p->variants[i].attr, &attr, sizeof attr)) {
+            *id = p->variants[i].scene_id;
+            return true;
+        }
+    SgMaterial copy = p->core.scene->materials[*id];
+    copy.cutout = attr.cutout;
+    copy.alpha = attr.alpha;
+    copy.alpha_texture = attr.alpha_texture;
+    memcpy(copy.sigma_a, attr.sigma_a, sizeof copy.sigma_a);
+    uint32_t base = *id;
+    if (!RESERVE(p, p->variants, p->variant_count, p->variant_capacity, 1) ||
+        !sg_builder_add_material(&p->core, &copy, id, p->err))
+        return false;
+    MaterialVariant *v = &p->variants[p->variant_count++];
+    v->base = base;
+    memcpy(&v->attr, &attr, sizeof attr);
+    v->scene_id = *id;
     return true;
 }
 

@@ -64,6 +64,9 @@ typedef struct GraphicsState {
     uint32_t material; /* index into Parser.materials */
     bool area_light;
     float radiance[3];
+    /* MediumInterface's inside medium, where it absorbs only (media.c):
+     * its absorption coefficient; 0: none */
+    float inside_sigma_a[3];
 } GraphicsState;
 
 typedef struct SavedState {
@@ -89,6 +92,29 @@ typedef struct EmissiveMaterial {
     float radiance[3];
     uint32_t scene_id;
 } EmissiveMaterial;
+
+/* What a shape adds to its material: an alpha cut-out (its "alpha") and
+ * the absorption of the medium inside it (MediumInterface). Zeroed: none. */
+typedef struct ShapeAttributes {
+    bool cutout;
+    float alpha;
+    uint32_t alpha_texture;
+    float sigma_a[3];
+} ShapeAttributes;
+
+/* A scene material made from another for a shape's attributes. */
+typedef struct MaterialVariant {
+    uint32_t base; /* scene material */
+    ShapeAttributes attr;
+    uint32_t scene_id;
+} MaterialVariant;
+
+/* A MakeNamedMedium: what its absorption is, if it is one we take. */
+typedef struct NamedMedium {
+    char *name;
+    float sigma_a[3];
+    bool supported; /* homogeneous and absorbing only */
+} NamedMedium;
 
 typedef struct Texture {
     char *name;
@@ -155,6 +181,11 @@ typedef struct Parser {
     size_t material_count, material_capacity;
     EmissiveMaterial *emissive;
     size_t emissive_count, emissive_capacity;
+    ShapeAttributes shape; /* of the Shape statement being read */
+    MaterialVariant *variants;
+    size_t variant_count, variant_capacity;
+    NamedMedium *media;
+    size_t medium_count, medium_capacity;
     Texture *textures;
     size_t texture_count, texture_capacity;
     NamedTransform *coordinate_systems;
@@ -242,6 +273,10 @@ bool pbrt_named_material_statement(Parser *p, const Token *statement);
 bool pbrt_current_scene_material(Parser *p, bool emissive, uint32_t *id);
 bool pbrt_area_light_statement(Parser *p, const Token *statement);
 bool pbrt_light_source_statement(Parser *p, const Token *statement); /* lights.c */
+
+/* media.c */
+bool pbrt_make_named_medium_statement(Parser *p, const Token *statement);
+bool pbrt_medium_interface_statement(Parser *p, const Token *statement);
 
 /* graphics_state.c: the transform statements (Translate, Scale, Rotate,
  * LookAt, Transform, ConcatTransform), named coordinate systems, and the

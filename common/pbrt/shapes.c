@@ -37,8 +37,8 @@ static bool emit_mesh(Parser *p, const Token *at, const char *what, const double
                       const double *normals, const float *uvs)
 {
     if (p->materials[p->state.material].invisible) {
-        pbrt_warn_at(p, at, "shapes with the \"interface\" material are left out (media are not "
-                       "supported)");
+        pbrt_warn_at(p, at, "shapes with the \"interface\" material are left out (a medium is "
+                       "taken only inside a dielectric)");
         return true;
     }
     SgTransform xf;
@@ -196,8 +196,6 @@ static bool inline_mesh(Parser *p, const Token *statement, const Token *type)
     const Param *N = pbrt_find_param(p, "N");
     if (N && N->kind == PARAM_NUMBERS && N->count == P->count && !bilinear)
         normals = p->numbers + N->first;
-    if (pbrt_find_param(p, "alpha"))
-        pbrt_warn_at(p, statement, "alpha cut-outs are ignored (the shapes are opaque)");
     char what[4300];
     snprintf(what, sizeof what, "%s:%d", statement->source->path, statement->line);
     /* texture coordinates: pbrt-v4's "point2 uv" (pbrt-v3 also wrote "float uv" or "st") */
@@ -267,16 +265,33 @@ static bool quadric(Parser *p, const Token *statement, const Token *type)
     return ok;
 }
 
+/* What the shape adds to its material (ShapeAttributes): pbrt-v4's
+ * "alpha", a constant or a float texture (a cut-out where below 0.5), and
+ * the absorption of its MediumInterface's inside (dielectrics only). */
+static bool shape_attributes(Parser *p)
+{
+    memset(&p->shape, 0, sizeof p->shape);
+    double alpha;
+    if (!pbrt_param_scalar(p, "alpha", 1, &alpha))
+        return false;
+    uint32_t texture = pbrt_param_texture(p, "alpha");
+    if (texture || alpha < 1) {
+        p->shape.cutout = true;
+        p->shape.alpha = texture ? 1.0f : (float)fmax(alpha, 0);
+        p->shape.alpha_texture = texture;
+    }
+    memcpy(p->shape.sigma_a, p->state.inside_sigma_a, sizeof p->shape.sigma_a);
+    return true;
+}
+
 bool pbrt_shape_statement(Parser *p, const Token *statement)
 {
     Token type;
-    if (!pbrt_need_string(p, statement, &type) || !pbrt_parse_params(p))
+    if (!pbrt_need_string(p, statement, &type) || !pbrt_parse_params(p) || !shape_attributes(p))
         return false;
     if (!p->in_world)
         pbrt_warn_at(p, statement, "shapes before WorldBegin are used as if after it");
     if (pbrt_string_is(&type, "plymesh")) {
-        if (pbrt_find_param(p, "alpha"))
-            pbrt_warn_at(p, statement, "alpha cut-outs are ignored (the shapes are opaque)");
         return plymesh(p, statement);
     }
     if (pbrt_string_is(&type, "trianglemesh") || pbrt_string_is(&type, "bilinearmesh") ||
