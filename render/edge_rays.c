@@ -115,24 +115,23 @@ typedef struct SurveyCtx {
     _Atomic uint64_t rays;
 } SurveyCtx;
 
-static float survey_view(SurveyCtx *sc, int x, int y, int j, PathStats *st)
+static float survey_view(SurveyCtx *sc, int x, int y, int j, int thread, PathStats *st)
 {
     size_t pix = (size_t)y * sc->er->width + x;
     float jx, jy;
     pixel_sampler_survey(&sc->sampler, pix, j, &jx, &jy);
-    float v = luminance(integrator_seen(sc->it, sc->cam->pos, camera_ray(sc->cam, x, y, jx, jy), st));
+    float v = luminance(integrator_seen(sc->it, sc->cam->pos, camera_ray(sc->cam, x, y, jx, jy), thread, st));
     edge_rays_add_view(sc->er, pix, v);
     return v;
 }
 
 static void survey_first_row(void *vctx, uint64_t row, int thread)
 {
-    (void)thread;
     SurveyCtx *sc = vctx;
     PathStats st = {0};
     int y = (int)row, w = sc->er->width;
     for (int x = 0; x < w; x++)
-        sc->first[(size_t)y * w + x] = survey_view(sc, x, y, 0, &st);
+        sc->first[(size_t)y * w + x] = survey_view(sc, x, y, 0, thread, &st);
     atomic_fetch_add(&sc->rays, st.rays);
 }
 
@@ -153,14 +152,13 @@ static bool survey_differs(const SurveyCtx *sc, int x, int y)
 
 static void survey_rest_row(void *vctx, uint64_t row, int thread)
 {
-    (void)thread;
     SurveyCtx *sc = vctx;
     PathStats st = {0};
     int y = (int)row;
     for (int x = 0; x < sc->er->width; x++)
         if (survey_differs(sc, x, y))
             for (int j = 1; j < EDGE_RAYS_SURVEY; j++)
-                survey_view(sc, x, y, j, &st);
+                survey_view(sc, x, y, j, thread, &st);
     atomic_fetch_add(&sc->rays, st.rays);
 }
 
@@ -176,7 +174,7 @@ uint64_t edge_rays_survey(EdgeRays *er, const Integrator *it, const Camera *cam,
 /* ---- a sample's extra rays ------------------------------------------------ */
 
 Vec3 edge_rays_sample(EdgeRays *er, const Integrator *it, const Camera *cam, const PixelSampler *ps,
-                      double sample_rays, int x, int y, Vec3 L, Vec3 seen, PathStats *st)
+                      double sample_rays, int x, int y, Vec3 L, Vec3 seen, int thread, PathStats *st)
 {
     size_t pix = (size_t)y * er->width + x;
     int k = edge_rays_count(er, pix, sample_rays);
@@ -185,7 +183,7 @@ Vec3 edge_rays_sample(EdgeRays *er, const Integrator *it, const Camera *cam, con
     for (int j = 0; j < k; j++) {
         float jx, jy;
         pixel_sampler_view(ps, pix, j, EDGE_RAYS_MAX, &jx, &jy);
-        Vec3 v = integrator_seen(it, cam->pos, camera_ray(cam, x, y, jx, jy), st);
+        Vec3 v = integrator_seen(it, cam->pos, camera_ray(cam, x, y, jx, jy), thread, st);
         edge_rays_add_view(er, pix, luminance(v));
         views = v3_add(views, v);
     }

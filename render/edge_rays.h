@@ -102,6 +102,6 @@ uint64_t edge_rays_survey(EdgeRays *er, const Integrator *it, const Camera *cam,
  * pixel takes now (pass sampler ps; sample_rays: a sample's cost in rays);
  * the views and the sample go to the pixel's sums. Returns the sample. */
 Vec3 edge_rays_sample(EdgeRays *er, const Integrator *it, const Camera *cam, const PixelSampler *ps,
-                      double sample_rays, int x, int y, Vec3 L, Vec3 seen, PathStats *st);
+                      double sample_rays, int x, int y, Vec3 L, Vec3 seen, int thread, PathStats *st);
 
 #endif

@@ -680,9 +680,9 @@ Vec3 integrator_trace(const Integrator *it, Vec3 o, Vec3 d, const PathCtx *pc, V
     return p.radiance;
 }
 
-Vec3 integrator_seen(const Integrator *it, Vec3 o, Vec3 d, PathStats *st)
+Vec3 integrator_seen(const Integrator *it, Vec3 o, Vec3 d, int thread, PathStats *st)
 {
-    Hit h = intersect(it->geo, o, d, INFINITY);
+    Hit h = intersect_solid(it, o, d, INFINITY, thread); /* past cut-outs, as the camera ray goes */
     st->rays++;
     st->views++;
     if (!h.found) /* as add_escaped sees it from the camera: the camera ray counts as a specular bounce */

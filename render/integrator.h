@@ -54,6 +54,6 @@ Vec3 integrator_trace(const Integrator *it, Vec3 o, Vec3 d, const PathCtx *pc, V
 
 /* What a camera ray from o along d sees directly, integrator_trace's `seen`
  * alone: one ray, nothing shaded (counted in st->rays and st->views). */
-Vec3 integrator_seen(const Integrator *it, Vec3 o, Vec3 d, PathStats *st);
+Vec3 integrator_seen(const Integrator *it, Vec3 o, Vec3 d, int thread, PathStats *st);
 
 #endif

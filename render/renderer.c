@@ -332,7 +332,7 @@ static void render_tile(PassCtx *pc, uint64_t index, int thread)
             Vec3 rest = v3_sub(L, seen);
             if (r->seen)
                 L = edge_rays_sample(r->seen, &r->integrator, &r->camera, &pc->sampler, pc->sample_rays, x, y, L,
-                                     seen, &st);
+                                     seen, thread, &st);
             if (!film_add(&r->film, pix, &L)) {
                 nonfinite++;
                 rest = v3(0, 0, 0);

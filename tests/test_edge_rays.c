@@ -78,7 +78,8 @@ Test(edge_rays, a_silhouette_takes_rays_by_its_noise_against_the_images)
  * over `passes` passes with up to `edge_rays` extra camera
  * rays a sample: column 3's values (8 of them) to `col`, extra rays a
  * sample to *per_sample; every other pixel must be exact. */
-static void render_edge_column(int edge_rays, uint64_t seed, int passes, double col[8], double *per_sample)
+static void render_edge_column_behind(int edge_rays, uint64_t seed, int passes, bool behind_cutout, double col[8],
+                                      double *per_sample)
 {
     SgScene *s = sgt_scene_new();
     const float black[3] = {0, 0, 0}, glow[3] = {1, 1, 1};
@@ -88,6 +89,13 @@ static void render_edge_column(int edge_rays, uint64_t seed, int passes, double 
     const double edge = (2.0 * 3.5 / w - 1.0) * t;
     const double q[4][3] = {{edge, -10, -1}, {10, -10, -1}, {10, 10, -1}, {edge, 10, -1}};
     sgt_add_quad(s, q, lm);
+    if (behind_cutout) { /* a black screen of alpha 0 across the whole view, facing the camera */
+        uint32_t screen = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, NULL);
+        sgt_material(s, screen)->cutout = true;
+        sgt_material(s, screen)->alpha = 0.0f;
+        const double c[4][3] = {{-10, -10, -0.5}, {10, -10, -0.5}, {10, 10, -0.5}, {-10, 10, -0.5}};
+        sgt_add_quad(s, c, screen);
+    }
     const double pos[3] = {0, 0, 0}, at[3] = {0, 0, -1}, up[3] = {0, 1, 0};
     sgt_set_camera(s, pos, at, up, fov, w, w);
     sgt_finish(s);
@@ -114,6 +122,23 @@ static void render_edge_column(int edge_rays, uint64_t seed, int passes, double 
                 cr_assert_float_eq(v, x < 3 ? 0.0 : 1.0, 1e-6, "pixel (%d, %d) is %g", x, y, v);
         }
     sgt_scene_free(s);
+}
+
+static void render_edge_column(int edge_rays, uint64_t seed, int passes, double col[8], double *per_sample)
+{
+    render_edge_column_behind(edge_rays, seed, passes, false, col, per_sample);
+}
+
+/* The same edge seen through a cut-out that lets every ray pass: the edge
+ * rays see past it as the camera's rays do, so the column is the same. */
+Test(edge_rays, the_edge_rays_see_through_cut_outs)
+{
+    double open[8], cut[8], per_open, per_cut;
+    render_edge_column(16, 5, 32, open, &per_open);
+    render_edge_column_behind(16, 5, 32, true, cut, &per_cut);
+    cr_assert_gt(per_cut, 0.0, "the survey found the edge behind the cut-out");
+    for (int y = 0; y < 8; y++)
+        cr_assert_float_eq(cut[y], open[y], 1e-6, "row %d: %g through the cut-out, %g without", y, cut[y], open[y]);
 }
 
 /* A light's edge through the middle of a column of pixels: each of them
