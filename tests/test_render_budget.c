@@ -203,3 +203,32 @@ Test(render_budget, guided_stops_learning_when_it_stops_paying, .timeout = 120)
     }
     sgt_scene_free(s);
 }
+
+/* Deterministic: the learning within the render, its checkpoints'
+ * judgement (costs in rays, not seconds) and the weights are the same on
+ * one thread and on two, so is the image, bit for bit. */
+Test(render_budget, the_same_seed_learns_and_weighs_alike_on_any_thread_count, .timeout = 120)
+{
+    SgScene *s = sgt_window_rooms();
+    float *img[2];
+    int learned[2];
+    for (int k = 0; k < 2; k++) {
+        SgRenderOptions o = window_options(s, 21);
+        o.threads = k + 1;
+        SgError err = {0};
+        SgRenderer *r = sg_renderer_create(s, &o, &err);
+        cr_assert_not_null(r, "%s", err.message);
+        sg_renderer_set_budget(r, 96, 0.0);
+        for (int p = 0; p < 96; p++)
+            sg_renderer_pass(r);
+        learned[k] = sg_renderer_learned_passes(r);
+        img[k] = image_of(r, &o);
+        sg_renderer_free(r);
+    }
+    cr_assert_eq(learned[0], learned[1], "learned %d passes on one thread, %d on two", learned[0], learned[1]);
+    cr_assert_gt(learned[0], 0);
+    cr_assert_eq(memcmp(img[0], img[1], sizeof(float) * 3 * 40 * 30), 0, "the images differ");
+    free(img[0]);
+    free(img[1]);
+    sgt_scene_free(s);
+}
