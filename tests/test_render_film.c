@@ -28,6 +28,13 @@ static void add_pass(Film *f, SgRng *rng, double spread, double cost)
     film_end_pass(f, cost);
 }
 
+/* A film of W x H and a stream of random numbers for its passes. */
+static void film_start(Film *f, SgRng *rng, uint64_t seed)
+{
+    cr_assert(film_init(f, W, H));
+    sg_rng_seed(rng, seed, 0);
+}
+
 static double image_mse(const float *img)
 {
     double e = 0.0;
@@ -41,9 +48,8 @@ static double image_mse(const float *img)
 Test(render_film, one_group_is_the_plain_mean)
 {
     Film f;
-    cr_assert(film_init(&f, W, H));
     SgRng rng;
-    sg_rng_seed(&rng, 1, 0);
+    film_start(&f, &rng, 1);
     for (int i = 0; i < 5; i++)
         add_pass(&f, &rng, 0.5, 1.0);
     double sum0 = f.sum[0];
@@ -61,9 +67,8 @@ Test(render_film, one_group_is_the_plain_mean)
 Test(render_film, groups_weigh_by_their_inverse_variance)
 {
     Film f;
-    cr_assert(film_init(&f, W, H));
     SgRng rng;
-    sg_rng_seed(&rng, 2, 0);
+    film_start(&f, &rng, 2);
     double noisy = 0.4, good = 0.2;
     for (int i = 0; i < 8; i++)
         add_pass(&f, &rng, noisy, 1.0);
@@ -100,9 +105,8 @@ Test(render_film, groups_weigh_by_their_inverse_variance)
 Test(render_film, a_group_that_saw_nothing_weighs_little)
 {
     Film f;
-    cr_assert(film_init(&f, W, H));
     SgRng rng;
-    sg_rng_seed(&rng, 3, 0);
+    film_start(&f, &rng, 3);
     for (int i = 0; i < 4; i++) {
         for (size_t p = 0; p < PIXELS; p++) {
             Vec3 L = v3(0, 0, 0);
@@ -132,9 +136,8 @@ Test(render_film, one_firefly_does_not_decide_a_weight)
     double variance[2][FILM_GROUPS_MAX + 1];
     for (int firefly = 0; firefly < 2; firefly++) {
         Film f;
-        cr_assert(film_init(&f, W, H));
         SgRng rng;
-        sg_rng_seed(&rng, 4, 0);
+        film_start(&f, &rng, 4);
         for (int i = 0; i < 4; i++)
             add_pass(&f, &rng, 0.4, 1.0);
         if (firefly) {
@@ -162,9 +165,8 @@ Test(render_film, the_combination_is_unbiased)
     float *img = malloc(PIXELS * 3 * sizeof *img);
     for (int k = 0; k < films; k++) {
         Film f;
-        cr_assert(film_init(&f, W, H));
         SgRng rng;
-        sg_rng_seed(&rng, 100 + (uint64_t)k, 0);
+        film_start(&f, &rng, 100 + (uint64_t)k);
         for (int group = 0; group < 3; group++) {
             int passes = 1 << group;
             double scale = group == 0 ? 3.0 : 1.0; /* the first group: a heavier tail */
