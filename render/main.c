@@ -17,7 +17,7 @@
 #include "output_file.h"
 #include "progress.h"
 #include "renderer.h"
-#include "scene.h"
+#include "scene_load.h"
 
 #define SG_STRING_(x) #x
 #define SG_STRING(x) SG_STRING_(x)

@@ -1,4 +1,5 @@
 #include "support_render.h"
+#include <criterion/criterion.h>
 
 #include <math.h>
 #include <stdio.h>
@@ -8,6 +9,7 @@
 
 #include "color.h"
 #include "memory.h"
+#include "scene_load.h"
 
 SgScene *sgt_scene_new(void)
 {
@@ -260,6 +262,14 @@ SgScene *sgt_scene_from_text(const char *name, const char *text, SgError *err)
     fclose(f);
     SgScene *s = sg_scene_load(path, err);
     remove(path);
+    return s;
+}
+
+SgScene *sgt_load_ok(const char *path)
+{
+    SgError err = {0};
+    SgScene *s = sg_scene_load(path, &err);
+    cr_assert(s, "%s: %s", path, err.message);
     return s;
 }
 

@@ -58,6 +58,9 @@ static inline SgRenderStats sgt_stats(const SgRenderer *r)
 /* The scene a file of `text` named `name` (its extension says the format)
  * loads as; NULL with err set where the loader refuses it. */
 SgScene *sgt_scene_from_text(const char *name, const char *text, SgError *err);
+/* The scene file at path, which must load: the test fails with the
+ * loader's message where it does not. */
+SgScene *sgt_load_ok(const char *path);
 
 /* A pbrt-v4 scene's start: an 8x8 camera over a 2x2 floor, after WorldBegin. */
 #define SGT_PBRT_ROOM                                                                                             \
