@@ -1,6 +1,6 @@
 /* Scene files in JSON (cJSON): materials, transforms, inline meshes, quad
  * lights, camera and settings; mesh files it names go to mesh_file.h. See
- * README.md, "Scene format". */
+ * docs/scene-format.md, "JSON scenes". */
 #include "scene_json.h"
 
 #include <cjson/cJSON.h>
@@ -730,8 +730,7 @@ SgScene *sg_json_scene_load(const char *path, SgError *err)
     SgScene *s = b.scene = b.core.scene;
     if (ok) {
         sg_builder_add_source(&b.core, text, size);
-        const char *slash = strrchr(path, '/');
-        snprintf(b.base_dir, sizeof b.base_dir, "%.*s", slash ? (int)(slash - path + 1) : 0, path);
+        sg_folder_of(path, b.base_dir, sizeof b.base_dir);
         b.material_overrides = cJSON_GetObjectItemCaseSensitive(root, "materials");
         if (b.material_overrides && !cJSON_IsObject(b.material_overrides))
             ok = sg_fail(err, "%s: \"materials\" must be an object", path);

@@ -527,21 +527,5 @@ bool mts_scene_material(MtsParser *p, size_t index, const float *radiance, uint3
         *id = m->scene_id;
         return true;
     }
-    for (size_t i = 0; i < p->emissive_count; i++) {
-        MtsEmissive *e = &p->emissive[i];
-        if (e->material == index && !memcmp(e->radiance, radiance, sizeof e->radiance)) {
-            *id = e->scene_id;
-            return true;
-        }
-    }
-    SgMaterial copy = m->material;
-    memcpy(copy.emission, radiance, sizeof copy.emission);
-    if (!MTS_RESERVE(p, p->emissive, p->emissive_count, p->emissive_capacity, 1) ||
-        !sg_builder_add_material(&p->core, &copy, id, p->err))
-        return false;
-    MtsEmissive *e = &p->emissive[p->emissive_count++];
-    e->material = index;
-    memcpy(e->radiance, radiance, sizeof e->radiance);
-    e->scene_id = *id;
-    return true;
+    return sg_builder_emissive_material(&p->core, index, &m->material, radiance, id, p->err);
 }

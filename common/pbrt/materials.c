@@ -372,9 +372,9 @@ bool pbrt_make_named_material_statement(Parser *p, const Token *statement)
         SgScene *scene = p->core.scene;
         if (old->scene_id != UINT32_MAX)
             scene->materials[old->scene_id] = m.material;
-        for (size_t k = 0; k < p->emissive_count; k++)
-            if (p->emissive[k].material == i) {
-                SgMaterial *e = &scene->materials[p->emissive[k].scene_id];
+        for (size_t k = 0; k < p->core.emissive_count; k++)
+            if (p->core.emissive[k].material == i) {
+                SgMaterial *e = &scene->materials[p->core.emissive[k].scene_id];
                 float emission[3];
                 memcpy(emission, e->emission, sizeof emission);
                 *e = m.material;
@@ -429,24 +429,7 @@ bool pbrt_current_scene_material(Parser *p, bool emissive, uint32_t *id)
         *id = m->scene_id;
         return true;
     }
-    const float *L = p->state.radiance;
-    for (size_t i = 0; i < p->emissive_count; i++) {
-        EmissiveMaterial *e = &p->emissive[i];
-        if (e->material == p->state.material && !memcmp(e->radiance, L, sizeof e->radiance)) {
-            *id = e->scene_id;
-            return true;
-        }
-    }
-    SgMaterial copy = m->material;
-    memcpy(copy.emission, L, sizeof copy.emission);
-    if (!RESERVE(p, p->emissive, p->emissive_count, p->emissive_capacity, 1) ||
-        !sg_builder_add_material(&p->core, &copy, id, p->err))
-        return false;
-    EmissiveMaterial *e = &p->emissive[p->emissive_count++];
-    e->material = p->state.material;
-    memcpy(e->radiance, L, sizeof e->radiance);
-    e->scene_id = *id;
-    return true;
+    return sg_builder_emissive_material(&p->core, p->state.material, &m->material, p->state.radiance, id, p->err);
 }
 
 bool pbrt_area_light_statement(Parser *p, const Token *statement)
