@@ -504,6 +504,7 @@ void sg_builder_release(SgSceneBuilder *b)
 {
     free(b->warnings);
     free(b->emissive);
+    sg_image_averages_free(&b->images);
     b->warnings = NULL;
     b->emissive = NULL;
     b->warning_count = b->emissive_count = 0;

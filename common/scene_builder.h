@@ -12,6 +12,7 @@
 #include <stdint.h>
 
 #include "error.h"
+#include "image_average.h"
 #include "scene.h"
 #include "transform.h"
 
@@ -40,6 +41,7 @@ typedef struct SgSceneBuilder {
     size_t warning_count;
     SgBuilderEmissive *emissive;
     size_t emissive_count;
+    SgImageAverages images; /* image files read for textures' means, by path */
 } SgSceneBuilder;
 
 /* Allocates the scene; on failure returns false and b->scene is NULL. */
@@ -113,7 +115,7 @@ bool sg_builder_add_light_source(SgSceneBuilder *b, const SgLightSource *light, 
  * The caller has checked that there are triangles. */
 bool sg_builder_finish(SgSceneBuilder *b, SgError *err);
 /* Frees what the builder holds besides the scene (the scene stays the
- * caller's); on every way out of a reader, after sg_builder_begin. */
+ * caller's); on every way out of a reader that began one. */
 void sg_builder_release(SgSceneBuilder *b);
 
 /* Tallies a warning, its kind printed from fmt, at where (a place

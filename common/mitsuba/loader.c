@@ -494,7 +494,6 @@ static void release(MtsParser *p)
         sg_shape_group_release(&p->groups[i].shapes);
     free(p->groups);
     sg_builder_release(&p->core);
-    sg_image_averages_free(&p->images);
 }
 
 /* Mitsuba's camera when the scene has no sensor: at the origin looking

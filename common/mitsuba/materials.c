@@ -58,7 +58,7 @@ static bool bitmap(MtsParser *p, const XmlNode *n, SgTexture *t, char *path, siz
     if (file_gamma == -1 || file_gamma > 0)
         gamma = file_gamma == 1 ? 0 : file_gamma;
     float mean[3] = {0.5f, 0.5f, 0.5f};
-    bool readable = sg_image_average(&p->images, path, gamma, mean, NULL);
+    bool readable = sg_image_average(&p->core.images, path, gamma, mean, NULL);
     if (!readable)
         mts_warn(p, n, "bitmap textures that cannot be read (missing files) are taken as grey 0.5");
     if (strcasecmp(filter, "bilinear"))

@@ -83,7 +83,6 @@ typedef struct MtsParser {
 
     bool has_sensor;
     char unsupported_emitter[64]; /* the first emitter type left out, for "no light" */
-    SgImageAverages images;
 } MtsParser;
 
 /* ---- props.c ------------------------------------------------------------ */

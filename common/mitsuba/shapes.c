@@ -140,7 +140,7 @@ static bool obj(MtsParser *p, XmlNode *shape, const char *path, const SgTransfor
     SgTransform identity;
     sg_transform_identity(&identity);
     SgError local = {0};
-    bool ok = sg_mesh_file_load(&tmp, &p->images, path, &identity, &rules, &local) ||
+    bool ok = sg_mesh_file_load(&tmp, &p->core.images, path, &identity, &rules, &local) ||
               mts_fail(p, shape, "%s", local.message);
     SgScene *s = tmp.scene;
     if (ok && s->triangle_count == 0 && tmp.dropped_degenerate == 0)
@@ -165,6 +165,7 @@ static bool obj(MtsParser *p, XmlNode *shape, const char *path, const SgTransfor
                                                     uvs, xf, false));
     free(uvs);
     sg_scene_free(s);
+    sg_builder_release(&tmp);
     return ok;
 }
 
@@ -228,10 +229,7 @@ static bool quadric_shape(MtsParser *p, XmlNode *shape, const char *type, const 
         /* a frame whose z is the axis */
         double z[3] = {axis[0] / length, axis[1] / length, axis[2] / length}, x[3], y[3];
         double helper[3] = {fabs(z[0]) < 0.9 ? 1 : 0, fabs(z[0]) < 0.9 ? 0 : 1, 0};
-        d3_cross(helper, z, x);
-        double lx = d3_length(x);
-        for (int a = 0; a < 3; a++)
-            x[a] /= lx;
+        d3_unit_cross(helper, z, x);
         d3_cross(z, x, y);
         for (int a = 0; a < 3; a++) {
             local.m[a][0] = x[a];

@@ -347,7 +347,6 @@ static void parser_release(Parser *p)
     }
     free(p->objects);
     sg_builder_release(&p->core);
-    sg_image_averages_free(&p->images);
 }
 
 SgScene *sg_pbrt_scene_load(const char *path, SgError *err)

@@ -146,7 +146,6 @@ typedef struct Parser {
     int film_width, film_height;
 
 
-    SgImageAverages images; /* image files read for textures, by path */
 } Parser;
 
 /* ---- tokens.c: errors, warnings, files and the lexer -------------------- */
