@@ -22,6 +22,9 @@ void sgt_set_camera(SgScene *s, const double pos[3], const double at[3], const d
                     double fov, int width, int height);
 /* Bounds and lights (one per emissive quad); call once when done. */
 void sgt_finish(SgScene *s);
+/* The usual ending: a camera at pos looking at `at`, +y up, then
+ * sgt_finish. */
+void sgt_finish_looking(SgScene *s, const double pos[3], const double at[3], double fov, int width, int height);
 /* Transforms every position by p * scale + offset (camera too). */
 void sgt_scale_offset(SgScene *s, double scale, const double offset[3]);
 
