@@ -35,7 +35,7 @@
 
 #include "image_io.h"
 #include "output_file.h"
-#include "scene.h"
+#include "scene_load.h"
 #include "shard_format.h"
 
 static const char usage[] =

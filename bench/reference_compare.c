@@ -14,7 +14,7 @@
 #include "image_io.h"
 #include "render/camera.h"
 #include "render/geometry.h"
-#include "scene.h"
+#include "scene_load.h"
 
 #define REGIONS 4
 

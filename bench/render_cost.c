@@ -20,7 +20,7 @@
 #include "../render/renderer.h"
 #include "error.h"
 #include "progress.h"
-#include "scene.h"
+#include "scene_load.h"
 
 int main(int argc, char **argv)
 {

@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <time.h>
 
-#include "scene.h"
+#include "scene_load.h"
 
 static double now(void)
 {

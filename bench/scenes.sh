@@ -1,17 +1,18 @@
 # The scenes of the convergence race (bench/sections/60-convergence.sh) and
-# of the sections that build on it (62, 64, 65), sourced by each: the
+# of the sections that build on it (portals, shards, previous build),
+# sourced by each: the
 # columns and their render options, the run's setting, and helpers.
 #
 # name|scene|voxel resolution (empty: the scene's own). The dark corridor
-# (issue 29) is lit round two corners, where guided's learned mixture
+# is lit round two corners, where guided's learned mixture
 # regressed unseen by the corridor's one corner. The staircase and
 # the bathroom are their pbrt-v4 files, with their textures and microfacet
 # materials; a pbrt file names no voxel size, so the bench gives the one
-# their JSON stand-ins in data/external/ use. The sunlit house (issue 30) is
+# their JSON stand-ins in data/external/ use. The sunlit house is
 # lit only by a sky and a sun through one window, seen from the next room;
-# the north room (issue 30) by a sky image through a north window, its sun
+# the north room by a sky image through a north window, its sun
 # (90% of the image's power) behind the house: where the openings found by
-# the precompute count (section 62).
+# the precompute count (the portals section, 62-portals.sh).
 # shellcheck disable=SC2034
 bench_scenes=(
   "corridor|data/corridor/corridor.json|"
@@ -53,11 +54,12 @@ done < <(sed -nE 's/^\{"name": "([^"]+)".*/\1/p' <<<"$bench_describe")
 bench_baseline=$(grep -F '"default_without_cache": true' <<<"$bench_describe" | sed -nE 's/^\{"name": "([^"]+)".*/\1/p')
 
 # ref_field KEY FILE: the value after KEY in a reference's record, the
-# ref.txt section 60 writes beside ref.exr ("relmse X mse8 Y mse Z spp N
-# seconds S state T"); section 62 reads its own error from it
+# ref.txt the convergence section writes beside ref.exr ("relmse X mse8 Y
+# mse Z spp N seconds S state T"); the portals section reads its own error
+# from it
 ref_field() { awk -v k="$1" '{for(i=1;i<NF;i++) if($i==k) print $(i+1)}' "$2"; }
 
-# The run's setting, as section 60 chose it: quick (SG_QUICK=1), long
+# The run's setting, as the convergence section chose it: quick (SG_QUICK=1), long
 # (SG_LONG=1) or default, and its image size in pixels (SG_CONV_PIXELS
 # overrides). by_setting QUICK LONG DEFAULT: the word for this setting.
 if [ "${SG_QUICK:-0}" = 1 ]; then

@@ -31,6 +31,10 @@ bool sg_read_file(const char *path, const char *what, size_t max_bytes, char **d
  * after at least one character. */
 bool sg_has_extension(const char *path, const char *ext);
 
+/* The folder part of path with its trailing '/' ("" for a bare file
+ * name): what a file's relative references are read against. */
+void sg_folder_of(const char *path, char *out, size_t size);
+
 #ifdef __cplusplus
 }
 #endif

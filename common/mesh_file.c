@@ -1,7 +1,7 @@
 /* Mesh files into a scene under construction: PLY through our own strict
  * reader (ply_mesh.h), every other format through Assimp, whose raw output
  * is checked before its post-processing runs, with its materials (MTL,
- * glTF) and their diffuse maps. See README.md, "Scene format". */
+ * glTF) and their diffuse maps. See docs/scene-format.md. */
 #include "mesh_file.h"
 
 #include <assimp/ObjMaterial.h>

@@ -1,6 +1,6 @@
 /* A mesh file into a scene under construction: PLY through our own reader
  * (ply_mesh.h), every other format through Assimp, with its materials and
- * their diffuse maps (README.md, "Scene format"). The scene description
+ * their diffuse maps (docs/scene-format.md). The scene description
  * that names the file (scene_json.c) decides its materials through
  * SgMeshFileMaterials. */
 #ifndef SG_MESH_FILE_H

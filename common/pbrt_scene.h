@@ -1,6 +1,6 @@
 /* pbrt-v4 scene files (.pbrt): the subset that shared research scenes use
- * (see README.md, "pbrt-v4 scenes"). sg_scene_load (scene.c) dispatches here on
- * the ".pbrt" extension. */
+ * (docs/scene-format.md, "pbrt-v4 scenes"). sg_scene_load (scene_load.c)
+ * dispatches here on the ".pbrt" and ".pbrt.gz" extensions. */
 #ifndef SG_PBRT_SCENE_H
 #define SG_PBRT_SCENE_H
 

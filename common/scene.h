@@ -1,8 +1,8 @@
 /* The scene every program reads: triangles in world space (double precision,
  * so that a scene far from the origin keeps its detail), materials, lights
  * grouped from emissive triangles, the camera and the build settings.
- * Loaded from the JSON scene description (see README.md, "Scene format";
- * meshes go through Assimp) or from a pbrt-v4 scene file (.pbrt). */
+ * The data model alone: scene_load.h reads it from a JSON, pbrt-v4 or
+ * Mitsuba XML file (docs/scene-format.md), scene_builder.h fills it. */
 #ifndef SG_SCENE_H
 #define SG_SCENE_H
 
@@ -261,10 +261,6 @@ SgGuideLight sg_scene_guide_light(const SgScene *scene, uint32_t i);
 /* A sky or a sun: the outside of the scene sends light in. */
 bool sg_scene_lit_from_outside(const SgScene *scene);
 
-/* Loads a scene description: a JSON file, or a pbrt-v4 file when the name
- * ends in ".pbrt". On failure returns NULL with "file: cause" (pbrt:
- * "file:line: cause"). */
-SgScene *sg_scene_load(const char *path, SgError *err);
 void sg_scene_free(SgScene *scene);
 
 /* Prints each warning as "program: warning: line" to out. */

@@ -119,6 +119,31 @@ bool sg_builder_add_material(SgSceneBuilder *b, const SgMaterial *m, uint32_t *i
     return true;
 }
 
+bool sg_builder_emissive_material(SgSceneBuilder *b, size_t material, const SgMaterial *m,
+                                  const float radiance[3], uint32_t *id, SgError *err)
+{
+    for (size_t i = 0; i < b->emissive_count; i++) {
+        const SgBuilderEmissive *e = &b->emissive[i];
+        if (e->material == material && !memcmp(e->radiance, radiance, sizeof e->radiance)) {
+            *id = e->scene_id;
+            return true;
+        }
+    }
+    SgBuilderEmissive *grown = realloc(b->emissive, (b->emissive_count + 1) * sizeof *grown);
+    if (!grown)
+        return sg_fail(err, "%s: out of memory", b->path);
+    b->emissive = grown;
+    SgMaterial copy = *m;
+    memcpy(copy.emission, radiance, sizeof copy.emission);
+    if (!sg_builder_add_material(b, &copy, id, err))
+        return false;
+    SgBuilderEmissive *e = &b->emissive[b->emissive_count++];
+    e->material = material;
+    memcpy(e->radiance, radiance, sizeof e->radiance);
+    e->scene_id = *id;
+    return true;
+}
+
 static bool is_degenerate(const double *a, const double *b, const double *c)
 {
     double e1[3], e2[3], e3[3], n[3];
@@ -407,7 +432,106 @@ bool sg_builder_finish(SgSceneBuilder *b, SgError *err)
     if (b->scene->uvs && !reserve_uvs(b, b->scene->vertex_count, err)) /* the meshes after the last with uv */
         return false;
     b->scene->degenerate_dropped = b->dropped_degenerate;
-    return compute_bounds_and_hash(b->scene, b->path, err);
+    if (!compute_bounds_and_hash(b->scene, b->path, err))
+        return false;
+    for (size_t i = 0; i < b->warning_count; i++) {
+        const SgBuilderWarning *w = &b->warnings[i];
+        if (w->count > 1)
+            sg_scene_add_warning(b->scene, "%s: %s (%u times)", w->where, w->kind, w->count);
+        else
+            sg_scene_add_warning(b->scene, "%s: %s", w->where, w->kind);
+    }
+    return true;
+}
+
+bool sg_shape_group_add(SgShapeGroup *g, const char *path, const double *positions, uint32_t vertex_count,
+                        const uint32_t *indices, uint32_t triangle_count, const float *uvs,
+                        const SgTransform *xf, uint32_t material, SgError *err)
+{
+    if (g->shape_count == g->shape_capacity) {
+        size_t cap = g->shape_capacity ? 2 * g->shape_capacity : 8;
+        SgGroupShape *grown = realloc(g->shapes, cap * sizeof *grown);
+        if (!grown)
+            return sg_fail(err, "%s: out of memory", path);
+        g->shapes = grown;
+        g->shape_capacity = cap;
+    }
+    SgGroupShape *s = &g->shapes[g->shape_count];
+    memset(s, 0, sizeof *s);
+    s->positions = malloc((size_t)vertex_count * 3 * sizeof(double) + 1);
+    s->indices = malloc((size_t)triangle_count * 3 * sizeof(uint32_t) + 1);
+    s->uvs = uvs ? malloc((size_t)vertex_count * 2 * sizeof(float) + 1) : NULL;
+    if (!s->positions || !s->indices || (uvs && !s->uvs)) {
+        free(s->positions);
+        free(s->indices);
+        free(s->uvs);
+        return sg_fail(err, "%s: out of memory", path);
+    }
+    g->shape_count++;
+    for (uint32_t v = 0; v < vertex_count; v++)
+        sg_transform_point(xf, positions + 3 * (size_t)v, s->positions + 3 * (size_t)v);
+    memcpy(s->indices, indices, (size_t)triangle_count * 3 * sizeof(uint32_t));
+    if (uvs)
+        memcpy(s->uvs, uvs, (size_t)vertex_count * 2 * sizeof(float));
+    s->vertex_count = vertex_count;
+    s->triangle_count = triangle_count;
+    s->material = material;
+    return true;
+}
+
+bool sg_builder_add_group(SgSceneBuilder *b, const char *what, const SgShapeGroup *g, const SgTransform *xf,
+                          SgError *err)
+{
+    for (size_t i = 0; i < g->shape_count; i++) {
+        const SgGroupShape *s = &g->shapes[i];
+        uint32_t first = b->scene->vertex_count;
+        if (!sg_builder_append_mesh(b, what, s->positions, s->vertex_count, s->indices, s->triangle_count, xf,
+                                    s->material, err) ||
+            (s->uvs && !sg_builder_set_uvs(b, first, s->vertex_count, s->uvs, err)))
+            return false;
+    }
+    return true;
+}
+
+void sg_shape_group_release(SgShapeGroup *g)
+{
+    for (size_t i = 0; i < g->shape_count; i++) {
+        free(g->shapes[i].positions);
+        free(g->shapes[i].indices);
+        free(g->shapes[i].uvs);
+    }
+    free(g->shapes);
+    memset(g, 0, sizeof *g);
+}
+
+void sg_builder_release(SgSceneBuilder *b)
+{
+    free(b->warnings);
+    free(b->emissive);
+    sg_image_averages_free(&b->images);
+    b->warnings = NULL;
+    b->emissive = NULL;
+    b->warning_count = b->emissive_count = 0;
+}
+
+void sg_builder_warnv(SgSceneBuilder *b, const char *where, const char *fmt, va_list ap)
+{
+    char kind[sizeof b->warnings->kind];
+    vsnprintf(kind, sizeof kind, fmt, ap);
+    for (size_t i = 0; i < b->warning_count; i++)
+        if (!strcmp(b->warnings[i].kind, kind)) {
+            b->warnings[i].count++;
+            return;
+        }
+    /* a handful of kinds: grown one at a time */
+    SgBuilderWarning *grown = realloc(b->warnings, (b->warning_count + 1) * sizeof *grown);
+    if (!grown)
+        return;
+    b->warnings = grown;
+    SgBuilderWarning *w = &b->warnings[b->warning_count++];
+    snprintf(w->kind, sizeof w->kind, "%s", kind);
+    snprintf(w->where, sizeof w->where, "%s", where);
+    w->count = 1;
 }
 
 void sg_scene_add_warning(SgScene *s, const char *fmt, ...)

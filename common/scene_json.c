@@ -1,6 +1,6 @@
 /* Scene files in JSON (cJSON): materials, transforms, inline meshes, quad
  * lights, camera and settings; mesh files it names go to mesh_file.h. See
- * README.md, "Scene format". */
+ * docs/scene-format.md, "JSON scenes". */
 #include "scene_json.h"
 
 #include <cjson/cJSON.h>
@@ -22,7 +22,6 @@ typedef struct Builder {
     const char *json_path;  /* core.path */
     char base_dir[4096];
     const cJSON *material_overrides; /* the "materials" object, or NULL */
-    SgImageAverages images;          /* texture files read, by path */
 } Builder;
 
 /* ---- JSON helpers ------------------------------------------------------- */
@@ -419,7 +418,7 @@ static bool load_meshes(Builder *b, const cJSON *root, SgError *err)
                                              .adjust = override_material,
                                              .context = b};
                 for (size_t i = 0; ok && i < g.gl_pathc; i++)
-                    ok = sg_mesh_file_load(&b->core, &b->images, g.gl_pathv[i], &xf, &rules, err);
+                    ok = sg_mesh_file_load(&b->core, &b->core.images, g.gl_pathv[i], &xf, &rules, err);
                 globfree(&g);
             }
         }
@@ -500,10 +499,7 @@ static bool sky_light(Builder *b, const cJSON *light, const char *owner, SgLight
     /* the map's x axis: the world axis least along up, made perpendicular */
     int a = fabs(up[0]) <= fabs(up[1]) && fabs(up[0]) <= fabs(up[2]) ? 0 : fabs(up[1]) <= fabs(up[2]) ? 1 : 2;
     double axis[3] = {a == 0, a == 1, a == 2};
-    d3_cross(up, axis, y);
-    double len = d3_length(y);
-    for (int c = 0; c < 3; c++)
-        y[c] /= len;
+    d3_unit_cross(up, axis, y);
     d3_cross(y, up, x);
     for (int r = 0; r < 3; r++) {
         l->light_to_world[r][0] = x[r];
@@ -730,8 +726,7 @@ SgScene *sg_json_scene_load(const char *path, SgError *err)
     SgScene *s = b.scene = b.core.scene;
     if (ok) {
         sg_builder_add_source(&b.core, text, size);
-        const char *slash = strrchr(path, '/');
-        snprintf(b.base_dir, sizeof b.base_dir, "%.*s", slash ? (int)(slash - path + 1) : 0, path);
+        sg_folder_of(path, b.base_dir, sizeof b.base_dir);
         b.material_overrides = cJSON_GetObjectItemCaseSensitive(root, "materials");
         if (b.material_overrides && !cJSON_IsObject(b.material_overrides))
             ok = sg_fail(err, "%s: \"materials\" must be an object", path);
@@ -754,7 +749,7 @@ SgScene *sg_json_scene_load(const char *path, SgError *err)
         ok = sg_fail(err, "%s: the scene has no triangles%s", path,
                      b.core.dropped_degenerate ? " (all were degenerate)" : "");
     ok = ok && sg_builder_finish(&b.core, err);
-    sg_image_averages_free(&b.images);
+    sg_builder_release(&b.core);
     cJSON_Delete(root);
     free(text);
     if (!ok) {

@@ -1,5 +1,5 @@
-/* Scene files in JSON (README.md, "Scene format"); sg_scene_load
- * dispatches here for every file that is not pbrt. */
+/* Scene files in JSON (docs/scene-format.md, "JSON scenes"); sg_scene_load
+ * dispatches here for every file that is neither pbrt nor Mitsuba XML. */
 #ifndef SG_SCENE_JSON_H
 #define SG_SCENE_JSON_H
 

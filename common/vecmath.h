@@ -79,5 +79,13 @@ static inline void d3_cross(const double a[3], const double b[3], double r[3])
     r[0] = x; r[1] = y; r[2] = z;
 }
 static inline double d3_length(const double a[3]) { return sqrt(d3_dot(a, a)); }
+/* r = a x b made unit (a and b not parallel): the axis perpendicular to both. */
+static inline void d3_unit_cross(const double a[3], const double b[3], double r[3])
+{
+    d3_cross(a, b, r);
+    double len = d3_length(r);
+    for (int c = 0; c < 3; c++)
+        r[c] /= len;
+}
 
 #endif

@@ -10,7 +10,7 @@
 #include "importance_cache.h"
 #include "medium.h"
 #include "memory.h"
-#include "scene.h"
+#include "scene_load.h"
 #include "skeleton_graph.h"
 
 static void usage(FILE *out)

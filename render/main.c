@@ -17,7 +17,7 @@
 #include "output_file.h"
 #include "progress.h"
 #include "renderer.h"
-#include "scene.h"
+#include "scene_load.h"
 
 #define SG_STRING_(x) #x
 #define SG_STRING(x) SG_STRING_(x)
@@ -33,7 +33,7 @@ static const char *usage_head =
     "              [--no-openings] [--edge-rays N]\n"
     "       render --describe [MODE]\n"
     "\n"
-    "Path traces SCENE (.json or pbrt-v4 .pbrt; Embree 3) with next-event estimation and MIS.\n"
+    "Path traces SCENE (.json, pbrt-v4 .pbrt or Mitsuba .xml; Embree 3) with next-event estimation and MIS.\n"
     "  --cache FILE      importance cache from bin/importance for this scene's geometry\n"
     "  --sampling MODE   how bounces are drawn:\n";
 

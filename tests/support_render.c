@@ -1,4 +1,5 @@
 #include "support_render.h"
+#include <criterion/criterion.h>
 
 #include <math.h>
 #include <stdio.h>
@@ -8,6 +9,7 @@
 
 #include "color.h"
 #include "memory.h"
+#include "scene_load.h"
 
 SgScene *sgt_scene_new(void)
 {
@@ -107,6 +109,13 @@ void sgt_set_camera(SgScene *s, const double pos[3], const double at[3], const d
     s->camera.height = height;
 }
 
+void sgt_finish_looking(SgScene *s, const double pos[3], const double at[3], double fov, int width, int height)
+{
+    static const double up[3] = {0, 1, 0};
+    sgt_set_camera(s, pos, at, up, fov, width, height);
+    sgt_finish(s);
+}
+
 void sgt_finish(SgScene *s)
 {
     for (int i = 0; i < 3; i++) {
@@ -192,9 +201,8 @@ SgScene *sgt_furnace_scene(void)
     uint32_t m = sgt_add_material(s, SG_MATERIAL_DIFFUSE, half, half);
     const double lo[3] = {-1, -1, -1}, hi[3] = {1, 1.5, 2};
     sgt_add_box_inside(s, lo, hi, m);
-    const double pos[3] = {0.2, 0.1, 0.3}, at[3] = {1, 0.5, 2}, up[3] = {0, 1, 0};
-    sgt_set_camera(s, pos, at, up, 90, 32, 24);
-    sgt_finish(s);
+    const double pos[3] = {0.2, 0.1, 0.3}, at[3] = {1, 0.5, 2};
+    sgt_finish_looking(s, pos, at, 90, 32, 24);
     return s;
 }
 
@@ -263,6 +271,14 @@ SgScene *sgt_scene_from_text(const char *name, const char *text, SgError *err)
     return s;
 }
 
+SgScene *sgt_load_ok(const char *path)
+{
+    SgError err = {0};
+    SgScene *s = sg_scene_load(path, &err);
+    cr_assert(s, "%s: %s", path, err.message);
+    return s;
+}
+
 /* ---- two rooms and a window -------------------------------------------------- */
 
 static void add_wall_piece(SgScene *s, double y0, double y1, double z0, double z1, uint32_t m)
@@ -288,8 +304,7 @@ SgScene *sgt_window_rooms(void)
     add_wall_piece(s, 0.75, 1.25, 1.25, 2, w);
     const double l[4][3] = {{0.8, 1.99, 0.8}, {1.2, 1.99, 0.8}, {1.2, 1.99, 1.2}, {0.8, 1.99, 1.2}};
     sgt_add_quad(s, l, lm);
-    const double pos[3] = {2.3, 1.0, 1.0}, at[3] = {4, 0.9, 1.1}, up[3] = {0, 1, 0};
-    sgt_set_camera(s, pos, at, up, 80, 40, 30);
-    sgt_finish(s);
+    const double pos[3] = {2.3, 1.0, 1.0}, at[3] = {4, 0.9, 1.1};
+    sgt_finish_looking(s, pos, at, 80, 40, 30);
     return s;
 }

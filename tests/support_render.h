@@ -22,6 +22,9 @@ void sgt_set_camera(SgScene *s, const double pos[3], const double at[3], const d
                     double fov, int width, int height);
 /* Bounds and lights (one per emissive quad); call once when done. */
 void sgt_finish(SgScene *s);
+/* The usual ending: a camera at pos looking at `at`, +y up, then
+ * sgt_finish. */
+void sgt_finish_looking(SgScene *s, const double pos[3], const double at[3], double fov, int width, int height);
 /* Transforms every position by p * scale + offset (camera too). */
 void sgt_scale_offset(SgScene *s, double scale, const double offset[3]);
 
@@ -58,6 +61,9 @@ static inline SgRenderStats sgt_stats(const SgRenderer *r)
 /* The scene a file of `text` named `name` (its extension says the format)
  * loads as; NULL with err set where the loader refuses it. */
 SgScene *sgt_scene_from_text(const char *name, const char *text, SgError *err);
+/* The scene file at path, which must load: the test fails with the
+ * loader's message where it does not. */
+SgScene *sgt_load_ok(const char *path);
 
 /* A pbrt-v4 scene's start: an 8x8 camera over a 2x2 floor, after WorldBegin. */
 #define SGT_PBRT_ROOM                                                                                             \

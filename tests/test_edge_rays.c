@@ -96,9 +96,8 @@ static void render_edge_column_behind(int edge_rays, uint64_t seed, int passes, 
         const double c[4][3] = {{-10, -10, -0.5}, {10, -10, -0.5}, {10, 10, -0.5}, {-10, 10, -0.5}};
         sgt_add_quad(s, c, screen);
     }
-    const double pos[3] = {0, 0, 0}, at[3] = {0, 0, -1}, up[3] = {0, 1, 0};
-    sgt_set_camera(s, pos, at, up, fov, w, w);
-    sgt_finish(s);
+    const double pos[3] = {0, 0, 0}, at[3] = {0, 0, -1};
+    sgt_finish_looking(s, pos, at, fov, w, w);
     SgRenderOptions o;
     sg_render_options_default(&o, s);
     o.max_depth = 1;
@@ -221,9 +220,8 @@ Test(edge_rays, the_survey_looks_again_only_where_first_views_differ)
     uint32_t lm = sgt_add_material(s, SG_MATERIAL_DIFFUSE, black, glow);
     const double q[4][3] = {{-10, -10, -1}, {10, -10, -1}, {10, 10, -1}, {-10, 10, -1}};
     sgt_add_quad(s, q, lm);
-    const double pos[3] = {0, 0, 0}, at[3] = {0, 0, -1}, up[3] = {0, 1, 0};
-    sgt_set_camera(s, pos, at, up, 40.0, 8, 8);
-    sgt_finish(s);
+    const double pos[3] = {0, 0, 0}, at[3] = {0, 0, -1};
+    sgt_finish_looking(s, pos, at, 40.0, 8, 8);
     SgRenderOptions o;
     sg_render_options_default(&o, s);
     o.max_depth = 1;

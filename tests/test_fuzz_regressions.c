@@ -13,7 +13,7 @@
 
 #include "importance_cache.h"
 #include "medium.h"
-#include "scene.h"
+#include "scene_load.h"
 #include "skeleton_graph.h"
 
 /* The fuzz targets, each under its own name. */

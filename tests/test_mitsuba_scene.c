@@ -12,7 +12,9 @@
 #include "color.h"
 #include "scene.h"
 #include "sunsky.h"
+#include "scene_load.h"
 #include "support_files.h"
+#include "support_render.h"
 
 #define BOX_V3 "tests/data/mitsuba/box_v3.xml"
 #define BOX_V06 "tests/data/mitsuba/box_v06.xml"
@@ -42,17 +44,9 @@ static const char *write_xml(const char *name, const char *version, const char *
     return path;
 }
 
-static SgScene *load_ok(const char *path)
-{
-    SgError err = {0};
-    SgScene *s = sg_scene_load(path, &err);
-    cr_assert(s, "load failed: %s", err.message);
-    return s;
-}
-
 static SgScene *load_body(const char *version, const char *body)
 {
-    return load_ok(write_xml("scene.xml", version, body));
+    return sgt_load_ok(write_xml("scene.xml", version, body));
 }
 
 static double total_area(const SgScene *s)
@@ -78,8 +72,8 @@ static bool has_warning(const SgScene *s, const char *what)
 
 Test(mitsuba_dialects, v3_and_v06_files_load_to_the_same_scene)
 {
-    SgScene *a = load_ok(sg_test_source_path(BOX_V3));
-    SgScene *b = load_ok(sg_test_source_path(BOX_V06));
+    SgScene *a = sgt_load_ok(sg_test_source_path(BOX_V3));
+    SgScene *b = sgt_load_ok(sg_test_source_path(BOX_V06));
     cr_expect_eq(a->triangle_count, b->triangle_count);
     cr_assert_eq(a->vertex_count, b->vertex_count);
     for (size_t i = 0; i < 3 * (size_t)a->vertex_count; i++)
@@ -114,7 +108,7 @@ Test(mitsuba_dialects, v3_and_v06_files_load_to_the_same_scene)
 /* The box: its camera, lights and materials as the file says. */
 Test(mitsuba_dialects, box_scene_maps_as_written)
 {
-    SgScene *s = load_ok(sg_test_source_path(BOX_V3));
+    SgScene *s = sgt_load_ok(sg_test_source_path(BOX_V3));
     cr_expect_eq(s->camera.width, 64);
     cr_expect_eq(s->camera.height, 48);
     double want_fov = 2 * atan(tan(20 * M_PI / 180) * 48.0 / 64.0) * 180 / M_PI;
@@ -589,7 +583,7 @@ Test(mitsuba_warnings, one_per_kind_with_file_and_line)
     const char *path = write_xml("warn.xml", "3.0.0",
                                  "<shape type=\"hair\"/>\n<shape type=\"hair\"/>\n<shape type=\"cube\"/>\n"
                                  "<medium type=\"homogeneous\"/>\n" LIGHT);
-    SgScene *s = load_ok(path);
+    SgScene *s = sgt_load_ok(path);
     cr_expect_eq(s->warning_count, 2);
     char want[4300];
     snprintf(want, sizeof want, "%s:3: shape \"hair\" is not supported: left out (2 times)", path);

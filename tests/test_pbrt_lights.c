@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "render/renderer.h"
-#include "scene.h"
+#include "scene_load.h"
 #include "support_files.h"
 #include "support_render.h"
 

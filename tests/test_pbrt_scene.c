@@ -13,7 +13,7 @@
 #include "color.h"
 #include "image_io.h"
 #include "render/renderer.h"
-#include "scene.h"
+#include "scene_load.h"
 #include "support_files.h"
 #include "support_render.h"
 

@@ -10,7 +10,7 @@
 #include "../render/guides/openpgl_field.h"
 #include "../render/renderer.h"
 #include "image_io.h"
-#include "scene.h"
+#include "scene_load.h"
 #include "support_files.h"
 #include "support_render.h"
 

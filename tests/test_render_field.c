@@ -169,9 +169,8 @@ static SgScene *room_with_a_lights_edge_in_view(void)
     /* just off the back wall, facing the camera; its left edge through pixel column 7.5 of 16 */
     const double q[4][3] = {{-0.03, -1, -1.99}, {1, -1, -1.99}, {1, 1, -1.99}, {-0.03, 1, -1.99}};
     sgt_add_quad(s, q, lamp);
-    const double pos[3] = {0, 0, 1}, at[3] = {0, 0, -2}, up[3] = {0, 1, 0};
-    sgt_set_camera(s, pos, at, up, 60, 16, 12);
-    sgt_finish(s);
+    const double pos[3] = {0, 0, 1}, at[3] = {0, 0, -2};
+    sgt_finish_looking(s, pos, at, 60, 16, 12);
     return s;
 }
 

@@ -296,7 +296,7 @@ Test(render_learning, regions_learn_the_second_moment_of_what_leaves_them)
  * of them and none of the rare ones (13% of such regions) must not claim a
  * mean square of 0: the learned roulette would cut its paths at its floor
  * and the rare survivor that finds the light would come back 20 times too
- * heavy (issue 29's fireflies). Its coarse region, which saw 3000 of the
+ * heavy (the dark corridor's fireflies). Its coarse region, which saw 3000 of the
  * same paths next door, pulls it up as MIN_SAMPLES (256) reports would. */
 Test(render_learning, a_region_that_missed_the_rare_light_is_not_taken_for_dark)
 {

@@ -15,6 +15,7 @@
 
 #include "quadric_mesh.h"
 #include "scene_builder.h"
+#include "scene_load.h"
 #include "../render/environment.h"
 #include "../render/renderer.h"
 #include "support_files.h"

@@ -100,9 +100,8 @@ static SgScene *glossy_room(void)
     sgt_add_quad(s, floor_q, floor);
     const double lamp_q[4][3] = {{0.8, 1.95, 0.8}, {1.2, 1.95, 0.8}, {1.2, 1.95, 1.2}, {0.8, 1.95, 1.2}};
     sgt_add_quad(s, lamp_q, light);
-    const double pos[3] = {0.2, 1.2, 0.2}, at[3] = {1.4, 0.0, 1.4}, up[3] = {0, 1, 0};
-    sgt_set_camera(s, pos, at, up, 70, 16, 12);
-    sgt_finish(s);
+    const double pos[3] = {0.2, 1.2, 0.2}, at[3] = {1.4, 0.0, 1.4};
+    sgt_finish_looking(s, pos, at, 70, 16, 12);
     return s;
 }
 

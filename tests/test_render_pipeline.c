@@ -14,8 +14,9 @@
 #include "render/guides/importance_file.h"
 #include "render/openings.h"
 #include "render/renderer.h"
-#include "scene.h"
+#include "scene_load.h"
 #include "support_files.h"
+#include "support_render.h"
 #include "voxelize/voxelize.h"
 
 static bool have_programs(void)
@@ -34,14 +35,6 @@ static const char *prog(const char *name)
     static int k;
     k = (k + 1) % 4;
     return sg_test_program(name, bufs[k], sizeof bufs[k]);
-}
-
-static SgScene *load_scene(const char *path)
-{
-    SgError e = {0};
-    SgScene *s = sg_scene_load(path, &e);
-    cr_assert(s, "%s", e.message);
-    return s;
 }
 
 /* voxelize, skeletonize, importance into dir; returns the cache path */
@@ -146,7 +139,7 @@ static void agreement(const char *scene, double bias_lo, double bias_hi)
         cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
     const char *dir = sg_test_tmpdir();
     const char *cache = precompute(scene, dir);
-    SgScene *loaded = load_scene(scene);
+    SgScene *loaded = sgt_load_ok(scene);
     double mb, sb, mg, sg, ms, ss;
     /* under the sanitizers (some 3x slower) half the samples: the bias is
      * still 3 se clear of both ends of its range */
@@ -345,7 +338,7 @@ Test(render_pipeline, guided_follows_the_sky_through_a_window, .timeout = 240)
     const char *scene = sky_room(dir, true);
     const char *cache_path = precompute(scene, dir);
     SgError e = {0};
-    SgScene *loaded = load_scene(scene);
+    SgScene *loaded = sgt_load_ok(scene);
     cr_assert_eq(sg_scene_guide_light_count(loaded), 1, "the outside is the one light");
 
     SgImportanceCache *cache = sg_cache_open(cache_path, &e);
@@ -399,7 +392,7 @@ Test(render_pipeline, a_room_with_no_opening_is_not_lit_by_the_sky)
     const char *dir = sg_test_tmpdir();
     const char *scene = sky_room(dir, false);
     SgError e = {0};
-    SgScene *loaded = load_scene(scene);
+    SgScene *loaded = sgt_load_ok(scene);
     SgMedium medium;
     SgVoxelizeStats stats;
     SgVoxelizeOptions options = {.resolution = 48, .threads = 1};
@@ -426,7 +419,7 @@ Test(render_pipeline, the_suns_importance_points_lead_into_its_rays, .timeout = 
     const char *scene = lit_room(dir, true, "[{\"type\": \"sun\", \"irradiance\": [5, 5, 5], "
                                             "\"direction\": [0, -1, 0]}]");
     const char *cache_path = precompute(scene, dir);
-    SgScene *loaded = load_scene(scene);
+    SgScene *loaded = sgt_load_ok(scene);
     cr_assert_eq(sg_scene_guide_light_count(loaded), 1);
     cr_expect_eq(sg_scene_guide_light(loaded, 0).kind, SG_GUIDE_LIGHT_SUN);
     SgError e = {0};
@@ -445,7 +438,7 @@ Test(render_pipeline, the_suns_importance_points_lead_into_its_rays, .timeout = 
 
     scene = lit_room(dir, true, "[{\"type\": \"sun\", \"irradiance\": [5, 5, 5], \"direction\": [0, -1, 0]},"
                                 "{\"type\": \"sky\", \"radiance\": [1, 1, 1]}]");
-    loaded = load_scene(scene);
+    loaded = sgt_load_ok(scene);
     cr_assert_eq(sg_scene_guide_light_count(loaded), 2);
     cr_expect(sg_scene_guide_light(loaded, 0).kind == SG_GUIDE_LIGHT_OUTSIDE &&
               sg_scene_guide_light(loaded, 1).kind == SG_GUIDE_LIGHT_SUN);
@@ -463,7 +456,7 @@ Test(render_pipeline, the_north_rooms_window_is_found_and_its_hidden_sun_costs_n
         cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
     const char *dir = sg_test_tmpdir(), *scene = "data/north-room/north-room.json";
     const char *cache_path = precompute(scene, dir);
-    SgScene *loaded = load_scene(scene);
+    SgScene *loaded = sgt_load_ok(scene);
     cr_assert_eq(sg_scene_guide_light_count(loaded), 1, "the outside is the one light");
     SgError e = {0};
     SgImportanceCache *cache = sg_cache_open(cache_path, &e);

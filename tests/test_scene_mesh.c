@@ -10,7 +10,7 @@
 
 #include "image_io.h"
 #include "render/renderer.h"
-#include "scene.h"
+#include "scene_load.h"
 #include "support_files.h"
 #include "support_render.h"
 
@@ -46,14 +46,6 @@ static char *join(char *buf, size_t size, const char *dir, const char *name)
     return buf;
 }
 
-static SgScene *load_ok(const char *path)
-{
-    SgError err = {0};
-    SgScene *s = sg_scene_load(path, &err);
-    cr_assert_not_null(s, "scene failed to load: %s", err.message);
-    return s;
-}
-
 /* DIR/scene.json: the mesh file under a quad light, loaded. */
 static SgScene *load_lit_mesh(const char *dir, const char *mesh)
 {
@@ -62,7 +54,7 @@ static SgScene *load_lit_mesh(const char *dir, const char *mesh)
              "{ \"mesh\": \"%s\", \"lights\": [ { \"type\": \"quad\", "
              "\"corners\": [[0,0,5],[0,1,5],[1,1,5],[1,0,5]], \"radiance\": [1,1,1] } ] }",
              mesh);
-    return load_ok(sg_test_write(dir, "scene.json", text));
+    return sgt_load_ok(sg_test_write(dir, "scene.json", text));
 }
 
 static const SgMaterial *material_named(const SgScene *s, const char *name)
@@ -102,7 +94,7 @@ Test(mesh_textures, obj_uv_and_map_kd_replacing_kd)
                   "newmtl painted\nKd 0.9 0.9 0.9\nmap_Kd tex\\quad.png\n"
                   "newmtl plain\nKd 0.2 0.4 0.6\n"
                   "newmtl recoloured\nKd 0.9 0.9 0.9\nmap_Kd tex/quad.png\n");
-    SgScene *s = load_ok(sg_test_write(dir, "scene.json",
+    SgScene *s = sgt_load_ok(sg_test_write(dir, "scene.json",
                                        "{ \"mesh\": \"models/quad.obj\",\n"
                                        "  \"materials\": { \"recoloured\": { \"albedo\": [0.1, 0.2, 0.3] } },\n"
                                        "  \"lights\": [ { \"type\": \"quad\", "
@@ -328,7 +320,7 @@ Test(mesh_render, obj_texture_the_right_way_up, .timeout = 60)
     sg_test_write(dir, "quad.obj", QUAD_OBJ("quad.mtl", "painted"));
     sg_test_write(dir, "quad.mtl", "newmtl painted\nKd 1 1 1\nmap_Kd quadrants.png\n");
     /* the light faces -z: (c1 - c0) x (c2 - c0) */
-    SgScene *s = load_ok(sg_test_write(
+    SgScene *s = sgt_load_ok(sg_test_write(
         dir, "scene.json",
         "{ \"mesh\": \"quad.obj\",\n"
         "  \"lights\": [ { \"type\": \"quad\", \"corners\": [[-20,-20,4],[-20,20,4],[20,20,4],[20,-20,4]],\n"

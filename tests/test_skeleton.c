@@ -644,6 +644,7 @@ Test(distance, lattice_layout_matches_grid_layout)
 }
 
 #include "../voxelize/voxelize.h"
+#include "scene_load.h"
 #include "support_files.h"
 
 Test(skeleton, sponza_topology)

@@ -8,7 +8,7 @@
 
 #include "medium.h"
 #include "rng.h"
-#include "scene.h"
+#include "scene_load.h"
 #include "support_files.h"
 #include "voxelize/voxelize.h"
 

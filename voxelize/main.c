@@ -8,7 +8,7 @@
 
 #include "medium.h"
 #include "progress.h"
-#include "scene.h"
+#include "scene_load.h"
 #include "voxelize.h"
 
 static void usage(FILE *out)

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Voxelize speed and memory on real scenes (issue targets: < 3 s each for
+# Voxelize speed and memory on real scenes (targets: < 3 s each for
 # Sponza at 500 and the bathroom at 256 on the 2-core machine).
 set -uo pipefail
 bin=${SG_BIN:-bin}

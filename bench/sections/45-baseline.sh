@@ -2,11 +2,11 @@
 # Against an earlier build: render's per-sample cost on scenes without
 # textures or microfacet materials (the corridor, the Cornell box), this
 # commit's build against SG_BASELINE's (default 3079266, the last commit
-# before issue 22 added textures and microfacet BSDFs; built once from
+# before textures and microfacet BSDFs came; built once from
 # `git archive` into bench/out/baseline-REV, without Open PGL). The same
 # seed and spp, so both trace the same paths (the images are compared too:
 # identical means the same work); old and new alternate, best of each.
-# Target (issue 22): no slower per sample, within the noise of this
+# Target: no slower per sample, within the noise of this
 # machine: the last row, this build against itself the same way, shows
 # that noise (ok within +3 %).
 set -uo pipefail

@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
-# Portals found by the skeleton's precompute (issue 30): on every scene of
+# Portals found by the skeleton's precompute: on every scene of
 # the convergence race lit by a sky, guided at equal time with the sky's
 # light samples through the openings render finds (its default) and over
 # the sky's whole sphere (--no-openings, the sky's own importance sampling),
-# each from a field trained alone with the same option, against section
-# 60's reference. Target: >= 2x in relMSE on a window-lit scene, no slower
-# anywhere else. Settings follow section 60's (SG_QUICK, SG_LONG);
+# each from a field trained alone with the same option, against the
+# convergence section's reference. Target: >= 2x in relMSE on a window-lit scene, no slower
+# anywhere else. Settings follow the convergence section's (SG_QUICK, SG_LONG);
 # SG_PORTAL_SECONDS, SG_PORTAL_SEEDS and SG_CONV_SCENES override.
 set -uo pipefail
 bin=${SG_BIN:-bin}
@@ -29,7 +29,7 @@ for entry in "${bench_scenes[@]}"; do
   if [ -n "${SG_CONV_SCENES:-}" ] && [[ " $SG_CONV_SCENES " != *" $name "* ]]; then continue; fi
   dir=bench/out/$name
   ref=$dir/ref-$setting/ref.exr cache=$dir/importance.cache
-  [ -e "$ref" ] && [ -e "$cache" ] || { notes+=("$name: no reference or cache from section 60: skipped"); continue; }
+  [ -e "$ref" ] && [ -e "$cache" ] || { notes+=("$name: no reference or cache from the convergence section: skipped"); continue; }
   read -r size _ < <("$tool" size "$scene" "$pixels") || { notes+=("$name: cannot read the scene"); continue; }
   # a scene with a sky: guided reports the openings it samples it through
   probe=$("$bin/render" "$scene" --cache "$cache" --sampling guided --alpha 0.5 --spp 1 --size 8x6 \
@@ -67,7 +67,7 @@ for entry in "${bench_scenes[@]}"; do
   rel_t=$(cut -d' ' -f1 "$runs/through" | mean) rel_s=$(cut -d' ' -f1 "$runs/sphere" | mean)
   mse_t=$(cut -d' ' -f2 "$runs/through" | mean) mse_s=$(cut -d' ' -f2 "$runs/sphere" | mean)
   m8_t=$(cut -d' ' -f3 "$runs/through" | mean) m8_s=$(cut -d' ' -f3 "$runs/sphere" | mean)
-  # the reference's own error (section 60 measures it from its two halves)
+  # the reference's own error (the convergence section measures it from its two halves)
   # is in both modes' errors: each less it is the error against the truth
   # (independent noise adds); a reference as noisy as the modes pulls the
   # raw gain toward 1
@@ -85,11 +85,11 @@ note "done"; [ -t 2 ] && printf '\n' >&2
 echo "The sky's light samples through the openings the precompute found (render's default with a"
 echo "cache) against over its whole sphere (\`--no-openings\`: the sky image's own importance sampling),"
 echo "\`guided\` from a field trained with the same choice, $seconds s of rendering each, $seeds seed(s),"
-echo "the two alternated; errors are the means at the end of the runs against section 60's reference;"
+echo "the two alternated; errors are the means at the end of the runs against the convergence section's reference;"
 echo "gain = sphere / openings (> 1: the openings help). Scenes with no sky have no openings and are"
 echo "left out (their light sampling is the same either way). Target: gain >= 2x in relMSE on a"
-echo "window-lit scene whose camera sees the sky's light first hand (issue 30), judged on the gain"
-echo "less the reference's own relMSE (section 60's estimate from its two halves, taken from both"
+echo "window-lit scene whose camera sees the sky's light first hand, judged on the gain"
+echo "less the reference's own relMSE (the convergence section's estimate from its two halves, taken from both"
 echo "errors: independent noise adds; \"-\" where a mode is not above it)."
 echo
 echo "| scene | openings | relMSE sphere | relMSE openings | gain | gain less the reference's own error | MSE sphere | MSE openings | gain | mse8 sphere | mse8 openings | gain |"

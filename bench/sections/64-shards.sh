@@ -3,13 +3,13 @@
 # field (`render --field F --shard K/16`, then `bin/merge`), as
 # scripts/slurm-render.sh renders it, against one process with the same
 # field, the same seed and the same samples in all. Each learned mode's
-# field and the reference are section 60's; bsdf, which learns nothing,
+# field and the reference are the convergence section's; bsdf, which learns nothing,
 # beside them. The shards differ from one process only where a shard
 # estimates something from its own passes: guided's learned roulette (each
 # pixel's noise) and, in every mode, how many edge rays a silhouette in
-# view takes. Target (issue 29): relMSE within 10% of one process.
+# view takes. Target: relMSE within 10% of one process.
 # Scenes: SG_SHARD_SCENES (default: the corridor, no light in view, and the
-# Cornell box, its light in view); settings follow section 60's.
+# Cornell box, its light in view); settings follow the convergence section's.
 set -uo pipefail
 bin=${SG_BIN:-bin}
 tool=${SG_BENCH_BIN:-build/release/bench}/convergence
@@ -35,12 +35,12 @@ for entry in "${bench_scenes[@]}"; do
   dir=bench/out/$name ref=bench/out/$name/ref-$setting/ref.exr
   read -r size exposure < <("$tool" size "$scene" "$pixels") || { notes+=("$name: cannot read the scene"); continue; }
   if [ ! -e "$ref" ] || [ ! -e "$dir/importance.cache" ]; then
-    notes+=("$name: no reference or cache from section 60: skipped"); continue
+    notes+=("$name: no reference or cache from the convergence section: skipped"); continue
   fi
   for mode in "${modes[@]}"; do
     field=()
     if mode_says "$(mode_of "$mode")" learns; then
-      [ -e "$dir/fields-$size/$mode.field" ] || { notes+=("$name: no $mode field from section 60: skipped"); continue; }
+      [ -e "$dir/fields-$size/$mode.field" ] || { notes+=("$name: no $mode field from the convergence section: skipped"); continue; }
       field=(--field "$dir/fields-$size/$mode.field")
     fi
     for seed in $(seq "$seeds"); do
@@ -78,9 +78,9 @@ for entry in "${bench_scenes[@]}"; do
 done
 note "done"; [ -t 2 ] && printf '\n' >&2
 
-echo "Each learned mode from section 60's stored field (bsdf learns nothing), $spp spp in all, at section"
+echo "Each learned mode from the convergence section's stored field (bsdf learns nothing), $spp spp in all, at section"
 echo "60's size: one \`render --field F --spp $spp\` against $shards \`render --field F --spp $spp --shard K/$shards\` merged by"
-echo "\`bin/merge\`; the same seed, so both render the same passes; errors against section 60's reference"
+echo "\`bin/merge\`; the same seed, so both render the same passes; errors against the convergence section's reference"
 echo "(\`convergence error\`). Change: merged over one process, less 1. Target: relMSE within"
 echo "$(awk -v w=$WITHIN 'BEGIN{printf "%d", 100 * (w - 1) + 0.5}')% of one process."
 echo

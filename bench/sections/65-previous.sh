@@ -5,7 +5,7 @@
 # bench/report.md's header; built once from `git archive` into
 # bench/out/previous-REV, with Open PGL where this build has it), each build
 # on its own precompute (the cache's format may have changed), both against
-# section 60's reference, each mode learning on the clock as a user's
+# the convergence section's reference, each mode learning on the clock as a user's
 # `render --time` does. A change that makes any mode's error worse shows
 # here, on every scene, whatever it did to speed. Settings follow section
 # 60's (SG_QUICK, SG_LONG); SG_PREVIOUS_SECONDS, SG_PREVIOUS_SEEDS and
@@ -58,7 +58,7 @@ for entry in "${bench_scenes[@]}"; do
   if [ -n "${SG_CONV_SCENES:-}" ] && [[ " $SG_CONV_SCENES " != *" $name "* ]]; then continue; fi
   ref=bench/out/$name/ref-$setting/ref.exr now_cache=bench/out/$name/importance.cache
   if [ ! -e "$ref" ] || [ ! -e "$now_cache" ]; then
-    notes+=("$name: no reference or cache from section 60: skipped"); continue
+    notes+=("$name: no reference or cache from the convergence section: skipped"); continue
   fi
   read -r size _ < <("$tool" size "$scene" "$pixels") || { notes+=("$name: cannot read the scene"); continue; }
   # the previous build's precompute, once per scene and build
@@ -107,7 +107,7 @@ for row in "${rows[@]}"; do [[ $row == *"| WORSE |" ]] && worse=$((worse + 1)); 
 echo "Every column of the convergence race on every scene, $seconds s of rendering each (\`render --time\`,"
 echo "learning on the clock), $seeds seed(s), this build (now) against the previous one (then:"
 echo "${full:0:12}, ${SG_PREVIOUS:+SG_PREVIOUS}${SG_PREVIOUS:-the commit the committed report measured}; \`$prev\`), each on its own"
-echo "precompute, against section 60's reference; errors are the runs' means at the end of their time."
+echo "precompute, against the convergence section's reference; errors are the runs' means at the end of their time."
 echo "ratio = now / then (< 1: now is better). WORSE: relMSE or linear MSE more than ${WORSE}x then's;"
 echo "better: both below 1/${WORSE}."
 echo

@@ -6,7 +6,7 @@
 # TungstenRender.exr), box-filtered down to our size. Compared on the
 # pixels whose first surface has all its textures (bench/reference_compare.c);
 # the whole image's ratio is given too. Target: every channel's mean within
-# 5 % of Tungsten's on those pixels. README.md, "Checked against Tungsten",
+# 5 % of Tungsten's on those pixels. bench/README.md, "Checked against Tungsten",
 # says what differs and why.
 set -uo pipefail
 bin=${SG_BIN:-bin}

@@ -11,6 +11,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "input_file.h"
 #include "mitsuba_parser.h"
 #include "sunsky.h"
 #include "vecmath.h"
@@ -611,19 +612,11 @@ static void release(MtsParser *p)
     free(p->defaults);
     free(p->ids);
     free(p->materials);
-    free(p->emissive);
     free(p->textures);
-    for (size_t i = 0; i < p->group_count; i++) {
-        for (size_t k = 0; k < p->groups[i].shape_count; k++) {
-            free(p->groups[i].shapes[k].positions);
-            free(p->groups[i].shapes[k].indices);
-            free(p->groups[i].shapes[k].uvs);
-        }
-        free(p->groups[i].shapes);
-    }
+    for (size_t i = 0; i < p->group_count; i++)
+        sg_shape_group_release(&p->groups[i].shapes);
     free(p->groups);
-    free(p->warnings);
-    sg_image_averages_free(&p->images);
+    sg_builder_release(&p->core);
 }
 
 /* Mitsuba's camera when the scene has no sensor: at the origin looking
@@ -643,14 +636,11 @@ static void default_camera(SgScene *s)
 
 SgScene *sg_mitsuba_scene_load(const char *path, SgError *err)
 {
-    MtsParser p;
-    memset(&p, 0, sizeof p);
-    p.err = err;
+    MtsParser p = {.err = err};
+    sg_folder_of(path, p.base_dir, sizeof p.base_dir);
     if (!sg_builder_begin(&p.core, path, err))
         return NULL;
     SgScene *s = p.core.scene;
-    const char *slash = strrchr(path, '/');
-    snprintf(p.base_dir, sizeof p.base_dir, "%.*s", slash ? (int)(slash - path + 1) : 0, path);
     s->render.max_depth = MTS_UNBOUNDED_DEPTH; /* Mitsuba's default path integrator: -1 */
     char real[PATH_MAX];
     XmlDoc *doc = NULL;
@@ -675,14 +665,6 @@ SgScene *sg_mitsuba_scene_load(const char *path, SgError *err)
     else if (ok && s->light_count == 0 && s->light_source_count == 0)
         ok = sg_fail(err, "%s: the scene has no light (no area, point, spot, directional, constant or envmap emitter)",
                      path);
-    if (ok)
-        for (size_t i = 0; i < p.warning_count; i++) {
-            const MtsWarning *w = &p.warnings[i];
-            if (w->count > 1)
-                sg_scene_add_warning(s, "%s: %s (%u times)", w->where, w->kind, w->count);
-            else
-                sg_scene_add_warning(s, "%s: %s", w->where, w->kind);
-        }
     release(&p);
     if (!ok) {
         sg_scene_free(s);

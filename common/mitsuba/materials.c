@@ -60,7 +60,7 @@ static bool bitmap(MtsParser *p, const XmlNode *n, SgTexture *t, char *path, siz
     if (file_gamma == -1 || file_gamma > 0)
         gamma = file_gamma == 1 ? 0 : file_gamma;
     float mean[3] = {0.5f, 0.5f, 0.5f};
-    bool readable = sg_image_average(&p->images, path, gamma, mean, NULL);
+    bool readable = sg_image_average(&p->core.images, path, gamma, mean, NULL);
     if (!readable)
         mts_warn(p, n, "bitmap textures that cannot be read (missing files) are taken as grey 0.5");
     if (strcasecmp(filter, "bilinear"))
@@ -571,23 +571,7 @@ bool mts_scene_material(MtsParser *p, size_t index, const float *radiance, uint3
         *id = m->scene_id;
         return true;
     }
-    for (size_t i = 0; i < p->emissive_count; i++) {
-        MtsEmissive *e = &p->emissive[i];
-        if (e->material == index && !memcmp(e->radiance, radiance, sizeof e->radiance)) {
-            *id = e->scene_id;
-            return true;
-        }
-    }
-    SgMaterial copy = m->material;
-    memcpy(copy.emission, radiance, sizeof copy.emission);
-    if (!MTS_RESERVE(p, p->emissive, p->emissive_count, p->emissive_capacity, 1) ||
-        !sg_builder_add_material(&p->core, &copy, id, p->err))
-        return false;
-    MtsEmissive *e = &p->emissive[p->emissive_count++];
-    e->material = index;
-    memcpy(e->radiance, radiance, sizeof e->radiance);
-    e->scene_id = *id;
-    return true;
+    return sg_builder_emissive_material(&p->core, index, &m->material, radiance, id, p->err);
 }
 
 /* ---- media ------------------------------------------------------------------ */

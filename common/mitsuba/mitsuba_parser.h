@@ -21,6 +21,7 @@
 
 #include "error.h"
 #include "image_average.h"
+#include "ply_mesh.h"
 #include "scene_builder.h"
 #include "transform.h"
 #include "xml_tree.h"
@@ -44,12 +45,6 @@ typedef struct MtsMaterial {
     uint32_t scene_id; /* UINT32_MAX until a shape uses it */
 } MtsMaterial;
 
-typedef struct MtsEmissive {
-    size_t material; /* MtsMaterial index */
-    float radiance[3];
-    uint32_t scene_id;
-} MtsEmissive;
-
 typedef struct MtsTexture {
     const XmlNode *node;
     uint32_t scene_texture; /* 1 + index; 0: a constant */
@@ -57,26 +52,10 @@ typedef struct MtsTexture {
 } MtsTexture;
 
 /* A shape of a shapegroup, in the group's space. */
-typedef struct MtsGroupShape {
-    double *positions;
-    float *uvs;
-    uint32_t vertex_count;
-    uint32_t *indices;
-    uint32_t triangle_count;
-    uint32_t scene_material;
-} MtsGroupShape;
-
 typedef struct MtsGroup {
     const XmlNode *node;
-    MtsGroupShape *shapes;
-    size_t shape_count, shape_capacity;
+    SgShapeGroup shapes;
 } MtsGroup;
-
-typedef struct MtsWarning {
-    char kind[160];
-    char where[4200];
-    uint32_t count;
-} MtsWarning;
 
 typedef struct MtsParser {
     SgSceneBuilder core;
@@ -96,8 +75,6 @@ typedef struct MtsParser {
     size_t id_count, id_capacity;
     MtsMaterial *materials;
     size_t material_count, material_capacity;
-    MtsEmissive *emissive;
-    size_t emissive_count, emissive_capacity;
     MtsTexture *textures;
     size_t texture_count, texture_capacity;
     MtsGroup *groups;
@@ -106,9 +83,6 @@ typedef struct MtsParser {
 
     bool has_sensor;
     char unsupported_emitter[64]; /* the first emitter type left out, for "no light" */
-    MtsWarning *warnings;
-    size_t warning_count, warning_capacity;
-    SgImageAverages images;
 } MtsParser;
 
 /* ---- props.c ------------------------------------------------------------ */
@@ -160,17 +134,9 @@ void mts_resolve(MtsParser *p, const XmlNode *at, const char *name, char *out, s
 
 /* ---- serialized.c ------------------------------------------------------- */
 
-typedef struct MtsMesh {
-    uint32_t vertex_count, triangle_count;
-    double *positions;
-    double *normals; /* or NULL */
-    float *uvs;      /* or NULL */
-    uint32_t *indices;
-} MtsMesh;
-
-/* Mesh shape_index of a .serialized file; errors are "path: cause". */
-bool mts_read_serialized(const char *path, long shape_index, MtsMesh *mesh, SgError *err);
-void mts_mesh_release(MtsMesh *mesh);
+/* Mesh shape_index of a .serialized file, into the mesh a PLY file reads
+ * to (sg_ply_mesh_release frees it); errors are "path: cause". */
+bool mts_read_serialized(const char *path, long shape_index, SgPlyMesh *mesh, SgError *err);
 
 /* ---- materials.c -------------------------------------------------------- */
 

@@ -1,7 +1,7 @@
 /* Mitsuba scene files (.xml), Mitsuba 3's dialect and the 0.5/0.6 one
  * (told apart by the scene's version, camelCase names upgraded as
  * Mitsuba 3 does), onto the scene builder as the pbrt-v4 reader does.
- * sg_scene_load (scene.c) dispatches here on the ".xml" extension.
+ * sg_scene_load (scene_load.c) dispatches here on the ".xml" extension.
  *
  * What it takes and maps to what:
  *   structure  <default> and $name, id / <ref> (nested ids too), <alias>,

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "color.h"
+#include "input_file.h"
 #include "mitsuba_parser.h"
 #include "vecmath.h"
 
@@ -43,31 +44,15 @@ bool mts_fail(MtsParser *p, const XmlNode *at, const char *fmt, ...)
 
 void mts_warn(MtsParser *p, const XmlNode *at, const char *fmt, ...)
 {
-    char kind[160];
+    char where[4200];
+    if (at)
+        snprintf(where, sizeof where, "%s:%d", at->doc->path, at->line);
+    else
+        snprintf(where, sizeof where, "%s", p->core.path);
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(kind, sizeof kind, fmt, ap);
+    sg_builder_warnv(&p->core, where, fmt, ap);
     va_end(ap);
-    for (size_t i = 0; i < p->warning_count; i++)
-        if (!strcmp(p->warnings[i].kind, kind)) {
-            p->warnings[i].count++;
-            return;
-        }
-    if (p->warning_count == p->warning_capacity) {
-        size_t cap = p->warning_capacity ? 2 * p->warning_capacity : 8;
-        MtsWarning *grown = realloc(p->warnings, cap * sizeof *grown);
-        if (!grown)
-            return; /* a lost warning is not worth an error */
-        p->warnings = grown;
-        p->warning_capacity = cap;
-    }
-    MtsWarning *w = &p->warnings[p->warning_count++];
-    snprintf(w->kind, sizeof w->kind, "%s", kind);
-    if (at)
-        snprintf(w->where, sizeof w->where, "%s:%d", at->doc->path, at->line);
-    else
-        snprintf(w->where, sizeof w->where, "%s", p->core.path);
-    w->count = 1;
 }
 
 /* ---- substitution and ids ----------------------------------------------- */
@@ -717,12 +702,6 @@ bool mts_color_of(MtsParser *p, const XmlNode *n, float out[3])
 
 /* ---- files -------------------------------------------------------------- */
 
-static void directory_of(const char *path, char *out, size_t size)
-{
-    const char *slash = strrchr(path, '/');
-    snprintf(out, size, "%.*s", slash ? (int)(slash - path + 1) : 0, path);
-}
-
 void mts_resolve(MtsParser *p, const XmlNode *at, const char *name, char *out, size_t size)
 {
     if (name[0] == '/') {
@@ -730,7 +709,7 @@ void mts_resolve(MtsParser *p, const XmlNode *at, const char *name, char *out, s
         return;
     }
     char dir[4096];
-    directory_of(at->doc->path, dir, sizeof dir);
+    sg_folder_of(at->doc->path, dir, sizeof dir);
     snprintf(out, size, "%s%s", dir, name);
     if (access(out, F_OK) == 0)
         return;

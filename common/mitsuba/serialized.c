@@ -122,7 +122,7 @@ static void read_reals(const unsigned char *b, bool dbl, size_t n, double *out)
     }
 }
 
-static bool parse_mesh(const char *path, const unsigned char *b, size_t size, int version, MtsMesh *mesh,
+static bool parse_mesh(const char *path, const unsigned char *b, size_t size, int version, SgPlyMesh *mesh,
                        SgError *err)
 {
     size_t pos = 4;
@@ -157,7 +157,7 @@ static bool parse_mesh(const char *path, const unsigned char *b, size_t size, in
     if (!mesh->positions || !mesh->indices || (flags & HAS_NORMALS && !mesh->normals) ||
         (flags & HAS_TEXCOORDS && (!mesh->uvs || !uv))) {
         free(uv);
-        mts_mesh_release(mesh);
+        sg_ply_mesh_release(mesh);
         return sg_fail(err, "%s: out of memory", path);
     }
     read_reals(b + pos, dbl, 3 * vertices, mesh->positions);
@@ -178,7 +178,7 @@ static bool parse_mesh(const char *path, const unsigned char *b, size_t size, in
     for (size_t i = 0; i < 3 * triangles; i++) {
         uint64_t v = le(b + pos + 4 * i, 4);
         if (v >= vertices) {
-            mts_mesh_release(mesh);
+            sg_ply_mesh_release(mesh);
             return sg_fail(err, "%s: index %llu is out of range (%llu vertices)", path, (unsigned long long)v,
                            (unsigned long long)vertices);
         }
@@ -187,7 +187,7 @@ static bool parse_mesh(const char *path, const unsigned char *b, size_t size, in
     return true;
 }
 
-bool mts_read_serialized(const char *path, long shape_index, MtsMesh *mesh, SgError *err)
+bool mts_read_serialized(const char *path, long shape_index, SgPlyMesh *mesh, SgError *err)
 {
     memset(mesh, 0, sizeof *mesh);
     char *text;
@@ -217,13 +217,4 @@ bool mts_read_serialized(const char *path, long shape_index, MtsMesh *mesh, SgEr
     free(raw);
     free(text);
     return ok;
-}
-
-void mts_mesh_release(MtsMesh *mesh)
-{
-    free(mesh->positions);
-    free(mesh->normals);
-    free(mesh->uvs);
-    free(mesh->indices);
-    memset(mesh, 0, sizeof *mesh);
 }

@@ -101,32 +101,9 @@ static bool emit_mesh(MtsParser *p, const XmlNode *shape, const char *what, cons
     for (uint32_t v = 0; v < vertex_count; v++)
         if (!sg_builder_check_point(&p->core, what, positions + 3 * (size_t)v, p->err))
             return false;
-    if (p->defining) {
-        MtsGroup *g = p->defining;
-        if (!MTS_RESERVE(p, g->shapes, g->shape_count, g->shape_capacity, 1))
-            return false;
-        MtsGroupShape *s = &g->shapes[g->shape_count];
-        memset(s, 0, sizeof *s);
-        s->positions = malloc((size_t)vertex_count * 3 * sizeof(double) + 1);
-        s->indices = malloc((size_t)triangle_count * 3 * sizeof(uint32_t) + 1);
-        s->uvs = uvs ? malloc((size_t)vertex_count * 2 * sizeof(float)) : NULL;
-        if (!s->positions || !s->indices || (uvs && !s->uvs)) {
-            free(s->positions);
-            free(s->indices);
-            free(s->uvs);
-            return sg_fail(p->err, "%s: out of memory", p->core.path);
-        }
-        g->shape_count++;
-        for (uint32_t v = 0; v < vertex_count; v++)
-            sg_transform_point(xf, positions + 3 * (size_t)v, s->positions + 3 * (size_t)v);
-        memcpy(s->indices, indices, (size_t)triangle_count * 3 * sizeof(uint32_t));
-        if (uvs)
-            memcpy(s->uvs, uvs, (size_t)vertex_count * 2 * sizeof(float));
-        s->vertex_count = vertex_count;
-        s->triangle_count = triangle_count;
-        s->scene_material = scene_material;
-        return true;
-    }
+    if (p->defining)
+        return sg_shape_group_add(&p->defining->shapes, p->core.path, positions, vertex_count, indices,
+                                  triangle_count, uvs, xf, scene_material, p->err);
     uint32_t first = p->core.scene->vertex_count;
     return sg_builder_append_mesh(&p->core, what, positions, vertex_count, indices, triangle_count, xf,
                                   scene_material, p->err) &&
@@ -164,7 +141,7 @@ static bool obj(MtsParser *p, XmlNode *shape, const char *path, const SgTransfor
     SgTransform identity;
     sg_transform_identity(&identity);
     SgError local = {0};
-    bool ok = sg_mesh_file_load(&tmp, &p->images, path, &identity, &rules, &local) ||
+    bool ok = sg_mesh_file_load(&tmp, &p->core.images, path, &identity, &rules, &local) ||
               mts_fail(p, shape, "%s", local.message);
     SgScene *s = tmp.scene;
     if (ok && s->triangle_count == 0 && tmp.dropped_degenerate == 0)
@@ -189,6 +166,7 @@ static bool obj(MtsParser *p, XmlNode *shape, const char *path, const SgTransfor
                                                     uvs, xf, false));
     free(uvs);
     sg_scene_free(s);
+    sg_builder_release(&tmp);
     return ok;
 }
 
@@ -204,26 +182,18 @@ static bool mesh_file(MtsParser *p, XmlNode *shape, const char *type, const SgTr
     if (!strcmp(type, "obj"))
         return obj(p, shape, path, xf);
     SgError local = {0};
-    if (!strcmp(type, "ply")) {
-        SgPlyMesh mesh;
-        if (!sg_ply_mesh_read(&mesh, path, &local))
-            return mts_fail(p, shape, "%s", local.message);
-        mitsuba_v_to_ours(mesh.uvs, mesh.vertex_count);
-        bool ok = emit_mesh(p, shape, path, mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count,
-                            mesh.normals, mesh.uvs, xf, false);
-        sg_ply_mesh_release(&mesh);
-        return ok;
-    }
-    long index;
-    if (!mts_int(p, shape, "shape_index", 0, &index))
+    SgPlyMesh mesh;
+    long index = 0;
+    if (strcmp(type, "ply") && !mts_int(p, shape, "shape_index", 0, &index))
         return false;
-    MtsMesh mesh;
-    if (!mts_read_serialized(path, index, &mesh, &local))
+    bool read = !strcmp(type, "ply") ? sg_ply_mesh_read(&mesh, path, &local)
+                                     : mts_read_serialized(path, index, &mesh, &local);
+    if (!read)
         return mts_fail(p, shape, "%s", local.message);
     mitsuba_v_to_ours(mesh.uvs, mesh.vertex_count);
     bool ok = emit_mesh(p, shape, path, mesh.positions, mesh.vertex_count, mesh.indices, mesh.triangle_count,
                         mesh.normals, mesh.uvs, xf, false);
-    mts_mesh_release(&mesh);
+    sg_ply_mesh_release(&mesh);
     return ok;
 }
 
@@ -260,10 +230,7 @@ static bool quadric_shape(MtsParser *p, XmlNode *shape, const char *type, const 
         /* a frame whose z is the axis */
         double z[3] = {axis[0] / length, axis[1] / length, axis[2] / length}, x[3], y[3];
         double helper[3] = {fabs(z[0]) < 0.9 ? 1 : 0, fabs(z[0]) < 0.9 ? 0 : 1, 0};
-        d3_cross(helper, z, x);
-        double lx = d3_length(x);
-        for (int a = 0; a < 3; a++)
-            x[a] /= lx;
+        d3_unit_cross(helper, z, x);
         d3_cross(z, x, y);
         for (int a = 0; a < 3; a++) {
             local.m[a][0] = x[a];
@@ -334,15 +301,7 @@ static bool instance(MtsParser *p, XmlNode *shape, const SgTransform *xf)
         return mts_fail(p, shape, "instance needs a <ref> to a shapegroup");
     if (p->defining)
         return mts_fail(p, shape, "an instance inside a shapegroup");
-    for (size_t i = 0; i < g->shape_count; i++) {
-        const MtsGroupShape *s = &g->shapes[i];
-        uint32_t first = p->core.scene->vertex_count;
-        if (!sg_builder_append_mesh(&p->core, "instance", s->positions, s->vertex_count, s->indices,
-                                    s->triangle_count, xf, s->scene_material, p->err) ||
-            (s->uvs && !sg_builder_set_uvs(&p->core, first, s->vertex_count, s->uvs, p->err)))
-            return false;
-    }
-    return true;
+    return sg_builder_add_group(&p->core, "instance", &g->shapes, xf, p->err);
 }
 
 bool mts_shape(MtsParser *p, XmlNode *shape)

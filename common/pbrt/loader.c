@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "input_file.h"
 #include "pbrt_parser.h"
 #include "vecmath.h"
 
@@ -319,7 +320,6 @@ static void parser_release(Parser *p)
     for (size_t i = 0; i < p->material_count; i++)
         free(p->materials[i].name);
     free(p->materials);
-    free(p->emissive);
     free(p->variants);
     for (size_t i = 0; i < p->medium_count; i++)
         free(p->media[i].name);
@@ -331,17 +331,11 @@ static void parser_release(Parser *p)
         free(p->coordinate_systems[i].name);
     free(p->coordinate_systems);
     for (size_t i = 0; i < p->object_count; i++) {
-        for (size_t k = 0; k < p->objects[i].shape_count; k++) {
-            free(p->objects[i].shapes[k].positions);
-            free(p->objects[i].shapes[k].indices);
-            free(p->objects[i].shapes[k].uvs);
-        }
-        free(p->objects[i].shapes);
+        sg_shape_group_release(&p->objects[i].shapes);
         free(p->objects[i].name);
     }
     free(p->objects);
-    free(p->warnings);
-    sg_image_averages_free(&p->images);
+    sg_builder_release(&p->core);
 }
 
 SgScene *sg_pbrt_scene_load(const char *path, SgError *err)
@@ -352,8 +346,7 @@ SgScene *sg_pbrt_scene_load(const char *path, SgError *err)
     if (!sg_builder_begin(&p.core, path, err))
         return NULL;
     SgScene *s = p.core.scene;
-    const char *slash = strrchr(path, '/');
-    snprintf(p.base_dir, sizeof p.base_dir, "%.*s", slash ? (int)(slash - path + 1) : 0, path);
+    sg_folder_of(path, p.base_dir, sizeof p.base_dir);
     p.film_width = 1280; /* pbrt's defaults */
     p.film_height = 720;
     s->render.max_depth = 5 + 1; /* pbrt's default maxdepth, 5 bounces */
@@ -383,14 +376,6 @@ SgScene *sg_pbrt_scene_load(const char *path, SgError *err)
         ok = sg_fail(err, "%s: the scene has no triangles%s", path,
                      p.core.dropped_degenerate ? " (all were degenerate)" : "");
     ok = ok && sg_builder_finish(&p.core, err);
-    if (ok)
-        for (size_t i = 0; i < p.warning_count; i++) {
-            const Warning *w = &p.warnings[i];
-            if (w->count > 1)
-                sg_scene_add_warning(s, "%s: %s (%u times)", w->where, w->kind, w->count);
-            else
-                sg_scene_add_warning(s, "%s: %s", w->where, w->kind);
-        }
     parser_release(&p);
     if (!ok) {
         sg_scene_free(s);

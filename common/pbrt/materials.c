@@ -130,7 +130,7 @@ static bool shading_maps(Parser *p, const Token *at, SgMaterial *m)
         return false;
     SgTexture st = {.kind = SG_TEXTURE_IMAGE, .uscale = 1, .vscale = 1, .path = path, .gamma = 0, .scale = 1,
                     .wrap = SG_WRAP_REPEAT};
-    if (!sg_image_average(&p->images, path, 0, st.mean, NULL)) {
+    if (!sg_image_average(&p->core.images, path, 0, st.mean, NULL)) {
         pbrt_warn_at(p, at, "normal maps that cannot be read (missing files) are ignored");
         return true;
     }
@@ -435,9 +435,9 @@ bool pbrt_make_named_material_statement(Parser *p, const Token *statement)
         SgScene *scene = p->core.scene;
         if (old->scene_id != UINT32_MAX)
             scene->materials[old->scene_id] = m.material;
-        for (size_t k = 0; k < p->emissive_count; k++)
-            if (p->emissive[k].material == i) {
-                SgMaterial *e = &scene->materials[p->emissive[k].scene_id];
+        for (size_t k = 0; k < p->core.emissive_count; k++)
+            if (p->core.emissive[k].material == i) {
+                SgMaterial *e = &scene->materials[p->core.emissive[k].scene_id];
                 float emission[3];
                 memcpy(emission, e->emission, sizeof emission);
                 *e = m.material;
@@ -492,24 +492,7 @@ static bool plain_scene_material(Parser *p, bool emissive, uint32_t *id)
         *id = m->scene_id;
         return true;
     }
-    const float *L = p->state.radiance;
-    for (size_t i = 0; i < p->emissive_count; i++) {
-        EmissiveMaterial *e = &p->emissive[i];
-        if (e->material == p->state.material && !memcmp(e->radiance, L, sizeof e->radiance)) {
-            *id = e->scene_id;
-            return true;
-        }
-    }
-    SgMaterial copy = m->material;
-    memcpy(copy.emission, L, sizeof copy.emission);
-    if (!RESERVE(p, p->emissive, p->emissive_count, p->emissive_capacity, 1) ||
-        !sg_builder_add_material(&p->core, &copy, id, p->err))
-        return false;
-    EmissiveMaterial *e = &p->emissive[p->emissive_count++];
-    e->material = p->state.material;
-    memcpy(e->radiance, L, sizeof e->radiance);
-    e->scene_id = *id;
-    return true;
+    return sg_builder_emissive_material(&p->core, p->state.material, &m->material, p->state.radiance, id, p->err);
 }
 
 /* The scene material of the current state with the current shape's

@@ -87,12 +87,6 @@ typedef struct PbrtMaterial {
     Token first_use;
 } PbrtMaterial;
 
-typedef struct EmissiveMaterial {
-    uint32_t material; /* Parser.materials index */
-    float radiance[3];
-    uint32_t scene_id;
-} EmissiveMaterial;
-
 /* What a shape adds to its material: an alpha cut-out (its "alpha") and
  * the absorption of the medium inside it (MediumInterface). Zeroed: none. */
 typedef struct ShapeAttributes {
@@ -128,26 +122,10 @@ typedef struct NamedTransform {
 } NamedTransform;
 
 /* A shape of an object definition, in world space at its definition. */
-typedef struct ObjectShape {
-    double *positions;
-    float *uvs; /* 2 per vertex, or NULL */
-    uint32_t vertex_count;
-    uint32_t *indices;
-    uint32_t triangle_count;
-    uint32_t scene_material;
-} ObjectShape;
-
 typedef struct Object {
     char *name;
-    ObjectShape *shapes;
-    size_t shape_count, shape_capacity;
+    SgShapeGroup shapes;
 } Object;
-
-typedef struct Warning {
-    char kind[160];   /* what could not be honoured */
-    char where[4200]; /* file:line of the first occurrence */
-    uint32_t count;
-} Warning;
 
 typedef struct Parser {
     SgSceneBuilder core;
@@ -179,8 +157,6 @@ typedef struct Parser {
 
     PbrtMaterial *materials;
     size_t material_count, material_capacity;
-    EmissiveMaterial *emissive;
-    size_t emissive_count, emissive_capacity;
     ShapeAttributes shape; /* of the Shape statement being read */
     MaterialVariant *variants;
     size_t variant_count, variant_capacity;
@@ -200,10 +176,7 @@ typedef struct Parser {
     double fov;
     int film_width, film_height;
 
-    Warning *warnings;
-    size_t warning_count, warning_capacity;
 
-    SgImageAverages images; /* image files read for textures, by path */
 } Parser;
 
 /* ---- tokens.c: errors, warnings, files and the lexer -------------------- */

@@ -80,33 +80,11 @@ static bool emit_mesh(Parser *p, const Token *at, const char *what, const double
         }
     }
     if (p->defining) {
-        Object *o = p->defining;
-        if (!RESERVE(p, o->shapes, o->shape_count, o->shape_capacity, 1))
-            return false;
-        ObjectShape *s = &o->shapes[o->shape_count];
-        memset(s, 0, sizeof *s);
-        s->positions = malloc((vertex_count ? vertex_count : 1) * 3 * sizeof(double));
-        s->indices = malloc((triangle_count ? triangle_count : 1) * 3 * sizeof(uint32_t));
-        s->uvs = uvs ? malloc((vertex_count ? vertex_count : 1) * 2 * sizeof(float)) : NULL;
-        if (!s->positions || !s->indices || (uvs && !s->uvs)) {
-            free(s->positions);
-            free(s->indices);
-            free(s->uvs);
-            return sg_fail(p->err, "%s: out of memory", p->core.path);
-        }
-        if (uvs)
-            memcpy(s->uvs, uvs, vertex_count * 2 * sizeof(float));
-        o->shape_count++;
-        for (uint32_t v = 0; v < vertex_count; v++) {
+        for (uint32_t v = 0; v < vertex_count; v++)
             if (!sg_builder_check_point(&p->core, what, positions + 3 * (size_t)v, p->err))
                 return false;
-            sg_transform_point(&xf, positions + 3 * (size_t)v, s->positions + 3 * (size_t)v);
-        }
-        memcpy(s->indices, indices, triangle_count * 3 * sizeof(uint32_t));
-        s->vertex_count = vertex_count;
-        s->triangle_count = triangle_count;
-        s->scene_material = material;
-        return true;
+        return sg_shape_group_add(&p->defining->shapes, p->core.path, positions, vertex_count, indices,
+                                  triangle_count, uvs, &xf, material, p->err);
     }
     uint32_t first = p->core.scene->vertex_count;
     return sg_builder_append_mesh(&p->core, what, positions, vertex_count, indices,
@@ -365,14 +343,5 @@ bool pbrt_object_instance(Parser *p, const Token *statement)
     SgTransform xf;
     if (!shape_transform(p, statement, &xf))
         return false;
-    for (size_t i = 0; i < o->shape_count; i++) {
-        const ObjectShape *s = &o->shapes[i];
-        uint32_t first = p->core.scene->vertex_count;
-        if (!sg_builder_append_mesh(&p->core, o->name, s->positions, s->vertex_count,
-                                    s->indices, s->triangle_count, &xf, s->scene_material,
-                                    p->err) ||
-            (s->uvs && !sg_builder_set_uvs(&p->core, first, s->vertex_count, s->uvs, p->err)))
-            return false;
-    }
-    return true;
+    return sg_builder_add_group(&p->core, o->name, &o->shapes, &xf, p->err);
 }

@@ -113,7 +113,7 @@ static bool image_texture(Parser *p, const Token *statement, SgTexture *st, floa
         return false;
     double gamma = image_gamma(pbrt_param_string(p, "encoding"), path);
     float average[3];
-    bool readable = sg_image_average(&p->images, path, gamma, average, NULL);
+    bool readable = sg_image_average(&p->core.images, path, gamma, average, NULL);
     if (!readable) {
         memcpy(average, grey, sizeof average);
         pbrt_warn_at(p, statement, "image textures that cannot be read (missing files) are "

@@ -46,22 +46,12 @@ bool pbrt_fail_at(Parser *p, const Token *t, const char *fmt, ...)
 
 void pbrt_warn_at(Parser *p, const Token *t, const char *fmt, ...)
 {
-    char kind[160];
+    char where[4200];
+    write_place(p, t ? t->source : NULL, t ? t->line : 0, where, sizeof where);
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(kind, sizeof kind, fmt, ap);
+    sg_builder_warnv(&p->core, where, fmt, ap);
     va_end(ap);
-    for (size_t i = 0; i < p->warning_count; i++)
-        if (!strcmp(p->warnings[i].kind, kind)) {
-            p->warnings[i].count++;
-            return;
-        }
-    if (!RESERVE(p, p->warnings, p->warning_count, p->warning_capacity, 1))
-        return;
-    Warning *w = &p->warnings[p->warning_count++];
-    snprintf(w->kind, sizeof w->kind, "%s", kind);
-    write_place(p, t ? t->source : NULL, t ? t->line : 0, w->where, sizeof w->where);
-    w->count = 1;
 }
 
 bool pbrt_token_is(const Token *t, const char *word)

@@ -557,7 +557,7 @@ static float rms_radiance(const RegionStats *st)
  * from a few hundred reports is most often far below its truth; the learned
  * roulette then cut its paths at ROULETTE_MIN_SURVIVAL and the rare
  * survivor that found the light came back 20 times too heavy: the
- * fireflies of guided on a corridor lit round two corners (issue 29). The
+ * fireflies of guided on a corridor lit round two corners (data/dark-corridor). The
  * coarse region has seen many more of the paths through that part of the
  * scene; past a few thousand reports the region's own estimate rules. */
 static float shrunk_rms_radiance(const SgMixtureLearner *l, uint32_t region)

@@ -11,7 +11,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "scene.h"
+#include "scene_load.h"
 
 static inline int sg_fuzz_scene_bytes(const uint8_t *data, size_t size, const char *extension)
 {

@@ -2,7 +2,7 @@
  * (pbrt_scene.h), a .xml file to the Mitsuba reader
  * (mitsuba/mitsuba_scene.h), anything else to the JSON reader (scene_json.h).
  * All three fill the flat world-space arrays through scene_builder.h. */
-#include "scene.h"
+#include "scene_load.h"
 
 #include "input_file.h"
 #include "mitsuba/mitsuba_scene.h"
