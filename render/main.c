@@ -248,22 +248,26 @@ static int parse_number(const char *s, const char *v, Args *a, SgError *err)
     return 0;
 }
 
+/* Which of three options s is, 0 to 2; -1: none of them. */
+static int one_of(const char *s, const char *first, const char *second, const char *third)
+{
+    return !strcmp(s, first) ? 0 : !strcmp(s, second) ? 1 : !strcmp(s, third) ? 2 : -1;
+}
+
 /* --sampling, --roulette, --openpgl-mode: a name of a few. */
 static int parse_choice(const char *s, const char *v, Args *a, SgError *err)
 {
-    bool sampling = !strcmp(s, "--sampling"), roulette = !strcmp(s, "--roulette");
-    if (!sampling && !roulette && strcmp(s, "--openpgl-mode"))
-        return 0;
-    if (!v)
-        return needs_value(s, err);
-    if (sampling) {
+    int which = one_of(s, "--sampling", "--roulette", "--openpgl-mode");
+    if (which < 0 || !v)
+        return which < 0 ? 0 : needs_value(s, err);
+    if (which == 0) {
         if (!sg_sampling_parse(v, &a->sampling)) {
             char names[256];
             mode_names(names, sizeof names);
             return sg_fail(err, "--sampling: '%s' is not %s", v, names), -1;
         }
         a->has_sampling = true;
-    } else if (roulette) {
+    } else if (which == 1) {
         if (!sg_roulette_parse(v, &a->roulette))
             return sg_fail(err, "--roulette: '%s' is not learned or albedo", v), -1;
     } else {
@@ -277,19 +281,17 @@ static int parse_choice(const char *s, const char *v, Args *a, SgError *err)
 /* --seed N, --size WxH, --shard K/N: numbers of their own shape. */
 static int parse_shaped(const char *s, const char *v, Args *a, SgError *err)
 {
-    bool seed = !strcmp(s, "--seed"), size = !strcmp(s, "--size");
-    if (!seed && !size && strcmp(s, "--shard"))
-        return 0;
-    if (!v)
-        return needs_value(s, err);
+    int which = one_of(s, "--seed", "--size", "--shard");
+    if (which < 0 || !v)
+        return which < 0 ? 0 : needs_value(s, err);
     char *end;
     errno = 0;
-    if (seed) {
+    if (which == 0) {
         unsigned long long x = strtoull(v, &end, 10);
         if (errno || end == v || *end || v[0] == '-')
             return sg_fail(err, "--seed: '%s' is not a non-negative integer", v), -1;
         a->seed = x;
-    } else if (size) {
+    } else if (which == 1) {
         long w = strtol(v, &end, 10);
         long h = *end == 'x' ? strtol(end + 1, &end, 10) : 0;
         if (*end || w <= 0 || h <= 0 || w > 65536 || h > 65536)

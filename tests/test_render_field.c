@@ -29,6 +29,29 @@ static SgRenderOptions field_options(const SgScene *s, SgSampling mode, int trai
     return o;
 }
 
+/* A renderer of s trained and its field written to the test folder's
+ * `name` (its path to path[size]). */
+static SgRenderer *trained(const SgScene *s, const SgRenderOptions *o, const char *name, char *path, size_t size)
+{
+    snprintf(path, size, "%s/%s", sg_test_tmpdir(), name);
+    SgError err = {0};
+    SgRenderer *r = sg_renderer_create(s, o, &err);
+    cr_assert_not_null(r, "%s", err.message);
+    cr_assert(sg_renderer_train(r, &err), "%s", err.message);
+    cr_assert(sg_renderer_write_field(r, path, &err), "%s", err.message);
+    return r;
+}
+
+/* Frees what a test of two renderers made. */
+static void free_pair(SgRenderer *a, SgRenderer *b, float *ia, float *ib, SgScene *s)
+{
+    free(ia);
+    free(ib);
+    sg_renderer_free(a);
+    sg_renderer_free(b);
+    sgt_scene_free(s);
+}
+
 static SgRenderer *renderer(const SgScene *s, const SgRenderOptions *o)
 {
     SgError err = {0};
@@ -101,11 +124,7 @@ static void field_round_trip(SgSampling mode, int training, bool learned_roulett
     cr_assert(mean > 0.9 && mean < 1.1, "the frozen field's furnace came out %g, not 1", mean);
     free(da);
     free(db);
-    free(ia);
-    free(ib);
-    sg_renderer_free(a);
-    sg_renderer_free(b);
-    sgt_scene_free(s);
+    free_pair(a, b, ia, ib, s);
 }
 
 /* A field serves any view of its scene: read into a renderer of another
@@ -117,14 +136,9 @@ Test(render_field, a_field_serves_another_camera_and_size, .timeout = 120)
 {
     SgScene *s = sgt_furnace_scene();
     SgRenderOptions o = field_options(s, SG_SAMPLING_GUIDED, 6);
-    const char *dir = sg_test_tmpdir();
     char path[4200];
-    snprintf(path, sizeof path, "%s/view.field", dir);
+    sg_renderer_free(trained(s, &o, "view.field", path, sizeof path));
     SgError err = {0};
-    SgRenderer *a = renderer(s, &o);
-    cr_assert(sg_renderer_train(a, &err), "%s", err.message);
-    cr_assert(sg_renderer_write_field(a, path, &err), "%s", err.message);
-    sg_renderer_free(a);
 
     SgRenderOptions other = o;
     other.width = o.width / 2 + 3;
@@ -178,13 +192,9 @@ Test(render_field, a_lights_edge_in_view_renders_the_same_from_a_field_read_back
 {
     SgScene *s = room_with_a_lights_edge_in_view();
     SgRenderOptions o = field_options(s, SG_SAMPLING_GUIDED, 6);
-    const char *dir = sg_test_tmpdir();
     char f1[4200];
-    snprintf(f1, sizeof f1, "%s/edge.field", dir);
+    SgRenderer *a = trained(s, &o, "edge.field", f1, sizeof f1);
     SgError err = {0};
-    SgRenderer *a = renderer(s, &o);
-    cr_assert(sg_renderer_train(a, &err), "%s", err.message);
-    cr_assert(sg_renderer_write_field(a, f1, &err), "%s", err.message);
     sg_renderer_freeze(a);
     float *ia = render_passes(a, &o, 12);
     double rays = sgt_stats(a).edge_rays_per_sample;
@@ -196,11 +206,7 @@ Test(render_field, a_lights_edge_in_view_renders_the_same_from_a_field_read_back
     cr_assert_float_eq(sgt_stats(b).edge_rays_per_sample, rays, 1e-12, "the two renders took other edge rays");
     cr_assert_eq(memcmp(ia, ib, sizeof *ia * 3 * (size_t)o.width * o.height), 0,
                  "a field read back renders another image where a light's edge is in view");
-    free(ia);
-    free(ib);
-    sg_renderer_free(a);
-    sg_renderer_free(b);
-    sgt_scene_free(s);
+    free_pair(a, b, ia, ib, s);
 }
 
 /* The edge rays change what the camera sees directly, never the paths:

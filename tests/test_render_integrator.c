@@ -1188,9 +1188,8 @@ Test(render_integrator, camera_inside_a_solid_is_detected)
     }
     const double l[4][3] = {{-1, 3, -1}, {1, 3, -1}, {1, 3, 1}, {-1, 3, 1}};
     sgt_add_quad(s, l, lm);
-    const double pos[3] = {0, 0, 0}, at[3] = {0, 0, 1}, up[3] = {0, 1, 0};
-    sgt_set_camera(s, pos, at, up, 60, 16, 16);
-    sgt_finish(s);
+    const double pos[3] = {0, 0, 0}, at[3] = {0, 0, 1};
+    sgt_finish_looking(s, pos, at, 60, 16, 16);
     SgRenderOptions o;
     sg_render_options_default(&o, s);
     SgError err = {0};

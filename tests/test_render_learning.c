@@ -48,6 +48,12 @@ static void feed_records(SgMixtureLearner *l, uint32_t region, int count, double
     }
 }
 
+/* The region of a point on a floor (normal +y). */
+static uint32_t floor_region(const SgMixtureLearner *l, float x, float y, float z)
+{
+    return sg_mixture_region(l, v3(x, y, z), v3(0, 1, 0));
+}
+
 /* The same, learned at once. */
 static void feed(SgMixtureLearner *l, uint32_t region, int count, double lit, float cos_light, uint64_t seed)
 {
@@ -88,7 +94,7 @@ Test(render_learning, learned_choices_reach_the_view_between_passes)
 Test(render_learning, the_lobe_wins_where_the_light_comes_along_the_guide)
 {
     SgMixtureLearner *l = unit_learner();
-    uint32_t r = sg_mixture_region(l, v3(0.3f, 0.3f, 0.3f), v3(0, 1, 0));
+    uint32_t r = floor_region(l, 0.3f, 0.3f, 0.3f);
     cr_assert_neq(r, SG_NO_REGION);
     cr_assert_float_eq(sg_mixture_choice(l, r).alpha, 1.0f, 0.0f); /* nothing learned yet */
     feed(l, r, 4000, 0.05, 0.995f, 1);
@@ -149,10 +155,10 @@ static void feed_sky(SgMixtureLearner *l, uint32_t region, int count, bool insid
 Test(render_learning, regions_learn_their_share_of_sky_samples_through_the_portals)
 {
     SgMixtureLearner *l = unit_learner();
+    uint32_t room = floor_region(l, 0.1f, 0.1f, 0.1f);
+    uint32_t open = floor_region(l, 0.9f, 0.9f, 0.9f);
+    uint32_t near_room = floor_region(l, 0.2f, 0.1f, 0.1f);
     const SgMixtureView *view = sg_mixture_view(l);
-    uint32_t room = sg_mixture_region(l, v3(0.1f, 0.1f, 0.1f), v3(0, 1, 0));
-    uint32_t open = sg_mixture_region(l, v3(0.9f, 0.9f, 0.9f), v3(0, 1, 0));
-    uint32_t near_room = sg_mixture_region(l, v3(0.2f, 0.1f, 0.1f), v3(0, 1, 0));
     cr_assert_eq(sg_portal_shares[SG_PORTAL_SHARE_DEFAULT], 0.8f, "the default is render/lights.h's PORTAL_SHARE");
     cr_assert_eq(sg_mixture_portal_share(view, room), 0.8f);
     cr_assert_eq(sg_mixture_portal_share(view, SG_NO_REGION), 0.8f);
@@ -194,13 +200,13 @@ Test(render_learning, sparse_regions_take_their_coarse_region_s_choice)
     /* before anything is learned: a mixture (so that `far` below keeps to
      * the BSDF only by following the whole scene's choice) */
     SgMixtureLearner *l = unit_learner_from(SG_MIXTURE_INITIAL);
-    uint32_t far = sg_mixture_region(l, v3(0.9f, 0.1f, 0.1f), v3(0, 1, 0));
+    uint32_t far = floor_region(l, 0.9f, 0.1f, 0.1f);
     cr_assert_lt(sg_mixture_choice(l, far).alpha, 1.0f);
     /* fine cells are 1/8; coarse ones 4 fine cells: (0.05..0.45) share one */
-    uint32_t busy = sg_mixture_region(l, v3(0.05f, 0.05f, 0.05f), v3(0, 1, 0));
-    uint32_t sparse = sg_mixture_region(l, v3(0.4f, 0.4f, 0.4f), v3(0, 1, 0));
+    uint32_t busy = floor_region(l, 0.05f, 0.05f, 0.05f);
+    uint32_t sparse = floor_region(l, 0.4f, 0.4f, 0.4f);
     uint32_t other_side = sg_mixture_region(l, v3(0.4f, 0.4f, 0.4f), v3(0, -1, 0));
-    uint32_t away = sg_mixture_region(l, v3(0.6f, 0.6f, 0.6f), v3(0, 1, 0));
+    uint32_t away = floor_region(l, 0.6f, 0.6f, 0.6f);
     cr_assert(busy != sparse && sparse != other_side && far != sparse && away != far);
     /* the lobe wins at `busy`; the BSDF wins at `away` (another coarse
      * cell), where bounces bring back more light in all: the scene as a
@@ -214,7 +220,7 @@ Test(render_learning, sparse_regions_take_their_coarse_region_s_choice)
     cr_assert_float_eq(sg_mixture_choice(l, sparse).alpha, lobe, 0.0f, "sparse region: %g",
                        sg_mixture_choice(l, sparse).alpha);
     /* a region with no samples at all in the same coarse cell also follows it */
-    uint32_t empty = sg_mixture_region(l, v3(0.3f, 0.1f, 0.2f), v3(0, 1, 0));
+    uint32_t empty = floor_region(l, 0.3f, 0.1f, 0.2f);
     cr_assert_eq(sg_mixture_region_samples(l, empty), 0);
     cr_assert_float_eq(sg_mixture_choice(l, empty).alpha, lobe, 0.0f);
     /* the other side of a wall and a coarse cell with no samples follow the
@@ -230,16 +236,16 @@ Test(render_learning, sparse_regions_take_their_coarse_region_s_choice)
     cr_assert(learning);
     /* outside the grid (only rounding puts a hit point there) or NaN: the nearest cell */
     r = sg_mixture_lookup(sg_mixture_view(l), v3(2, 0.5f, 0.5f), sg_mixture_normal_bin(v3(0, 1, 0)), &a, &learning);
-    cr_assert_eq(r, sg_mixture_region(l, v3(1.0f, 0.5f, 0.5f), v3(0, 1, 0)));
+    cr_assert_eq(r, floor_region(l, 1.0f, 0.5f, 0.5f));
     r = sg_mixture_lookup(sg_mixture_view(l), v3(NAN, -5.0f, 0.0f), sg_mixture_normal_bin(v3(0, 1, 0)), &a, &learning);
-    cr_assert_eq(r, sg_mixture_region(l, v3(0.0f, 0.0f, 0.0f), v3(0, 1, 0)));
+    cr_assert_eq(r, floor_region(l, 0.0f, 0.0f, 0.0f));
     sg_mixture_learner_free(l);
 }
 
 Test(render_learning, a_region_with_enough_samples_settles)
 {
     SgMixtureLearner *l = unit_learner();
-    uint32_t r = sg_mixture_region(l, v3(0.3f, 0.3f, 0.3f), v3(0, 1, 0));
+    uint32_t r = floor_region(l, 0.3f, 0.3f, 0.3f);
     cr_assert(sg_mixture_learning(l, r));
     feed(l, r, SG_MIXTURE_SETTLED_SAMPLES - 1000, 0.05, 0.995f, 6);
     cr_assert(sg_mixture_learning(l, r), "settled before its records reached SG_MIXTURE_SETTLED_SAMPLES");
@@ -264,9 +270,9 @@ Test(render_learning, regions_learn_the_second_moment_of_what_leaves_them)
 {
     SgMixtureLearner *l = unit_learner();
     const SgMixtureView *v = sg_mixture_view(l);
-    uint32_t lit = sg_mixture_region(l, v3(0.05f, 0.05f, 0.05f), v3(0, 1, 0));
-    uint32_t sparse = sg_mixture_region(l, v3(0.4f, 0.4f, 0.4f), v3(0, 1, 0));
-    uint32_t dark = sg_mixture_region(l, v3(0.9f, 0.9f, 0.9f), v3(0, 1, 0));
+    uint32_t lit = floor_region(l, 0.05f, 0.05f, 0.05f);
+    uint32_t sparse = floor_region(l, 0.4f, 0.4f, 0.4f);
+    uint32_t dark = floor_region(l, 0.9f, 0.9f, 0.9f);
     uint32_t elsewhere = sg_mixture_region(l, v3(0.9f, 0.1f, 0.9f), v3(1, 0, 0));
     cr_assert_lt(sg_mixture_radiance(v, lit), 0.0f, "nothing known yet");
     feed_radiance(l, lit, 1000, 2, 1.0f, 3.0f);
@@ -302,8 +308,8 @@ Test(render_learning, a_region_that_missed_the_rare_light_is_not_taken_for_dark)
 {
     SgMixtureLearner *l = unit_learner();
     /* one coarse cell (fine cells 1/8, coarse ones 4 of them) */
-    uint32_t busy = sg_mixture_region(l, v3(0.05f, 0.05f, 0.05f), v3(0, 1, 0));
-    uint32_t unlucky = sg_mixture_region(l, v3(0.3f, 0.3f, 0.3f), v3(0, 1, 0));
+    uint32_t busy = floor_region(l, 0.05f, 0.05f, 0.05f);
+    uint32_t unlucky = floor_region(l, 0.3f, 0.3f, 0.3f);
     cr_assert_neq(busy, unlucky);
     feed_radiance(l, busy, 3000, 100, 10.0f, 0.0f);
     feed_radiance(l, unlucky, 200, 2, 0.0f, 0.0f);

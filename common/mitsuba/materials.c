@@ -14,6 +14,7 @@
 #include <strings.h>
 
 #include "mitsuba_parser.h"
+#include "named_metals.h"
 
 /* ---- textures ----------------------------------------------------------- */
 
@@ -229,22 +230,6 @@ static bool ior(MtsParser *p, const XmlNode *obj, const char *name, double fallb
     return mts_fail(p, n, "\"%s\": unknown material \"%.40s\"", name, s);
 }
 
-/* Conductors' complex index of refraction in RGB (the values the pbrt
- * reader uses for pbrt's named metals; chromium and the others averaged
- * from their measured spectra at 650, 550 and 450 nm). */
-static const struct {
-    const char *name;
-    float eta[3], k[3];
-} named_metals[] = {
-    {"Ag", {0.155f, 0.117f, 0.138f}, {4.83f, 3.12f, 2.15f}},
-    {"Al", {1.66f, 0.880f, 0.521f}, {9.22f, 6.27f, 4.84f}},
-    {"Au", {0.143f, 0.375f, 1.44f}, {3.98f, 2.39f, 1.60f}},
-    {"Cu", {0.200f, 0.924f, 1.10f}, {3.91f, 2.45f, 2.14f}},
-    {"CuZn", {0.444f, 0.527f, 1.09f}, {3.70f, 2.77f, 1.83f}},
-    {"Cr", {3.11f, 3.18f, 2.35f}, {3.31f, 3.33f, 3.21f}},
-    {"W", {3.76f, 3.51f, 3.39f}, {2.86f, 2.74f, 2.54f}},
-};
-
 static bool conductor(MtsParser *p, const XmlNode *n, bool rough, SgMaterial *m)
 {
     const char *name;
@@ -267,14 +252,12 @@ static bool conductor(MtsParser *p, const XmlNode *n, bool rough, SgMaterial *m)
     const XmlNode *eta_node, *k_node;
     if (!mts_find(p, n, "eta", &eta_node) || !mts_find(p, n, "k", &k_node))
         return false;
-    bool found = false;
-    for (size_t i = 0; i < sizeof named_metals / sizeof *named_metals; i++)
-        if (!strcmp(name, named_metals[i].name)) {
-            memcpy(m->eta, named_metals[i].eta, sizeof m->eta);
-            memcpy(m->k, named_metals[i].k, sizeof m->k);
-            found = true;
-        }
-    if (!found && !(eta_node && k_node))
+    const SgNamedMetal *metal = sg_named_metal(name);
+    if (metal) {
+        memcpy(m->eta, metal->eta, sizeof m->eta);
+        memcpy(m->k, metal->k, sizeof m->k);
+    }
+    if (!metal && !(eta_node && k_node))
         mts_warn(p, n, "conductor material \"%s\" is not known here: copper instead", name);
     double ext_ior;
     if (!mts_color(p, n, "eta", m->eta, m->eta, NULL, NULL) || !mts_color(p, n, "k", m->k, m->k, NULL, NULL) ||

@@ -218,15 +218,6 @@ const Token *pbrt_param_string(Parser *p, const char *name);
 
 /* ---- spectra.c: colours and spectra ------------------------------------- */
 
-/* A named metal spectrum: its complex index of refraction in RGB. */
-typedef struct NamedMetal {
-    const char *name;
-    float eta[3], k[3];
-} NamedMetal;
-
-/* Copper is index 3: the default of conductors. */
-extern const NamedMetal pbrt_named_metals[];
-
 bool pbrt_param_color(Parser *p, const char *name, const float fallback[3], float out[3],
                       bool *present);
 bool pbrt_param_scalar(Parser *p, const char *name, double fallback, double *out);

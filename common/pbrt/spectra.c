@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "color.h"
+#include "named_metals.h"
 #include "pbrt_parser.h"
 
 static const Texture *find_texture(const Parser *p, const Token *name)
@@ -17,15 +18,6 @@ static const Texture *find_texture(const Parser *p, const Token *name)
 
 /* Complex index of refraction of pbrt's named metal spectra, reduced to
  * red, green and blue (approximate: evaluated near 650, 550 and 450 nm). */
-const NamedMetal pbrt_named_metals[] = {
-    {"Ag", {0.155f, 0.117f, 0.138f}, {4.83f, 3.12f, 2.15f}},
-    {"Al", {1.66f, 0.880f, 0.521f}, {9.22f, 6.27f, 4.84f}},
-    {"Au", {0.143f, 0.375f, 1.44f}, {3.98f, 2.39f, 1.60f}},
-    {"Cu", {0.200f, 0.924f, 1.10f}, {3.91f, 2.45f, 2.14f}},
-    {"CuZn", {0.444f, 0.527f, 1.09f}, {3.70f, 2.77f, 1.83f}},
-    {"MgO", {1.73f, 1.74f, 1.76f}, {0, 0, 0}},
-    {"TiO2", {2.58f, 2.74f, 3.03f}, {0, 0, 0}},
-};
 
 /* Index of refraction of pbrt's named glasses near 550 nm. */
 static const struct {
@@ -139,16 +131,17 @@ bool pbrt_param_color(Parser *p, const char *name, const float fallback[3], floa
             return true;
         }
         const Token *s = &p->strings[param->first];
-        for (size_t i = 0; i < sizeof pbrt_named_metals / sizeof pbrt_named_metals[0]; i++) {
-            char eta_name[32], k_name[32];
-            snprintf(eta_name, sizeof eta_name, "metal-%s-eta", pbrt_named_metals[i].name);
-            snprintf(k_name, sizeof k_name, "metal-%s-k", pbrt_named_metals[i].name);
-            if (pbrt_string_is(s, eta_name)) {
-                memcpy(out, pbrt_named_metals[i].eta, 3 * sizeof(float));
+        /* "metal-NAME-eta", "metal-NAME-k" */
+        if (s->len > 6 && !memcmp(s->s, "metal-", 6)) {
+            const char *name = s->s + 6, *dash = memchr(name, '-', s->len - 6);
+            const SgNamedMetal *metal = dash ? sg_named_metal_n(name, (unsigned)(dash - name)) : NULL;
+            size_t rest = dash ? s->len - (size_t)(dash + 1 - s->s) : 0;
+            if (metal && rest == 3 && !memcmp(dash + 1, "eta", 3)) {
+                memcpy(out, metal->eta, 3 * sizeof(float));
                 return true;
             }
-            if (pbrt_string_is(s, k_name)) {
-                memcpy(out, pbrt_named_metals[i].k, 3 * sizeof(float));
+            if (metal && rest == 1 && dash[1] == 'k') {
+                memcpy(out, metal->k, 3 * sizeof(float));
                 return true;
             }
         }
