@@ -156,10 +156,9 @@ static double equal_weight_image(const GroupView *v, int n, size_t pixels, int t
 }
 
 /* Each group's variance per pass, relative to the image of all passes,
- * trimmed: from the distance of its passes to that image (within = false)
- * or from their spread about their own mean (within = true: blind to what
- * the whole group missed, but free of the image's own noise). */
-static int group_variances(const Film *f, bool within, double *variance, double *cost)
+ * trimmed, from the distance of its passes to that image (its own spread
+ * would be blind to what the whole group missed). */
+int film_group_variances(const Film *f, double *variance, double *cost)
 {
     GroupView v[FILM_GROUPS_MAX + 1];
     int n = group_views(f, v);
@@ -179,29 +178,19 @@ static int group_variances(const Film *f, bool within, double *variance, double 
     double floor = equal_weight_image(v, n, pixels, total, reference, relative);
     for (int g = 0; g < n; g++) {
         int k = v[g].passes;
-        if (within && k < 2)
-            continue;
         for (size_t p = 0; p < pixels; p++) {
-            double r = reference[p], sum = view_luminance_sum(&v[g], p), square = view_square(&v[g], p);
-            /* the sum over the group's passes of (y - c)^2, c its own mean or the image */
-            double d = within ? square - sum * sum / k : square - 2.0 * r * sum + k * r * r;
-            relative[p] = fmax(d, 0.0) / (within ? k - 1 : k) / (r * r + floor);
+            double r = reference[p];
+            /* the sum over the group's passes of (y - r)^2, from its sums */
+            double d = view_square(&v[g], p) - 2.0 * r * view_luminance_sum(&v[g], p) + k * r * r;
+            relative[p] = fmax(d, 0.0) / k / (r * r + floor);
         }
         variance[g] = sg_trimmed_mean(relative, pixels);
     }
-    if (!within)
-        variances_from_distances(v, n, total, variance);
+    variances_from_distances(v, n, total, variance);
     free(reference);
     free(relative);
     return n;
 }
-
-int film_group_variances(const Film *f, double *variance, double *cost)
-{
-    return group_variances(f, false, variance, cost);
-}
-
-int film_group_spreads(const Film *f, double *variance, double *cost) { return group_variances(f, true, variance, cost); }
 
 void film_image(const Film *f, float *rgb)
 {

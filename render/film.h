@@ -92,11 +92,6 @@ void film_clear(Film *f);
  * pass in cost[] (NULL: not wanted). Returns how many were written (at most
  * FILM_GROUPS_MAX + 1). */
 int film_group_variances(const Film *f, double *variance, double *cost);
-/* The same from each group's spread about its own mean (groups of one pass:
- * 0). Blind to what a whole group missed, so no weight for the image; free
- * of the noise of the image of all passes, so the fairer comparison of two
- * groups that both saw the light. */
-int film_group_spreads(const Film *f, double *variance, double *cost);
 
 /* The image: the groups' means weighted by their passes over their
  * variance (one group: its mean), linear RGB, width * height * 3 floats. */
