@@ -41,8 +41,10 @@ now() { date +%s.%N; }
 e2e_rows() { awk -F, -v p="$2" -v o="$3" 'NR > 1 { print p + o + $1, $2, $3, $4, $5, $6 }' "$1"; }
 # at_budget ROWS B COLUMN: the column at the last row within B seconds ("-": none)
 at_budget() { awk -v b="$2" -v c="$3" '$1 <= b { v = $c } END { print (v == "" ? "-" : v) }' "$1"; }
-# time_to ROWS LEVEL COLUMN: the first time the column reaches LEVEL ("-": never)
-time_to() { awk -v l="$2" -v c="$3" '$c <= l { print $1; found = 1; exit } END { if (!found) print "-" }' "$1"; }
+# time_to ROWS LEVEL COLUMN: the time from which the column stays at or
+# below LEVEL ("-": never; a relative error can dip early, when the first
+# passes see nothing where the image is dark)
+time_to() { awk -v l="$2" -v c="$3" '$c > l { t = "" } $c <= l && t == "" { t = $1 } END { print (t == "" ? "-" : t) }' "$1"; }
 # mean_spread VALUES...: "mean ± spread" (spread: half the range), "-" if any is missing
 mean_spread() {
   printf '%s\n' "$@" | awk '$1 == "-" { miss = 1 } { n++; s += $1; if (n == 1 || $1 < lo) lo = $1; if (n == 1 || $1 > hi) hi = $1 }
