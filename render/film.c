@@ -1,5 +1,6 @@
 #include "film.h"
 
+#include "color.h"
 #include "error_metrics.h"
 
 #include <math.h>
@@ -108,8 +109,8 @@ static int group_views(const Film *f, GroupView *v)
 static inline double view_luminance_sum(const GroupView *v, size_t pix)
 {
     if (v->sum_d)
-        return 0.2126 * v->sum_d[3 * pix] + 0.7152 * v->sum_d[3 * pix + 1] + 0.0722 * v->sum_d[3 * pix + 2];
-    return 0.2126 * v->sum_f[3 * pix] + 0.7152 * v->sum_f[3 * pix + 1] + 0.0722 * v->sum_f[3 * pix + 2];
+        return sg_luminance(v->sum_d[3 * pix], v->sum_d[3 * pix + 1], v->sum_d[3 * pix + 2]);
+    return sg_luminance(v->sum_f[3 * pix], v->sum_f[3 * pix + 1], v->sum_f[3 * pix + 2]);
 }
 
 static inline double view_square(const GroupView *v, size_t pix)

@@ -22,6 +22,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "color.h"
 #include "vecmath.h"
 
 /* A closed group of passes: each pixel's sum of samples and sum of squared
@@ -51,8 +52,6 @@ typedef struct Film {
 bool film_init(Film *f, int width, int height);
 void film_free(Film *f);
 
-static inline double film_luminance(Vec3 L) { return 0.2126 * L.x + 0.7152 * L.y + 0.0722 * L.z; }
-
 /* Adds pixel `pix`'s sample of this pass; a non-finite one counts as 0
  * (and returns false). */
 static inline bool film_add(Film *f, size_t pix, Vec3 *L)
@@ -66,7 +65,7 @@ static inline bool film_add(Film *f, size_t pix, Vec3 *L)
     f->sum[3 * pix] += L->x;
     f->sum[3 * pix + 1] += L->y;
     f->sum[3 * pix + 2] += L->z;
-    double y = film_luminance(*L);
+    double y = sg_luminance(L->x, L->y, L->z);
     f->square[pix] += y * y;
     return finite;
 }

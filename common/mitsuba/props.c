@@ -650,7 +650,7 @@ static void blackbody_rgb(double kelvin, float out[3])
         value[i] = 1.0 / (pow(l, 5) * (exp(1.4387769e-2 / (l * kelvin)) - 1));
     }
     spectrum_to_rgb(lambda, value, 471, out);
-    double y = 0.2126 * out[0] + 0.7152 * out[1] + 0.0722 * out[2];
+    double y = sg_luminance(out[0], out[1], out[2]);
     for (int c = 0; c < 3; c++)
         out[c] = y > 0 ? (float)(out[c] / y) : 1.0f;
 }
