@@ -498,8 +498,6 @@ static void run_close(Run *run)
 }
 
 /* --field-out: the training alone, its passes the image. */
-static bool trains_alone(const Args *a) { return a->field_out != NULL; }
-
 static bool run_training(Run *run, SgError *err)
 {
     int passes = sg_renderer_train_begin(run->r, err);
@@ -659,7 +657,7 @@ static void make_attributes(const Run *run, const SgRenderStats *st, const SgRen
     add_attribute(at, SG_ATTR_SCENE, a->scene);
     add_attribute(at, SG_ATTR_CACHE, run->importance.cache ? a->cache : "");
     add_attribute(at, SG_ATTR_FIELD, a->field ? a->field : a->field_out ? a->field_out : a->save_field ? a->save_field : "");
-    add_attribute(at, SG_ATTR_TRAINING, trains_alone(a) ? "yes" : "no");
+    add_attribute(at, SG_ATTR_TRAINING, a->field_out ? "yes" : "no");
     add_attribute(at, SG_ATTR_LEARNED_PASSES, at->learned);
     add_attribute(at, SG_ATTR_EXPOSURE, at->exposure);
     /* for bin/merge */
@@ -760,7 +758,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "render: --sampling %s: %s\n", run.mode->name, err.message);
         return 1;
     }
-    bool ok = run_open(&run, &err) && (trains_alone(&run.a) ? run_training(&run, &err) : run_passes(&run, &err)) &&
+    bool ok = run_open(&run, &err) && (run.a.field_out ? run_training(&run, &err) : run_passes(&run, &err)) &&
               run_outputs(&run, &err);
     if (!ok)
         sg_error_print("render", &err);
