@@ -138,27 +138,22 @@ static void variances_from_distances(const GroupView *v, int n, int total, doubl
         m[g] = fmax((m[g] - image) / a, 0.0);
 }
 
-/* The image of every pass at equal weight (luminance) and the floor under
- * its squares: pixels far darker than a hundredth of its brightness (its
- * trimmed mean: a firefly does not make the image bright) count absolutely.
- * `scratch`: pixels doubles. */
-static double equal_weight_image(const GroupView *v, int n, size_t pixels, int total, double *reference,
-                                 double *scratch)
+/* The image of every pass at equal weight (luminance). */
+static void equal_weight_image(const GroupView *v, int n, size_t pixels, int total, double *reference)
 {
     for (size_t p = 0; p < pixels; p++) {
         double s = 0.0;
         for (int g = 0; g < n; g++)
             s += view_luminance_sum(&v[g], p);
         reference[p] = s / total;
-        scratch[p] = reference[p];
     }
-    double mean = sg_trimmed_mean(scratch, pixels);
-    return fmax(0.01 * mean * mean, 1e-30);
 }
 
-/* Each group's variance per pass, relative to the image of all passes,
- * trimmed, from the distance of its passes to that image (its own spread
- * would be blind to what the whole group missed). */
+/* Each group's variance per pass, trimmed, from the distance of its passes
+ * to the image of all passes (its own spread would be blind to what the
+ * whole group missed). Absolute, not relative to the image: relative to a
+ * dark scene's image, the darkest pixels' noise decides every weight (on
+ * the dark corridor relative weights tripled the linear MSE of equal ones). */
 int film_group_variances(const Film *f, double *variance, double *cost)
 {
     GroupView v[FILM_GROUPS_MAX + 1];
@@ -170,26 +165,26 @@ int film_group_variances(const Film *f, double *variance, double *cost)
         if (cost)
             cost[g] = v[g].cost / v[g].passes;
     }
-    double *reference = malloc(pixels * sizeof *reference), *relative = malloc(pixels * sizeof *relative);
-    if (!reference || !relative || total == 0 || pixels == 0) {
+    double *reference = malloc(pixels * sizeof *reference), *distance = malloc(pixels * sizeof *distance);
+    if (!reference || !distance || total == 0 || pixels == 0) {
         free(reference);
-        free(relative);
+        free(distance);
         return n;
     }
-    double floor = equal_weight_image(v, n, pixels, total, reference, relative);
+    equal_weight_image(v, n, pixels, total, reference);
     for (int g = 0; g < n; g++) {
         int k = v[g].passes;
         for (size_t p = 0; p < pixels; p++) {
             double r = reference[p];
             /* the sum over the group's passes of (y - r)^2, from its sums */
             double d = view_square(&v[g], p) - 2.0 * r * view_luminance_sum(&v[g], p) + k * r * r;
-            relative[p] = fmax(d, 0.0) / k / (r * r + floor);
+            distance[p] = fmax(d, 0.0) / k;
         }
-        variance[g] = sg_trimmed_mean(relative, pixels);
+        variance[g] = sg_trimmed_mean(distance, pixels);
     }
     variances_from_distances(v, n, total, variance);
     free(reference);
-    free(relative);
+    free(distance);
     return n;
 }
 

@@ -7,8 +7,8 @@
  * so that the early, noisy passes count without spoiling the later ones
  * (practical path guiding's rule for combining its iterations). A group's
  * variance per pass is the mean, over the pixels, of its passes' squared
- * distance to the image of all passes, relative to that image (the worst
- * 0.1 % of pixels left out: one firefly does not decide a weight). Each
+ * distance to the image of all passes, in luminance (the worst 0.1 % of
+ * pixels left out: one firefly does not decide a weight). Each
  * pass is an unbiased estimate and a weight is one number for the whole
  * image, so a pixel's own samples move its weights by 1/pixels at most:
  * the combination is unbiased up to that (tests/test_render_film.c
@@ -85,7 +85,7 @@ bool film_close_group(Film *f);
 /* Every pixel back to no sample, every group gone. */
 void film_clear(Film *f);
 
-/* Each group's estimated variance per pass (relative, the worst 0.1 % of
+/* Each group's estimated variance per pass (luminance, the worst 0.1 % of
  * pixels left out; 0: unknown, under 3 passes in all): groups[0..group_count-1]
  * then the open group (if it has passes) in variance[], and their cost per
  * pass in cost[] (NULL: not wanted). Returns how many were written (at most
