@@ -18,11 +18,13 @@ bool roulette_survive(const PathGuide *g, float q, Vec3 *beta, Vec3 *rr_beta, Sg
     return true;
 }
 
-RouletteVerdict roulette_learned(float worth, int depth, int branches, bool may_split, SgRng *rng)
+RouletteVerdict roulette_learned(float worth, int depth, int branches, bool may_split, float floor, SgRng *rng)
 {
     float q = ROULETTE_GAIN * worth, split = SPLIT_GAIN * worth;
     if (depth >= ROULETTE_DEPTH && q < 1.0f) {
-        q = sg_maxf(q, ROULETTE_MIN_SURVIVAL);
+        q = sg_maxf(q, sg_maxf(ROULETTE_MIN_SURVIVAL, floor));
+        if (q >= 1.0f)
+            return (RouletteVerdict){1, 1.0f};
         if (!(sg_rng_float(rng) < q))
             return (RouletteVerdict){0, 0.0f};
         return (RouletteVerdict){1, 1.0f / q};

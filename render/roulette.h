@@ -76,7 +76,7 @@ typedef struct RouletteVerdict {
     float scale;
 } RouletteVerdict;
 
-RouletteVerdict roulette_learned(float worth, int depth, int branches, bool may_split, SgRng *rng);
+RouletteVerdict roulette_learned(float worth, int depth, int branches, bool may_split, float floor, SgRng *rng);
 
 /* Before each pass of a render with the learned roulette: the pixels'
  * noise remade from the `spp` passes so far, at every pass at first, then

@@ -116,6 +116,8 @@ static void mixture_vertex_begin(PathGuide *g, const GuideHit *h, SgRng *rng, Gu
     mv->skeleton = false;
     mv->position = h->p;
     mv->direction = v3(0, 0, 0);
+    if (!x->learner) /* a fixed --alpha is the user's: no floor under it */
+        v->alpha_floor = 0.0f;
     bool lobe_region = x->fixed.alpha < 1.0f;
     if (x->learner) {
         /* the region's learned alpha; where it is the BSDF alone the guide
@@ -161,17 +163,24 @@ static void mixture_vertex_end(PathGuide *g, const GuideHit *h, bool lit, SgRng 
     }
 }
 
+/* The region's BSDF share, or more where the path's weight asks for it. */
+static inline float mixture_alpha(const GuideVertex *v, const MixtureVertex *mv)
+{
+    return sg_maxf(mv->mix.alpha, v->alpha_floor);
+}
+
 static float mixture_pdf(const GuideVertex *v, Vec3 w, float cos_n)
 {
     const MixtureVertex *mv = mixture_vertex_c(v);
     if (!mv->mixture)
         return guide_bsdf_pdf(v, w, cos_n);
+    float alpha = mixture_alpha(v, mv);
     if (mv->histogram) {
-        float a = mv->mix.alpha;
+        float a = alpha;
         return a * bsdf_pdf(&v->bsdf, w) + (1.0f - a) * sg_mixture_histogram_pdf(mv->histogram, w);
     }
     float pdf_bsdf, c1, c2;
-    return bsdf_mixture_pdf(&v->bsdf, &mv->lobe, mv->mix.alpha, w, cos_n, &pdf_bsdf, &c1, &c2);
+    return bsdf_mixture_pdf(&v->bsdf, &mv->lobe, alpha, w, cos_n, &pdf_bsdf, &c1, &c2);
 }
 
 static Vec3 mixture_sample(GuideVertex *v, const float u[3], float *pdf)
@@ -185,7 +194,7 @@ static Vec3 mixture_sample(GuideVertex *v, const float u[3], float *pdf)
         }
         return w;
     }
-    float alpha = mv->mix.alpha;
+    float alpha = mixture_alpha(v, mv);
     v->by_guide = !(u[0] < alpha);
     if (mv->histogram) {
         Vec3 w = v->by_guide ? sg_mixture_histogram_sample(mv->histogram, u[1], u[2])
@@ -193,6 +202,7 @@ static Vec3 mixture_sample(GuideVertex *v, const float u[3], float *pdf)
         mv->pdf_bsdf = bsdf_pdf(&v->bsdf, w);
         mv->pdf = *pdf = alpha * mv->pdf_bsdf + (1.0f - alpha) * sg_mixture_histogram_pdf(mv->histogram, w);
         mv->direction = w;
+        v->pdf_bsdf = mv->pdf_bsdf;
         return w;
     }
     Vec3 w = bsdf_mixture_sample(&v->bsdf, &mv->lobe, alpha, u[0], u[1], u[2]);
@@ -200,6 +210,7 @@ static Vec3 mixture_sample(GuideVertex *v, const float u[3], float *pdf)
     float c1, c2;
     mv->pdf = *pdf = bsdf_mixture_pdf(&v->bsdf, &mv->lobe, alpha, w, v3_dot(w, v->bsdf.lobe.n), &mv->pdf_bsdf, &c1, &c2);
     mv->direction = w;
+    v->pdf_bsdf = mv->pdf_bsdf;
     return w;
 }
 

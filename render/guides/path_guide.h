@@ -95,10 +95,18 @@ typedef struct GuideVertex {
                         * roulette's input); < 0 unknown */
     float portal_share; /* of a sky's light samples here, the share drawn
                          * through its portals; < 0: PORTAL_SHARE */
+    /* set by the integrator before vertex_begin: the least BSDF share a
+     * learned mixture may take here, so that the path's weight stays within
+     * WEIGHT_RATIO_MAX of what BSDF sampling would give it (integrator.c);
+     * a guide may lower it where its mixture is the user's choice */
+    float alpha_floor;
     /* set by the integrator where the vertex learns */
     SkyLightSample sky;
     /* set by sample */
     bool by_guide;     /* the guide, not the BSDF's sampler, drew the direction */
+    float pdf_bsdf;    /* > 0: the BSDF sampler's density of the direction drawn,
+                        * where a mixture drew it; <= 0 (as the integrator
+                        * starts it): the BSDF's sampler alone drew it */
     float mis_pdf;     /* >= 0: the density the bounce's MIS against the lights
                         * weighs by, where it is not the one drawn from (RIS:
                         * pdf() of the direction); < 0 (as the integrator
