@@ -60,6 +60,10 @@ int main(int argc, char **argv)
     o.roulette = SG_ROULETTE_ALBEDO;
     if (!r[0] || !(r[1] = sg_renderer_create(scene, &o, &err)))
         goto done;
+    /* the budget bin/render gives them from --spp: guided learns as long as
+     * learning pays within it */
+    sg_renderer_set_budget(r[0], spp, 0.0);
+    sg_renderer_set_budget(r[1], spp, 0.0);
     double seconds[2] = {0.0, 0.0};
     for (int pass = 0; pass < spp; pass++)
         for (int k = 0; k < 2; k++) {

@@ -70,7 +70,8 @@ bool roulette_survive(const PathGuide *g, float q, Vec3 *beta, Vec3 *rr_beta, Sg
  * the pixel's deviation) at vertex `depth`: how many branches go on (0: the
  * path is cut, 1: it goes on, more: it splits), and the factor beta is
  * multiplied by. `branches` the path's branches so far; `may_split` whether
- * this vertex can wait for more (SPLIT_STACK, SPLIT_FROM_PASS). */
+ * this vertex can wait for more (SPLIT_STACK, SPLIT_FROM_PASS); `floor` the
+ * least survival the path's weight allows (integrator.c, WEIGHT_RATIO_MAX). */
 typedef struct RouletteVerdict {
     int branches;
     float scale;
