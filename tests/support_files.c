@@ -122,3 +122,17 @@ void sg_test_put(SgTestText *t, const char *fmt, ...)
         cr_assert_not_null(t->data);
     }
 }
+
+const char *sg_test_precompute(const char *scene, const char *dir)
+{
+    static char cache[4200];
+    char vox[4096], skel[4096], imp[4096], cmd[16384], err[4096];
+    snprintf(cmd, sizeof cmd,
+             "%s %s -o %s/medium.vdb >/dev/null && %s %s/medium.vdb -o %s/skeleton.ply >/dev/null && "
+             "%s %s/medium.vdb %s/skeleton.ply -o %s/importance.cache >/dev/null",
+             sg_test_program("voxelize", vox, sizeof vox), scene, dir, sg_test_program("skeletonize", skel, sizeof skel),
+             dir, dir, sg_test_program("importance", imp, sizeof imp), dir, dir, dir);
+    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "precompute of %s: %s", scene, err);
+    snprintf(cache, sizeof cache, "%s/importance.cache", dir);
+    return cache;
+}

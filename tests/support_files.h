@@ -22,6 +22,9 @@ const char *sg_test_program(const char *name, char *buf, size_t size);
 /* Runs a shell command; returns its exit status and stores its stderr
  * (at most size bytes) in err_text if given. */
 int sg_test_run(const char *command, char *err_text, size_t size);
+/* voxelize, skeletonize and importance on `scene` into dir (the test fails
+ * if one does); the importance cache's path, valid until the next call. */
+const char *sg_test_precompute(const char *scene, const char *dir);
 /* Number of lines in text. */
 int sg_test_count_lines(const char *text);
 /* True when ../shared/scenes exists (third-party scenes for some tests). */

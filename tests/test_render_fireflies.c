@@ -20,28 +20,6 @@
 
 #define SCENE "tests/data/sun-window/sun-window.json"
 
-static const char *program(const char *name)
-{
-    static char bufs[3][4096];
-    static int k;
-    k = (k + 1) % 3;
-    return sg_test_program(name, bufs[k], sizeof bufs[k]);
-}
-
-/* voxelize, skeletonize, importance into dir; the cache's path */
-static const char *precompute(const char *scene, const char *dir)
-{
-    static char cache[4200];
-    char cmd[16384], err[4096];
-    snprintf(cmd, sizeof cmd,
-             "%s %s -o %s/medium.vdb >/dev/null && %s %s/medium.vdb -o %s/skeleton.ply >/dev/null && "
-             "%s %s/medium.vdb %s/skeleton.ply -o %s/importance.cache >/dev/null",
-             program("voxelize"), scene, dir, program("skeletonize"), dir, dir, program("importance"), dir, dir, dir);
-    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "precompute of %s: %s", scene, err);
-    snprintf(cache, sizeof cache, "%s/importance.cache", dir);
-    return cache;
-}
-
 static SgRenderOptions options(const SgScene *s, SgSampling mode, const SgImportanceSource *guide, uint64_t seed)
 {
     SgRenderOptions o = sgt_options(s, mode);
@@ -85,7 +63,7 @@ Test(render_fireflies, a_sun_through_a_window_makes_no_firefly_while_guided_lear
     const char *path = sg_test_source_path(SCENE);
     SgScene *s = sg_scene_load(path, &err);
     cr_assert_not_null(s, "%s", err.message);
-    const char *cache = precompute(path, sg_test_tmpdir());
+    const char *cache = sg_test_precompute(path, sg_test_tmpdir());
     SgRenderOptions ro = options(s, SG_SAMPLING_BSDF, NULL, 1000);
     SgImportanceFile file = {0};
     SgImportanceSource guide = ro.importance;

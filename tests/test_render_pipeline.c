@@ -37,20 +37,6 @@ static const char *prog(const char *name)
     return sg_test_program(name, bufs[k], sizeof bufs[k]);
 }
 
-/* voxelize, skeletonize, importance into dir; returns the cache path */
-static const char *precompute(const char *scene, const char *dir)
-{
-    static char cache[4200];
-    char cmd[16384], err[4096];
-    snprintf(cmd, sizeof cmd,
-             "%s %s -o %s/medium.vdb >/dev/null && %s %s/medium.vdb -o %s/skeleton.ply >/dev/null && "
-             "%s %s/medium.vdb %s/skeleton.ply -o %s/importance.cache >/dev/null",
-             prog("voxelize"), scene, dir, prog("skeletonize"), dir, dir, prog("importance"), dir, dir, dir);
-    cr_assert_eq(sg_test_run(cmd, err, sizeof err), 0, "precompute of %s: %s", scene, err);
-    snprintf(cache, sizeof cache, "%s/importance.cache", dir);
-    return cache;
-}
-
 /* Mean over seeds of the image mean, and its standard error. Rendered here
  * as bin/render renders (its default options, sg_importance_file_open, the
  * skeleton rule's exponent 4; seeds 1000 + k, 80x60), not by 32 runs of
@@ -138,7 +124,7 @@ static void agreement(const char *scene, double bias_lo, double bias_hi)
     if (!have_programs())
         cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
     const char *dir = sg_test_tmpdir();
-    const char *cache = precompute(scene, dir);
+    const char *cache = sg_test_precompute(scene, dir);
     SgScene *loaded = sgt_load_ok(scene);
     double mb, sb, mg, sg, ms, ss;
     /* under the sanitizers (some 3x slower) half the samples: the bias is
@@ -177,7 +163,7 @@ Test(render_pipeline, cache_for_other_geometry_is_refused)
     if (!have_programs())
         cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
     const char *dir = sg_test_tmpdir();
-    const char *cache = precompute("data/corridor/corridor.json", dir);
+    const char *cache = sg_test_precompute("data/corridor/corridor.json", dir);
     char cmd[16384], err[4096];
     snprintf(cmd, sizeof cmd, "%s data/cornell-box/cornell-box.json --cache %s -o %s/x.exr", prog("render"),
              cache, dir);
@@ -232,7 +218,7 @@ Test(render_pipeline, the_renderers_reading_of_the_cache_matches_the_guide_funct
     if (!have_programs())
         cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
     const char *dir = sg_test_tmpdir();
-    const char *path = precompute("data/corridor/corridor.json", dir);
+    const char *path = sg_test_precompute("data/corridor/corridor.json", dir);
     SgError e = {0};
     SgScene *scene = sg_scene_load("data/corridor/corridor.json", &e);
     cr_assert(scene, "%s", e.message);
@@ -336,7 +322,7 @@ Test(render_pipeline, guided_follows_the_sky_through_a_window, .timeout = 240)
         cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
     const char *dir = sg_test_tmpdir();
     const char *scene = sky_room(dir, true);
-    const char *cache_path = precompute(scene, dir);
+    const char *cache_path = sg_test_precompute(scene, dir);
     SgError e = {0};
     SgScene *loaded = sgt_load_ok(scene);
     cr_assert_eq(sg_scene_guide_light_count(loaded), 1, "the outside is the one light");
@@ -418,7 +404,7 @@ Test(render_pipeline, the_suns_importance_points_lead_into_its_rays, .timeout = 
     const char *dir = sg_test_tmpdir();
     const char *scene = lit_room(dir, true, "[{\"type\": \"sun\", \"irradiance\": [5, 5, 5], "
                                             "\"direction\": [0, -1, 0]}]");
-    const char *cache_path = precompute(scene, dir);
+    const char *cache_path = sg_test_precompute(scene, dir);
     SgScene *loaded = sgt_load_ok(scene);
     cr_assert_eq(sg_scene_guide_light_count(loaded), 1);
     cr_expect_eq(sg_scene_guide_light(loaded, 0).kind, SG_GUIDE_LIGHT_SUN);
@@ -455,7 +441,7 @@ Test(render_pipeline, the_north_rooms_window_is_found_and_its_hidden_sun_costs_n
     if (!have_programs())
         cr_skip_test("needs bin/voxelize, bin/skeletonize, bin/importance");
     const char *dir = sg_test_tmpdir(), *scene = "data/north-room/north-room.json";
-    const char *cache_path = precompute(scene, dir);
+    const char *cache_path = sg_test_precompute(scene, dir);
     SgScene *loaded = sgt_load_ok(scene);
     cr_assert_eq(sg_scene_guide_light_count(loaded), 1, "the outside is the one light");
     SgError e = {0};
