@@ -137,7 +137,7 @@ static bool sun_direction(MtsParser *p, const XmlNode *e, const double world_fro
     return true;
 }
 
-/* Mitsuba 0.6's sky, sun and sunsky: Preetham's sky as an environment
+/* Mitsuba's sky, sun and sunsky: Preetham's sky as an environment
  * image made here (common/sunsky.h), the sun a distant light with its disk;
  * sky_scale, sun_scale, sun_radius_scale (the disk's size, its power kept;
  * 0 a delta), turbidity, resolution, extend. Mitsuba's values are spectral
@@ -163,8 +163,10 @@ static bool sunsky(MtsParser *p, const XmlNode *e, const char *type, const SgTra
         return mts_fail(p, e, "%s: scales must be finite and not negative", type);
     if (!(resolution >= 4 && resolution <= 8192))
         return mts_fail(p, e, "%s: resolution must be in [4, 8192]", type);
-    if (!e->doc->old_dialect)
-        mts_warn(p, e, "Mitsuba 3's %s (Hosek-Wilkie) is taken as Mitsuba 0.6's Preetham sky", type);
+    /* Mitsuba's sky is Hosek and Wilkie's (2012) in 0.5, 0.6 and 3; its
+     * fitted coefficients are not at hand (docs/scene-format.md) */
+    if (with_sky)
+        mts_warn(p, e, "%s: Mitsuba's Hosek-Wilkie sky is taken as Preetham's: its colour and level may differ", type);
     if (stretch != 1)
         mts_warn(p, e, "%s: stretch is ignored", type);
     double theta_sun = acos(fmin(fmax(local[1], -1.0), 1.0));
