@@ -9,7 +9,6 @@
 
 /* ---- the path's state ------------------------------------------------------ */
 
-/* Between vertices. */
 /* No sample of a path weighs more than WEIGHT_RATIO_MAX times what BSDF
  * sampling with the albedo roulette would give the same path: at each
  * vertex a guide's mixture takes a BSDF share of at least
@@ -26,6 +25,7 @@
  * the sun window 1.6x worse than 4). docs/render.md, "Bounded weights". */
 #define WEIGHT_RATIO_MAX 4.0f
 
+/* Between vertices. */
 typedef struct PathState {
     Vec3 o, d;
     Vec3 beta;
@@ -485,12 +485,12 @@ static bool vertex_roulette(Path *p, const BounceVertex *v, PendingRecord *pr, b
         float q_albedo = 1.0f; /* the albedo roulette's survival here */
         if (p->depth >= ROULETTE_DEPTH) {
             *decided = true;
-            q_albedo = sg_minf(0.95f, v3_max_component(ps->rr_beta));
+            q_albedo = roulette_albedo_survival(ps->rr_beta);
             ps->rr_beta = v3(1, 1, 1);
         }
         bool may_split = p->split_count < SPLIT_STACK && p->pc->may_split;
-        float floor = q_albedo * ps->weight_ratio * (1.0f / WEIGHT_RATIO_MAX);
-        RouletteVerdict rv = roulette_learned(worth, p->depth, p->branches, may_split, floor, rng);
+        float min_survival = q_albedo * ps->weight_ratio * (1.0f / WEIGHT_RATIO_MAX);
+        RouletteVerdict rv = roulette_learned(worth, p->depth, p->branches, may_split, min_survival, rng);
         ps->weight_ratio *= q_albedo * rv.scale;
         if (rv.branches == 0) {
             if (pr) /* what a surviving bounce brings is what the guide estimates */

@@ -4,7 +4,7 @@
 
 bool roulette_albedo(const PathGuide *g, Vec3 *beta, Vec3 *rr_beta, SgRng *rng, GuideSegment *seg)
 {
-    return roulette_survive(g, sg_minf(0.95f, v3_max_component(*rr_beta)), beta, rr_beta, rng, seg);
+    return roulette_survive(g, roulette_albedo_survival(*rr_beta), beta, rr_beta, rng, seg);
 }
 
 bool roulette_survive(const PathGuide *g, float q, Vec3 *beta, Vec3 *rr_beta, SgRng *rng, GuideSegment *seg)
@@ -18,11 +18,12 @@ bool roulette_survive(const PathGuide *g, float q, Vec3 *beta, Vec3 *rr_beta, Sg
     return true;
 }
 
-RouletteVerdict roulette_learned(float worth, int depth, int branches, bool may_split, float floor, SgRng *rng)
+RouletteVerdict roulette_learned(float worth, int depth, int branches, bool may_split, float min_survival,
+                                 SgRng *rng)
 {
     float q = ROULETTE_GAIN * worth, split = SPLIT_GAIN * worth;
     if (depth >= ROULETTE_DEPTH && q < 1.0f) {
-        q = sg_maxf(q, sg_maxf(ROULETTE_MIN_SURVIVAL, floor));
+        q = sg_maxf(q, sg_maxf(ROULETTE_MIN_SURVIVAL, min_survival));
         if (q >= 1.0f)
             return (RouletteVerdict){1, 1.0f};
         if (!(sg_rng_float(rng) < q))

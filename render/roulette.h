@@ -58,6 +58,10 @@
 #define SPLIT_BRANCHES_MAX 16
 #define SPLIT_STACK 12
 
+/* The albedo roulette's survival probability for the rr_beta a path
+ * carries (pbrt's rule, at most 0.95). */
+static inline float roulette_albedo_survival(Vec3 rr_beta) { return sg_minf(0.95f, v3_max_component(rr_beta)); }
+
 /* Albedo roulette from the rr_beta a path carries (the product of its
  * albedos, what beta would be under BSDF sampling): false cuts the path;
  * a survivor's beta and rr_beta are divided by the survival probability.
@@ -70,14 +74,15 @@ bool roulette_survive(const PathGuide *g, float q, Vec3 *beta, Vec3 *rr_beta, Sg
  * the pixel's deviation) at vertex `depth`: how many branches go on (0: the
  * path is cut, 1: it goes on, more: it splits), and the factor beta is
  * multiplied by. `branches` the path's branches so far; `may_split` whether
- * this vertex can wait for more (SPLIT_STACK, SPLIT_FROM_PASS); `floor` the
+ * this vertex can wait for more (SPLIT_STACK, SPLIT_FROM_PASS); `min_survival` the
  * least survival the path's weight allows (integrator.c, WEIGHT_RATIO_MAX). */
 typedef struct RouletteVerdict {
     int branches;
     float scale;
 } RouletteVerdict;
 
-RouletteVerdict roulette_learned(float worth, int depth, int branches, bool may_split, float floor, SgRng *rng);
+RouletteVerdict roulette_learned(float worth, int depth, int branches, bool may_split, float min_survival,
+                                 SgRng *rng);
 
 /* Before each pass of a render with the learned roulette: the pixels'
  * noise remade from the `spp` passes so far, at every pass at first, then

@@ -175,10 +175,8 @@ static float mixture_pdf(const GuideVertex *v, Vec3 w, float cos_n)
     if (!mv->mixture)
         return guide_bsdf_pdf(v, w, cos_n);
     float alpha = mixture_alpha(v, mv);
-    if (mv->histogram) {
-        float a = alpha;
-        return a * bsdf_pdf(&v->bsdf, w) + (1.0f - a) * sg_mixture_histogram_pdf(mv->histogram, w);
-    }
+    if (mv->histogram)
+        return alpha * bsdf_pdf(&v->bsdf, w) + (1.0f - alpha) * sg_mixture_histogram_pdf(mv->histogram, w);
     float pdf_bsdf, c1, c2;
     return bsdf_mixture_pdf(&v->bsdf, &mv->lobe, alpha, w, cos_n, &pdf_bsdf, &c1, &c2);
 }
