@@ -1,7 +1,7 @@
 /* The per-sample cost of guided sampling over bsdf (bench/sections/40-render.sh),
  * measured so that the shared machine's slow spells fall on both alike:
  *
- *   render_cost SCENE CACHE SPP [--max-depth N] [--threads N]
+ *   render_cost SCENE CACHE SPP [--max-depth N] [--threads N] [--field FIELD]
  *
  * renders SCENE twice at once, with bsdf and with guided sampling under
  * bsdf's own roulette (guided --roulette albedo: the same kind of paths,
@@ -9,7 +9,10 @@
  * the order swapped every pass; each renderer's seconds are the sum of its
  * passes (as bin/render counts them). Separate runs of ~10 s each, even
  * interleaved and best of 3, put the same binaries' corridor anywhere from
- * +8.7% to +12.0% in one evening (Sponza +5.6% to +13.8%).
+ * +8.7% to +12.0% in one evening (Sponza +5.6% to +13.8%). With --field,
+ * guided starts from that stored field (render --save-field, the same depth
+ * and roulette) and learns no more: the frozen guide's own cost, without
+ * its learning passes.
  * Prints a line per mode: its name, µs per sample, µs per ray, rays per
  * sample. */
 #include <stdio.h>
@@ -25,13 +28,16 @@
 int main(int argc, char **argv)
 {
     if (argc < 4) {
-        fputs("usage: render_cost SCENE CACHE SPP [--max-depth N] [--threads N]\n", stderr);
+        fputs("usage: render_cost SCENE CACHE SPP [--max-depth N] [--threads N] [--field FIELD]\n", stderr);
         return 2;
     }
     const char *scene_path = argv[1], *cache_path = argv[2];
     int spp = atoi(argv[3]), max_depth = 0, threads = 0;
+    const char *field = NULL;
     for (int i = 4; i + 1 < argc; i += 2) {
-        if (!strcmp(argv[i], "--max-depth"))
+        if (!strcmp(argv[i], "--field"))
+            field = argv[i + 1];
+        else if (!strcmp(argv[i], "--max-depth"))
             max_depth = atoi(argv[i + 1]);
         else if (!strcmp(argv[i], "--threads"))
             threads = atoi(argv[i + 1]);
@@ -64,6 +70,8 @@ int main(int argc, char **argv)
      * learning pays within it */
     sg_renderer_set_budget(r[0], spp, 0.0);
     sg_renderer_set_budget(r[1], spp, 0.0);
+    if (field && !sg_renderer_read_field(r[1], field, &err))
+        goto done;
     double seconds[2] = {0.0, 0.0};
     for (int pass = 0; pass < spp; pass++)
         for (int k = 0; k < 2; k++) {

@@ -108,6 +108,8 @@ echo "$steady_spp would learn), rendered in one process"
 echo "(build/release/bench/render_cost), a pass of each in turn, so that the shared machine's slow"
 echo "spells fall on both alike (separate runs of the same binaries, even interleaved and best of 3,"
 echo "ranged from +8.7% to +12.0% on the corridor in one evening); the median of $runs such runs."
+echo "The frozen field row: the same pair, guided from the field that run learned (render_cost --field),"
+echo "one run: the guide's cost once it has stopped learning, for information."
 echo
 if [ $have_pipeline = 0 ]; then
   echo "(needs bin/voxelize, bin/skeletonize, bin/importance)"
@@ -137,6 +139,16 @@ else
       END{for (k = 1; k <= 2; k++) { m = k == 1 ? "bsdf" : "guided-albedo"
             printf "| %s | %s (one process) | %d | %.4f | %.4f | %.2f | %+.1f%% | %+.1f%% |\n", n, m, s, u[m], ur[m], rs[m],
                    100*(u[m]/u["bsdf"]-1), 100*(ur[m]/ur["bsdf"]-1) }}' <<<"${outs[$mid]}"
+    # the frozen guide alone: the same pair from the field that budget
+    # learned (render --save-field), so that the learning passes' share of
+    # the cost above shows
+    if "$bin/render" "$sc" --cache "$out/$name/importance.cache" --roulette albedo --spp $steady_spp --max-depth 8 \
+         --save-field "$out/$name/field" -o "$out/f.exr" --quiet 2>/dev/null &&
+       lines=$("$cost_bin" "$sc" "$out/$name/importance.cache" $steady_spp --max-depth 8 --field "$out/$name/field" 2>&1); then
+      awk -v n="$name" -v s=$steady_spp '{u[$1]=$2; ur[$1]=$3; rs[$1]=$4}
+        END{m = "guided-albedo"; printf "| %s | %s, frozen field (one process) | %d | %.4f | %.4f | %.2f | %+.1f%% | %+.1f%% |\n", n, m, s,
+                 u[m], ur[m], rs[m], 100*(u[m]/u["bsdf"]-1), 100*(ur[m]/ur["bsdf"]-1) }' <<<"$lines"
+    fi
     verdicts+=("$(awk -v c="${costs[$mid]}" -v all="${costs[*]}" -v n="$name" -v s=$steady_spp -v w="$warm" -v spp=$spp \
       'BEGIN{gsub(/ /, "%, ", all); printf "%s: guided-albedo %+.1f%% per sample at %d spp (median of %s%%; %s at %d spp): %s", n, c, s, all, w, spp, (c<10)?"ok":"MISSED"}')")
   done
