@@ -312,6 +312,50 @@ static void power_case(float exponent, uint64_t seed, int sub)
 }
 
 
+/* The first bin i with u < cdf[i], else the last: by a plain scan. */
+static uint32_t scan_bin(const double *cdf, uint32_t n, double u)
+{
+    for (uint32_t i = 0; i < n; i++)
+        if (u < cdf[i])
+            return i;
+    return n - 1;
+}
+
+Test(render_sampling, piecewise_search_finds_the_scans_bin)
+{
+    /* every size up to past a histogram's 256 bins, with bins of no weight
+     * (a repeated sum), sums short of 1 (u past them all) and u on the
+     * sums themselves, where an off-by-one would show */
+    enum { N_MAX = 300 };
+    double cdf[N_MAX];
+    float cdff[N_MAX];
+    SgRng rng;
+    sg_rng_seed(&rng, 41, 1);
+    for (uint32_t n = 1; n <= N_MAX; n++) {
+        double sum = 0.0;
+        for (uint32_t i = 0; i < n; i++) {
+            sum += sg_rng_float(&rng) < 0.3f ? 0.0 : (double)sg_rng_float(&rng);
+            cdf[i] = sum;
+        }
+        double top = sum > 0.0 ? sum : 1.0, scale = sg_rng_float(&rng) < 0.5f ? 1.0 : 0.9;
+        for (uint32_t i = 0; i < n; i++) {
+            cdf[i] = cdf[i] / top * scale;
+            cdff[i] = (float)cdf[i];
+        }
+        for (int k = 0; k < 64; k++) {
+            double u = k < 32 ? (double)sg_rng_float(&rng) : cdf[(uint32_t)k % n];
+            cr_assert_eq(sg_piecewise_pick(cdf, n, u), scan_bin(cdf, n, u), "n %u, u %.17g", n, u);
+            uint32_t want = n - 1;
+            for (uint32_t i = 0; i < n; i++)
+                if ((float)u < cdff[i]) {
+                    want = i;
+                    break;
+                }
+            cr_assert_eq(sg_piecewise_pickf(cdff, n, (float)u), want, "n %u, u %.9g (float)", n, u);
+        }
+    }
+}
+
 Test(render_sampling, cosine_power_10000_narrow_lobe)
 {
     /* Too narrow for 80 theta bins: test it with the lobe's own moments.
