@@ -89,6 +89,15 @@ measure() {
   done
 }
 
+# cost_rows "MODES" LABEL: a table row per mode of render_cost's output
+# (stdin) for scene $name at $steady_spp, against its bsdf line
+cost_rows() {
+  awk -v n="$name" -v s=$steady_spp -v modes="$1" -v label="$2" '{u[$1]=$2; ur[$1]=$3; rs[$1]=$4}
+    END{k = split(modes, m, " "); for (i = 1; i <= k; i++)
+          printf "| %s | %s%s (one process) | %d | %.4f | %.4f | %.2f | %+.1f%% | %+.1f%% |\n", n, m[i], label, s,
+                 u[m[i]], ur[m[i]], rs[m[i]], 100*(u[m[i]]/u["bsdf"]-1), 100*(ur[m[i]]/ur["bsdf"]-1) }'
+}
+
 # 64 spp: guided's learner is still warming up (its initial mixture asks
 # the guide at every bounce until regions settle); the steady state too
 spp=64; steady_spp=256; [ "$quick" = 1 ] && { spp=16; steady_spp=64; }
@@ -135,19 +144,14 @@ else
       costs+=("$(awk '{u[$1]=$2} END{printf "%.2f", 100*(u["guided-albedo"]/u["bsdf"]-1)}' <<<"$lines")")
     done
     mid=$(for i in "${!costs[@]}"; do echo "${costs[$i]} $i"; done | sort -g | awk '{v[NR]=$2} END{print v[int((NR+1)/2)]}')
-    awk -v n="$name" -v s=$steady_spp '{u[$1]=$2; ur[$1]=$3; rs[$1]=$4}
-      END{for (k = 1; k <= 2; k++) { m = k == 1 ? "bsdf" : "guided-albedo"
-            printf "| %s | %s (one process) | %d | %.4f | %.4f | %.2f | %+.1f%% | %+.1f%% |\n", n, m, s, u[m], ur[m], rs[m],
-                   100*(u[m]/u["bsdf"]-1), 100*(ur[m]/ur["bsdf"]-1) }}' <<<"${outs[$mid]}"
+    cost_rows "bsdf guided-albedo" "" <<<"${outs[$mid]}"
     # the frozen guide alone: the same pair from the field that budget
     # learned (render --save-field), so that the learning passes' share of
     # the cost above shows
     if "$bin/render" "$sc" --cache "$out/$name/importance.cache" --roulette albedo --spp $steady_spp --max-depth 8 \
          --save-field "$out/$name/field" -o "$out/f.exr" --quiet 2>/dev/null &&
        lines=$("$cost_bin" "$sc" "$out/$name/importance.cache" $steady_spp --max-depth 8 --field "$out/$name/field" 2>&1); then
-      awk -v n="$name" -v s=$steady_spp '{u[$1]=$2; ur[$1]=$3; rs[$1]=$4}
-        END{m = "guided-albedo"; printf "| %s | %s, frozen field (one process) | %d | %.4f | %.4f | %.2f | %+.1f%% | %+.1f%% |\n", n, m, s,
-                 u[m], ur[m], rs[m], 100*(u[m]/u["bsdf"]-1), 100*(ur[m]/ur["bsdf"]-1) }' <<<"$lines"
+      cost_rows guided-albedo ", frozen field" <<<"$lines"
     fi
     verdicts+=("$(awk -v c="${costs[$mid]}" -v all="${costs[*]}" -v n="$name" -v s=$steady_spp -v w="$warm" -v spp=$spp \
       'BEGIN{gsub(/ /, "%, ", all); printf "%s: guided-albedo %+.1f%% per sample at %d spp (median of %s%%; %s at %d spp): %s", n, c, s, all, w, spp, (c<10)?"ok":"MISSED"}')")
