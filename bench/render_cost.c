@@ -1,7 +1,7 @@
 /* The per-sample cost of guided sampling over bsdf (bench/sections/40-render.sh),
  * measured so that the shared machine's slow spells fall on both alike:
  *
- *   render_cost SCENE CACHE SPP [--max-depth N] [--threads N] [--field FIELD]
+ *   render_cost SCENE CACHE SPP [--max-depth N] [--threads N] [--field FIELD | --save-field FIELD]
  *
  * renders SCENE twice at once, with bsdf and with guided sampling under
  * bsdf's own roulette (guided --roulette albedo: the same kind of paths,
@@ -12,7 +12,8 @@
  * +8.7% to +12.0% in one evening (Sponza +5.6% to +13.8%). With --field,
  * guided starts from that stored field (render --save-field, the same depth
  * and roulette) and learns no more: the frozen guide's own cost, without
- * its learning passes.
+ * its learning passes. With --save-field, guided's field is written to FIELD
+ * after the passes: what this run learned, for a run with --field.
  * Prints a line per mode: its name, µs per sample, µs per ray, rays per
  * sample. */
 #include <stdio.h>
@@ -28,15 +29,18 @@
 int main(int argc, char **argv)
 {
     if (argc < 4) {
-        fputs("usage: render_cost SCENE CACHE SPP [--max-depth N] [--threads N] [--field FIELD]\n", stderr);
+        fputs("usage: render_cost SCENE CACHE SPP [--max-depth N] [--threads N] [--field FIELD | --save-field FIELD]\n",
+              stderr);
         return 2;
     }
     const char *scene_path = argv[1], *cache_path = argv[2];
     int spp = atoi(argv[3]), max_depth = 0, threads = 0;
-    const char *field = NULL;
+    const char *field = NULL, *save_field = NULL;
     for (int i = 4; i + 1 < argc; i += 2) {
         if (!strcmp(argv[i], "--field"))
             field = argv[i + 1];
+        else if (!strcmp(argv[i], "--save-field"))
+            save_field = argv[i + 1];
         else if (!strcmp(argv[i], "--max-depth"))
             max_depth = atoi(argv[i + 1]);
         else if (!strcmp(argv[i], "--threads"))
@@ -80,6 +84,11 @@ int main(int argc, char **argv)
             sg_renderer_pass(r[which]);
             seconds[which] += sg_seconds() - t0;
         }
+    if (save_field) {
+        sg_renderer_stop_learning(r[1]);
+        if (!sg_renderer_write_field(r[1], save_field, &err))
+            goto done;
+    }
     double samples = (double)o.width * o.height * spp;
     const char *names[2] = {"bsdf", "guided-albedo"};
     for (int k = 0; k < 2; k++) {

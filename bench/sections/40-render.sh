@@ -117,8 +117,8 @@ echo "$steady_spp would learn), rendered in one process"
 echo "(build/release/bench/render_cost), a pass of each in turn, so that the shared machine's slow"
 echo "spells fall on both alike (separate runs of the same binaries, even interleaved and best of 3,"
 echo "ranged from +8.7% to +12.0% on the corridor in one evening); the median of $runs such runs."
-echo "The frozen field row: the same pair, guided from the field that run learned (render_cost --field),"
-echo "one run: the guide's cost once it has stopped learning, for information."
+echo "The frozen field row: the same pair, guided from the field the first such run learned (render_cost"
+echo "--save-field, then --field), one run: the guide's cost once it has stopped learning, for information."
 echo
 if [ $have_pipeline = 0 ]; then
   echo "(needs bin/voxelize, bin/skeletonize, bin/importance)"
@@ -137,19 +137,20 @@ else
     # one process a pass of each in turn (render_cost); the median of $runs
     # runs is the verdict, its rows go in the table
     costs=() outs=()
-    for _ in $(seq $runs); do
-      lines=$("$cost_bin" "$sc" "$out/$name/importance.cache" $steady_spp --max-depth 8 2>&1) ||
+    rm -f "$out/$name/field"
+    for run in $(seq $runs); do
+      # the first run keeps what its guided renderer learned, for the frozen field row
+      save=(); [ "$run" = 1 ] && save=(--save-field "$out/$name/field")
+      lines=$("$cost_bin" "$sc" "$out/$name/importance.cache" $steady_spp --max-depth 8 "${save[@]}" 2>&1) ||
         { echo "| $name | render_cost failed: ${lines//$'\n'/ } | | | | | | |"; continue 2; }
       outs+=("$lines")
       costs+=("$(awk '{u[$1]=$2} END{printf "%.2f", 100*(u["guided-albedo"]/u["bsdf"]-1)}' <<<"$lines")")
     done
     mid=$(for i in "${!costs[@]}"; do echo "${costs[$i]} $i"; done | sort -g | awk '{v[NR]=$2} END{print v[int((NR+1)/2)]}')
     cost_rows "bsdf guided-albedo" "" <<<"${outs[$mid]}"
-    # the frozen guide alone: the same pair from the field that budget
-    # learned (render --save-field), so that the learning passes' share of
-    # the cost above shows
-    if "$bin/render" "$sc" --cache "$out/$name/importance.cache" --roulette albedo --spp $steady_spp --max-depth 8 \
-         --save-field "$out/$name/field" -o "$out/f.exr" --quiet 2>/dev/null &&
+    # the frozen guide alone: the same pair from the field the first run
+    # learned, so that the learning passes' share of the cost above shows
+    if [ -e "$out/$name/field" ] &&
        lines=$("$cost_bin" "$sc" "$out/$name/importance.cache" $steady_spp --max-depth 8 --field "$out/$name/field" 2>&1); then
       cost_rows guided-albedo ", frozen field" <<<"$lines"
     fi
